@@ -1,0 +1,65 @@
+//! Mitsuba's `roughconductor`: one-sided microfacet reflection with the complex-index Fresnel term.
+
+use super::fresnel::fresnel_conductor;
+use super::microfacet::Microfacet;
+use super::{BsdfSample, Lobe};
+use crate::geometry::frame::reflect;
+use crate::spectrum::Rgb;
+use glam::{Vec2, Vec3};
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RoughConductor {
+    pub distr: Microfacet,
+    /// Real part of the complex index of refraction, per channel.
+    pub eta: Rgb,
+    /// Imaginary part (extinction), per channel.
+    pub k: Rgb,
+    pub specular_reflectance: Rgb,
+}
+
+impl RoughConductor {
+    fn fresnel(&self, cos_theta: f32) -> Rgb {
+        fresnel_conductor(cos_theta, self.eta, self.k) * self.specular_reflectance
+    }
+
+    pub fn eval(&self, wi: Vec3, wo: Vec3) -> Rgb {
+        if !(wi.z > 0.0 && wo.z > 0.0) {
+            return Rgb::ZERO;
+        }
+        let h = (wo + wi).normalize();
+        let d = self.distr.eval(h);
+        if d == 0.0 {
+            return Rgb::ZERO;
+        }
+        let g = self.distr.g(wi, wo, h);
+        // f·cos θo = D G F / (4 cos θi): the cos θo of the BRDF cancels the foreshortening.
+        self.fresnel(wi.dot(h)) * (d * g / (4.0 * wi.z))
+    }
+
+    pub fn pdf(&self, wi: Vec3, wo: Vec3) -> f32 {
+        let m = (wo + wi).normalize();
+        if !(wi.z > 0.0 && wo.z > 0.0 && wi.dot(m) > 0.0 && wo.dot(m) > 0.0) {
+            return 0.0;
+        }
+        self.distr.eval(m) * self.distr.smith_g1(wi, m) / (4.0 * wi.z)
+    }
+
+    pub fn sample(&self, wi: Vec3, u: Vec2) -> Option<BsdfSample> {
+        if wi.z <= 0.0 {
+            return None;
+        }
+        let (m, pdf_m) = self.distr.sample(wi, u);
+        let wo = reflect(wi, m);
+        if !(pdf_m != 0.0 && wo.z > 0.0) {
+            return None;
+        }
+        let weight = self.fresnel(wi.dot(m)) * self.distr.smith_g1(wo, m);
+        Some(BsdfSample {
+            wo,
+            pdf: pdf_m / (4.0 * wo.dot(m)),
+            eta: 1.0,
+            lobe: Lobe::Reflection,
+            weight,
+        })
+    }
+}

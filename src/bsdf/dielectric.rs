@@ -1,0 +1,127 @@
+//! Mitsuba's `roughdielectric`: microfacet reflection and refraction through a rough interface
+//! (Walter et al. 2007), two-sided, with lobe selection by the Fresnel reflectance.
+
+use super::fresnel::fresnel_dielectric;
+use super::microfacet::Microfacet;
+use super::{BsdfSample, Lobe, TransportMode};
+use crate::geometry::frame::{reflect, refract};
+use crate::spectrum::Rgb;
+use glam::{Vec2, Vec3};
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RoughDielectric {
+    pub distr: Microfacet,
+    /// Relative index `int_ior / ext_ior`.
+    pub eta: f32,
+    pub specular_reflectance: Rgb,
+    pub specular_transmittance: Rgb,
+}
+
+impl RoughDielectric {
+    /// The half vector of `(wi, wo)` on the side of the macro normal, and the relative index
+    /// seen from `wi`'s side. `None` for directions in the tangent plane.
+    fn half_vector(&self, wi: Vec3, wo: Vec3) -> (Vec3, bool, f32) {
+        let reflect = wi.z * wo.z > 0.0;
+        let eta = if wi.z > 0.0 { self.eta } else { 1.0 / self.eta };
+        let m = (wi + wo * if reflect { 1.0 } else { eta }).normalize();
+        let m = if m.z.is_sign_negative() { -m } else { m };
+        (m, reflect, eta)
+    }
+
+    pub fn eval(&self, wi: Vec3, wo: Vec3, mode: TransportMode) -> Rgb {
+        let (m, reflect, eta) = self.half_vector(wi, wo);
+        let d = self.distr.eval(m);
+        let f = fresnel_dielectric(wi.dot(m), self.eta).r;
+        let g = self.distr.g(wi, wo, m);
+        let value = if reflect {
+            self.specular_reflectance * (f * d * g / (4.0 * wi.z.abs()))
+        } else {
+            // Radiance is compressed by (1/eta)² when it crosses into the denser medium.
+            let scale = match mode {
+                TransportMode::Radiance => 1.0 / (eta * eta),
+                TransportMode::Importance => 1.0,
+            };
+            let denom = wi.dot(m) + eta * wo.dot(m);
+            let v = (scale * (1.0 - f) * d * g * eta * eta * wi.dot(m) * wo.dot(m))
+                / (wi.z * denom * denom);
+            self.specular_transmittance * v.abs()
+        };
+        if value.is_finite() {
+            value
+        } else {
+            Rgb::ZERO
+        }
+    }
+
+    pub fn pdf(&self, wi: Vec3, wo: Vec3) -> f32 {
+        let (m, reflect, eta) = self.half_vector(wi, wo);
+        // The sides of micro- and macrosurface must agree (the same rule as in smith_g1).
+        if !(wi.dot(m) * wi.z > 0.0 && wo.dot(m) * wo.z > 0.0) {
+            return 0.0;
+        }
+        let dwh_dwo = if reflect {
+            1.0 / (4.0 * wo.dot(m))
+        } else {
+            let denom = wi.dot(m) + eta * wo.dot(m);
+            (eta * eta * wo.dot(m)) / (denom * denom)
+        };
+        let wi_up = if wi.z.is_sign_negative() { -wi } else { wi };
+        let f = fresnel_dielectric(wi.dot(m), self.eta).r;
+        let prob = self.distr.pdf(wi_up, m) * if reflect { f } else { 1.0 - f };
+        let p = prob * dwh_dwo.abs();
+        if p.is_finite() {
+            p
+        } else {
+            0.0
+        }
+    }
+
+    /// `u0` chooses the lobe (reflection iff `u0 <= F`), `u` drives the microfacet sampler.
+    pub fn sample(&self, wi: Vec3, u0: f32, u: Vec2, mode: TransportMode) -> Option<BsdfSample> {
+        let cos_theta_i = wi.z;
+        let wi_up = if cos_theta_i.is_sign_negative() { -wi } else { wi };
+        let (m, pdf_m) = self.distr.sample(wi_up, u);
+        let fr = fresnel_dielectric(wi.dot(m), self.eta);
+        let f = fr.r;
+        let selected_r = u0 <= f;
+        let (wo, eta, lobe, mut weight, pdf_lobe, dwh_dwo);
+        if selected_r {
+            wo = reflect(wi, m);
+            if !(cos_theta_i * wo.z > 0.0) {
+                return None;
+            }
+            eta = 1.0;
+            lobe = Lobe::Reflection;
+            weight = self.specular_reflectance;
+            pdf_lobe = f;
+            dwh_dwo = 1.0 / (4.0 * wo.dot(m));
+        } else {
+            wo = refract(wi, m, fr.cos_theta_t, fr.eta_ti);
+            if !(cos_theta_i * wo.z < 0.0) {
+                return None;
+            }
+            eta = fr.eta_it;
+            lobe = Lobe::Transmission;
+            let factor = match mode {
+                TransportMode::Radiance => fr.eta_ti,
+                TransportMode::Importance => 1.0,
+            };
+            weight = self.specular_transmittance * (factor * factor);
+            pdf_lobe = 1.0 - f;
+            let denom = wi.dot(m) + eta * wo.dot(m);
+            dwh_dwo = (eta * eta * wo.dot(m)) / (denom * denom);
+        }
+        weight *= self.distr.smith_g1(wo, m);
+        let pdf = pdf_m * pdf_lobe * dwh_dwo.abs();
+        if !(pdf > 0.0 && pdf.is_finite() && weight.is_finite()) {
+            return None;
+        }
+        Some(BsdfSample {
+            wo,
+            pdf,
+            eta,
+            lobe,
+            weight,
+        })
+    }
+}

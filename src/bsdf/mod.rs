@@ -1,0 +1,106 @@
+//! Mitsuba 3's `diffuse`, `roughconductor` and `roughdielectric`, value for value (DESIGN.md §4).
+//!
+//! # Convention
+//!
+//! One convention everywhere, Mitsuba's:
+//!
+//! * `wi` and `wo` are unit vectors in the local shading frame (`z` = shading normal, `x` = the
+//!   `alpha_u` tangent), and both point **away** from the surface: `wi` towards the camera or
+//!   previous path vertex, `wo` towards the light or next vertex.
+//! * [`Bsdf::eval`] returns `f(wi, wo) · |cos θo|`: the cosine is included.
+//! * [`Bsdf::pdf`] is the solid-angle density with which [`Bsdf::sample`] produces `wo`, lobe
+//!   selection included.
+//! * [`Bsdf::sample`] returns `weight = eval / pdf`.
+//! * In [`TransportMode::Radiance`] transmission carries the `1/η²` radiance scaling.
+
+pub mod conductor;
+pub mod dielectric;
+pub mod diffuse;
+pub mod fresnel;
+pub mod ior;
+pub mod microfacet;
+pub mod mitsuba;
+
+pub use conductor::RoughConductor;
+pub use dielectric::RoughDielectric;
+pub use diffuse::Diffuse;
+pub use microfacet::{Distribution, Microfacet};
+
+use crate::spectrum::Rgb;
+use glam::{Vec2, Vec3};
+
+/// What is being transported along the path (affects refraction only).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum TransportMode {
+    /// Paths traced from the camera (the usual case).
+    #[default]
+    Radiance,
+    /// Paths traced from the lights.
+    Importance,
+}
+
+/// Which lobe a sample came from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Lobe {
+    Reflection,
+    Transmission,
+}
+
+/// A sampled direction.
+#[derive(Clone, Copy, Debug)]
+pub struct BsdfSample {
+    pub wo: Vec3,
+    /// Solid-angle density, lobe selection included.
+    pub pdf: f32,
+    /// Relative index of refraction crossed (1 for reflection).
+    pub eta: f32,
+    pub lobe: Lobe,
+    /// `eval / pdf`.
+    pub weight: Rgb,
+}
+
+/// A BSDF with every parameter resolved at one shading point (textures already looked up).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Bsdf {
+    Diffuse(Diffuse),
+    Conductor(RoughConductor),
+    Dielectric(RoughDielectric),
+}
+
+impl Bsdf {
+    /// `f(wi, wo) · |cos θo|`.
+    #[inline]
+    pub fn eval(&self, wi: Vec3, wo: Vec3, mode: TransportMode) -> Rgb {
+        match self {
+            Bsdf::Diffuse(b) => b.eval(wi, wo),
+            Bsdf::Conductor(b) => b.eval(wi, wo),
+            Bsdf::Dielectric(b) => b.eval(wi, wo, mode),
+        }
+    }
+
+    /// Solid-angle density of [`Bsdf::sample`] producing `wo`.
+    #[inline]
+    pub fn pdf(&self, wi: Vec3, wo: Vec3) -> f32 {
+        match self {
+            Bsdf::Diffuse(b) => b.pdf(wi, wo),
+            Bsdf::Conductor(b) => b.pdf(wi, wo),
+            Bsdf::Dielectric(b) => b.pdf(wi, wo),
+        }
+    }
+
+    /// Sample `wo`: `u0` selects the lobe (dielectric only), `u` drives the direction.
+    /// `None` when the sample is invalid (below the horizon, wrong side, zero density).
+    #[inline]
+    pub fn sample(&self, wi: Vec3, u0: f32, u: Vec2, mode: TransportMode) -> Option<BsdfSample> {
+        match self {
+            Bsdf::Diffuse(b) => b.sample(wi, u),
+            Bsdf::Conductor(b) => b.sample(wi, u),
+            Bsdf::Dielectric(b) => b.sample(wi, u0, u, mode),
+        }
+    }
+
+    /// True when the BSDF scatters light arriving from below the shading normal.
+    pub fn is_two_sided(&self) -> bool {
+        matches!(self, Bsdf::Dielectric(_))
+    }
+}

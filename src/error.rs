@@ -1,0 +1,66 @@
+//! Typed errors of the library. Every message is one sentence that names the file and, where
+//! there is one, the object (mesh, material, accessor, texture) at fault.
+
+use std::path::PathBuf;
+
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    #[error("cannot read {path}: {source}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+
+    #[error("{path}: not a valid glTF file: {reason}")]
+    GltfFormat { path: PathBuf, reason: String },
+
+    #[error("{path}: buffer {buffer}: {reason}")]
+    Buffer {
+        path: PathBuf,
+        buffer: usize,
+        reason: String,
+    },
+
+    #[error("{path}: mesh \"{mesh}\", primitive {primitive}: {reason}")]
+    Mesh {
+        path: PathBuf,
+        mesh: String,
+        primitive: usize,
+        reason: String,
+    },
+
+    #[error("{path}: material \"{material}\": {reason}")]
+    Material {
+        path: PathBuf,
+        material: String,
+        reason: String,
+    },
+
+    #[error("{path}: texture image {image}: {reason}")]
+    Texture {
+        path: PathBuf,
+        image: String,
+        reason: String,
+    },
+
+    #[error("{path}: unsupported scene format (expected .gltf or .glb)")]
+    UnsupportedFormat { path: PathBuf },
+
+    #[error("{path}: the scene has no emitter (no emissive material and no light), so it would render black")]
+    NoEmitter { path: PathBuf },
+
+    #[error("{path}: the scene has no geometry to render")]
+    EmptyScene { path: PathBuf },
+
+    #[error("{path}: {reason}")]
+    Camera { path: PathBuf, reason: String },
+
+    #[error("invalid setting: {0}")]
+    InvalidSetting(String),
+
+    #[error("cannot write {path}: {reason}")]
+    Output { path: PathBuf, reason: String },
+}
+
+pub type Result<T, E = Error> = std::result::Result<T, E>;

@@ -1,0 +1,25 @@
+//! RGB radiometric quantities.
+//!
+//! The renderer works in linear RGB (Mitsuba's `*_rgb` variants): a radiance, a BSDF value and a
+//! throughput are all `Rgb`, which is `glam::Vec3` under a name that says what it holds.
+
+/// Linear RGB triple (radiance, reflectance, throughput).
+pub type Rgb = glam::Vec3;
+
+/// Largest component, the quantity Mitsuba uses for Russian roulette.
+#[inline]
+pub fn max_component(c: Rgb) -> f32 {
+    c.x.max(c.y).max(c.z)
+}
+
+/// Rec. 709 luminance.
+#[inline]
+pub fn luminance(c: Rgb) -> f32 {
+    0.212_671 * c.x + 0.715_160 * c.y + 0.072_169 * c.z
+}
+
+/// True when every component is finite.
+#[inline]
+pub fn is_finite(c: Rgb) -> bool {
+    c.is_finite()
+}
