@@ -59,6 +59,9 @@ pub enum Error {
     #[error("invalid setting: {0}")]
     InvalidSetting(String),
 
+    #[error("{path}: cannot read as an OpenEXR image: {reason}")]
+    ImageRead { path: PathBuf, reason: String },
+
     #[error("cannot write {path}: {reason}")]
     Output { path: PathBuf, reason: String },
 }

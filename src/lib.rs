@@ -19,14 +19,15 @@
 //! # Ok(()) }
 //! ```
 
-//TMP pub mod accel;
+pub mod accel;
 pub mod bsdf;
+pub mod emitters;
 pub mod error;
 pub mod geometry;
-//TMP pub mod image;
-//TMP pub mod reference;
+pub mod image;
+pub mod reference;
 pub mod sampler;
-//TMP pub mod scene;
+pub mod scene;
 pub mod spectrum;
 
 pub use error::Error;

@@ -26,14 +26,20 @@ impl Sampler {
     /// The stream for sample `index` of item `stream` (pixel, surfel, ...) under `seed`.
     #[inline]
     pub fn new(seed: u64, stream: u64, index: u64) -> Self {
-        let key = mix64(mix64(seed ^ 0x6a09_e667_f3bc_c908).wrapping_add(stream) ^ mix64(index.wrapping_add(0x9e37_79b9_7f4a_7c15)));
+        let key = mix64(
+            mix64(seed ^ 0x6a09_e667_f3bc_c908).wrapping_add(stream)
+                ^ mix64(index.wrapping_add(0x9e37_79b9_7f4a_7c15)),
+        );
         Sampler { key, dim: 0 }
     }
 
     /// Next uniform number in [0, 1).
     #[inline]
     pub fn next_1d(&mut self) -> f32 {
-        let bits = mix64(self.key.wrapping_add((self.dim as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15)));
+        let bits = mix64(
+            self.key
+                .wrapping_add((self.dim as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15)),
+        );
         self.dim += 1;
         // 24 high bits: every value is exactly representable and strictly below 1.
         (bits >> 40) as f32 * (1.0 / (1u64 << 24) as f32)

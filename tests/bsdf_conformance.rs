@@ -14,8 +14,11 @@ use wpbgi::bsdf::{mitsuba::parse_bsdf, Bsdf, Lobe, TransportMode};
 use wpbgi::sampler::Sampler;
 
 fn load() -> Value {
-    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/bsdf_reference.json"))
-        .expect("reference table");
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/data/bsdf_reference.json"
+    ))
+    .expect("reference table");
     serde_json::from_str(&text).expect("valid JSON")
 }
 
@@ -24,7 +27,11 @@ fn f(v: &Value) -> Option<f32> {
 }
 
 fn v3(r: &[Value], i: usize) -> Vec3 {
-    Vec3::new(f(&r[i]).unwrap(), f(&r[i + 1]).unwrap(), f(&r[i + 2]).unwrap())
+    Vec3::new(
+        f(&r[i]).unwrap(),
+        f(&r[i + 1]).unwrap(),
+        f(&r[i + 2]).unwrap(),
+    )
 }
 
 fn bsdfs(cfg: &Value) -> Bsdf {
@@ -59,7 +66,11 @@ fn ulp_neighbours(v: Vec3) -> Vec<Vec3> {
 }
 
 fn step_ulp(x: f32, up: bool) -> f32 {
-    if up { x.next_up() } else { x.next_down() }
+    if up {
+        x.next_up()
+    } else {
+        x.next_down()
+    }
 }
 
 /// The BSDF with one float32 parameter (eta, alpha_u, alpha_v) moved by one ulp.
@@ -79,7 +90,11 @@ fn parameter_neighbours(b: &Bsdf) -> Vec<Bsdf> {
                 Bsdf::Conductor(c) => &mut c.distr,
                 Bsdf::Diffuse(_) => continue,
             };
-            if axis == 0 { distr.alpha_u = step_ulp(distr.alpha_u, up) } else { distr.alpha_v = step_ulp(distr.alpha_v, up) }
+            if axis == 0 {
+                distr.alpha_u = step_ulp(distr.alpha_u, up)
+            } else {
+                distr.alpha_v = step_ulp(distr.alpha_v, up)
+            }
             out.push(v);
         }
     }
@@ -107,7 +122,8 @@ fn sensitivity(bsdf: &Bsdf, g: impl Fn(&Bsdf, Vec3, Vec3) -> f32, wi: Vec3, wo: 
 /// coordinate of wi, u1, u2, or a BSDF parameter — moves by one ulp.
 fn sample_weight_sensitivity(bsdf: &Bsdf, wi: Vec3, u0: f32, u: Vec2, c: usize) -> f32 {
     let w = |b: &Bsdf, wi: Vec3, u: Vec2| {
-        b.sample(wi, u0, u, TransportMode::Radiance).map_or(0.0, |s| s.weight[c])
+        b.sample(wi, u0, u, TransportMode::Radiance)
+            .map_or(0.0, |s| s.weight[c])
     };
     let base = w(bsdf, wi, u);
     let mut out = 0.0_f32;
@@ -142,7 +158,12 @@ fn eval_and_pdf_match_mitsuba() {
             assert!(e.is_finite() && p.is_finite(), "{id}: non-finite output");
             for c in 0..3 {
                 let Some(theirs) = f(&r[6 + c]) else { continue };
-                let slack = sensitivity(&bsdf, |x, a, b| x.eval(a, b, TransportMode::Radiance)[c], wi, wo);
+                let slack = sensitivity(
+                    &bsdf,
+                    |x, a, b| x.eval(a, b, TransportMode::Radiance)[c],
+                    wi,
+                    wo,
+                );
                 if !close(e[c], theirs, 0.0) {
                     via_sensitivity += 1;
                     if !close(e[c], theirs, slack) {
@@ -163,9 +184,19 @@ fn eval_and_pdf_match_mitsuba() {
             }
         }
     }
-    eprintln!("{checked} eval/pdf values checked, {via_sensitivity} needed the one-ulp sensitivity rule");
-    assert!(checked > 50_000, "the table should hold all 112 configurations");
-    assert!(failures.is_empty(), "{} mismatches:\n{}", failures.len(), failures[..failures.len().min(40)].join("\n"));
+    eprintln!(
+        "{checked} eval/pdf values checked, {via_sensitivity} needed the one-ulp sensitivity rule"
+    );
+    assert!(
+        checked > 50_000,
+        "the table should hold all 112 configurations"
+    );
+    assert!(
+        failures.is_empty(),
+        "{} mismatches:\n{}",
+        failures.len(),
+        failures[..failures.len().min(40)].join("\n")
+    );
 }
 
 #[test]
@@ -179,8 +210,15 @@ fn samples_match_mitsuba() {
         for row in cfg["sample"].as_array().unwrap() {
             let r = row.as_array().unwrap();
             let wi = v3(r, 0);
-            let (u0, u) = (f(&r[3]).unwrap(), Vec2::new(f(&r[4]).unwrap(), f(&r[5]).unwrap()));
-            let theirs_weight = Vec3::new(f(&r[12]).unwrap_or(0.0), f(&r[13]).unwrap_or(0.0), f(&r[14]).unwrap_or(0.0));
+            let (u0, u) = (
+                f(&r[3]).unwrap(),
+                Vec2::new(f(&r[4]).unwrap(), f(&r[5]).unwrap()),
+            );
+            let theirs_weight = Vec3::new(
+                f(&r[12]).unwrap_or(0.0),
+                f(&r[13]).unwrap_or(0.0),
+                f(&r[14]).unwrap_or(0.0),
+            );
             let ours = bsdf.sample(wi, u0, u, TransportMode::Radiance);
             checked += 1;
             let Some(s) = ours else {
@@ -200,25 +238,43 @@ fn samples_match_mitsuba() {
             // At grazing angles with tiny alpha the half vector of the (nearly opposite) pair
             // cancels catastrophically, so the ratio is held to its one-ulp sensitivity there.
             let ratio_ok = (0..3).all(|c| {
-                let ratio = |x: &Bsdf, a: Vec3, b: Vec3| x.eval(a, b, TransportMode::Radiance)[c] / x.pdf(a, b);
+                let ratio = |x: &Bsdf, a: Vec3, b: Vec3| {
+                    x.eval(a, b, TransportMode::Radiance)[c] / x.pdf(a, b)
+                };
                 let slack = sensitivity(&bsdf, ratio, wi, s.wo);
                 close(s.weight[c], e[c] / p, slack)
             });
             if !(close(p, s.pdf, slack) && ratio_ok) {
-                failures.push(format!("{id} wi={wi}: weight {} pdf {} but eval/pdf {} pdf(wo) {p} (slack {slack})", s.weight, s.pdf, e / p));
+                failures.push(format!(
+                    "{id} wi={wi}: weight {} pdf {} but eval/pdf {} pdf(wo) {p} (slack {slack})",
+                    s.weight,
+                    s.pdf,
+                    e / p
+                ));
             }
             if theirs_weight == Vec3::ZERO {
                 // Mitsuba flagged the sample invalid; ours must carry no energy either.
                 if s.weight.max_element() > 0.0 {
-                    failures.push(format!("{id} wi={wi} u=({u0},{u}): Mitsuba invalid, ours weight {}", s.weight));
+                    failures.push(format!(
+                        "{id} wi={wi} u=({u0},{u}): Mitsuba invalid, ours weight {}",
+                        s.weight
+                    ));
                 }
                 continue;
             }
             let wo = v3(r, 6);
-            let lobe = if r[11].as_u64() == Some(1) { Lobe::Transmission } else { Lobe::Reflection };
+            let lobe = if r[11].as_u64() == Some(1) {
+                Lobe::Transmission
+            } else {
+                Lobe::Reflection
+            };
             // Directions: compare with an angular tolerance scaled by the sampler's conditioning.
             let dwo = (s.wo - wo).length();
-            let pdf_ok = close(s.pdf, f(&r[9]).unwrap(), 4.0 * sensitivity(&bsdf, |x, a, b| x.pdf(a, b), wi, s.wo));
+            let pdf_ok = close(
+                s.pdf,
+                f(&r[9]).unwrap(),
+                4.0 * sensitivity(&bsdf, |x, a, b| x.pdf(a, b), wi, s.wo),
+            );
             if dwo > 1e-3 || s.lobe != lobe || !pdf_ok || !close(s.eta, f(&r[10]).unwrap(), 0.0) {
                 failures.push(format!(
                     "{id} wi={wi} u=({u0},{u}): ours wo={} pdf={} eta={} {:?}; mitsuba wo={wo} pdf={} eta={} {:?}",
@@ -228,26 +284,40 @@ fn samples_match_mitsuba() {
             for c in 0..3 {
                 let slack = sample_weight_sensitivity(&bsdf, wi, u0, u, c);
                 if !close(s.weight[c], theirs_weight[c], slack) {
-                    failures.push(format!("{id} wi={wi} u=({u0},{u}) weight[{c}]: ours {} mitsuba {}", s.weight[c], theirs_weight[c]));
+                    failures.push(format!(
+                        "{id} wi={wi} u=({u0},{u}) weight[{c}]: ours {} mitsuba {}",
+                        s.weight[c], theirs_weight[c]
+                    ));
                 }
             }
         }
     }
     eprintln!("{checked} sample rows checked");
-    assert!(failures.is_empty(), "{} mismatches:\n{}", failures.len(), failures[..failures.len().min(40)].join("\n"));
+    assert!(
+        failures.is_empty(),
+        "{} mismatches:\n{}",
+        failures.len(),
+        failures[..failures.len().min(40)].join("\n")
+    );
 }
 
 #[test]
 fn named_conductors_resolve_like_mitsuba() {
     let data = load();
     for cfg in data["configs"].as_array().unwrap() {
-        let Bsdf::Conductor(c) = bsdfs(cfg) else { continue };
+        let Bsdf::Conductor(c) = bsdfs(cfg) else {
+            continue;
+        };
         let p = &cfg["mitsuba_params"];
         for (key, ours) in [("eta.value", c.eta), ("k.value", c.k)] {
             if let Some(v) = p[key].as_array() {
                 for i in 0..3 {
                     let t = v[i].as_f64().unwrap() as f32;
-                    assert!((ours[i] - t).abs() <= 1e-5 * t.abs().max(1.0), "{}: {key}", cfg["id"]);
+                    assert!(
+                        (ours[i] - t).abs() <= 1e-5 * t.abs().max(1.0),
+                        "{}: {key}",
+                        cfg["id"]
+                    );
                 }
             }
         }
@@ -266,7 +336,11 @@ fn albedo_matches_mitsuba() {
         let bsdf = bsdfs(cfg);
         let id = cfg["id"].as_str().unwrap();
         for (ai, a) in cfg["albedo"].as_array().unwrap().iter().enumerate() {
-            let wi = Vec3::new(f(&a["wi"][0]).unwrap(), f(&a["wi"][1]).unwrap(), f(&a["wi"][2]).unwrap());
+            let wi = Vec3::new(
+                f(&a["wi"][0]).unwrap(),
+                f(&a["wi"][1]).unwrap(),
+                f(&a["wi"][2]).unwrap(),
+            );
             let (mut sum, mut sum2) = ([0.0f64; 3], [0.0f64; 3]);
             for i in 0..n {
                 let mut s = Sampler::new(ci as u64 * 1000 + ai as u64, i, 0);
@@ -286,7 +360,9 @@ fn albedo_matches_mitsuba() {
                 let var = (sum2[c] / n as f64 - mean * mean).max(0.0);
                 let our_se = (var / n as f64).sqrt();
                 let their = rad["total"][c].as_f64().unwrap();
-                let their_se = (rad["R_stderr"][c].as_f64().unwrap().powi(2) + rad["T_stderr"][c].as_f64().unwrap().powi(2)).sqrt();
+                let their_se = (rad["R_stderr"][c].as_f64().unwrap().powi(2)
+                    + rad["T_stderr"][c].as_f64().unwrap().powi(2))
+                .sqrt();
                 let se = (our_se * our_se + their_se * their_se).sqrt();
                 // An albedo is the mean of sample weights; each weight may differ from Mitsuba's by
                 // the 1e-4 relative allowed for every eval value, so the means may too.
@@ -306,7 +382,19 @@ fn albedo_matches_mitsuba() {
     // fail by chance: P(|z| > 3) = 0.27% gives ~1.5 expected exceedances, and the standard errors
     // of heavy-tailed weights are themselves estimated. So: no entry beyond 5 sigma (p = 6e-7
     // each), and at most 1% beyond 3 sigma (binomial mean 0.27%, sd 0.07% on 560 trials).
-    eprintln!("{compared} albedo values, {} beyond 3 sigma:\n{}", beyond_3_sigma.len(), beyond_3_sigma.join("\n"));
-    assert!(beyond_3_sigma.len() * 100 <= compared, "too many albedos beyond 3 sigma");
-    assert!(failures.is_empty(), "{} mismatches:\n{}", failures.len(), failures[..failures.len().min(40)].join("\n"));
+    eprintln!(
+        "{compared} albedo values, {} beyond 3 sigma:\n{}",
+        beyond_3_sigma.len(),
+        beyond_3_sigma.join("\n")
+    );
+    assert!(
+        beyond_3_sigma.len() * 100 <= compared,
+        "too many albedos beyond 3 sigma"
+    );
+    assert!(
+        failures.is_empty(),
+        "{} mismatches:\n{}",
+        failures.len(),
+        failures[..failures.len().min(40)].join("\n")
+    );
 }

@@ -1,1 +1,248 @@
-fn main(){}
+//! The `wpbgi` command line: a thin shell over the library that parses arguments, shows progress
+//! and turns every error into one sentence and a non-zero exit code.
+
+use anyhow::{bail, Context, Result};
+use clap::{Args, Parser, Subcommand};
+use glam::Vec3;
+use indicatif::{ProgressBar, ProgressStyle};
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+use wpbgi::image::{write_exr, write_png};
+use wpbgi::reference::{render, RenderOutput, RenderSettings};
+use wpbgi::scene::{Camera, Scene};
+
+/// The Cornell box compiled into the binary for `wpbgi demo`.
+const DEMO_SCENE: &[u8] = include_bytes!("../../scenes/cbox-rough.gltf");
+
+#[derive(Parser)]
+#[command(name = "wpbgi", version, about = "Noise-free global illumination for glTF scenes with Mitsuba's diffuse, roughconductor and roughdielectric materials.", long_about = None)]
+struct Cli {
+    /// Worker threads (default: all cores). Results are identical for any count.
+    #[arg(long, global = true)]
+    threads: Option<usize>,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Path-trace the ground truth of a scene (unidirectional, next-event estimation with MIS,
+    /// Russian roulette; Mitsuba `path` semantics) and write a float EXR.
+    Reference(ReferenceArgs),
+    /// Render the bundled Cornell box (rough gold box, glass sphere) to DIR/demo.exr and DIR/demo.png.
+    Demo(DemoArgs),
+}
+
+#[derive(Args)]
+struct CameraArgs {
+    /// Image size as WIDTHxHEIGHT.
+    #[arg(long, default_value = "512x512", value_parser = parse_size)]
+    size: (u32, u32),
+    /// Use the scene camera with this name (default: the first camera, or an automatic framing).
+    #[arg(long)]
+    camera: Option<String>,
+    /// Place a camera at this point instead (x,y,z); needs --target.
+    #[arg(long, value_parser = parse_vec3, requires = "target", conflicts_with = "camera")]
+    eye: Option<Vec3>,
+    /// The point the --eye camera looks at (x,y,z).
+    #[arg(long, value_parser = parse_vec3, requires = "eye")]
+    target: Option<Vec3>,
+    /// Vertical field of view of the --eye camera, in degrees.
+    #[arg(long, default_value_t = 40.0)]
+    fov: f32,
+}
+
+#[derive(Args)]
+struct ReferenceArgs {
+    /// The scene (.gltf or .glb).
+    scene: PathBuf,
+    /// Output image (OpenEXR, float32 RGB).
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Samples per pixel.
+    #[arg(long, conflicts_with = "time", required_unless_present = "time")]
+    spp: Option<u32>,
+    /// Render for this many seconds instead (in passes of 4 samples per pixel).
+    #[arg(long)]
+    time: Option<f64>,
+    /// Longest path in segments, as Mitsuba's max_depth: 2 = direct light only, -1 = unlimited.
+    #[arg(long, default_value_t = -1, allow_hyphen_values = true)]
+    max_depth: i32,
+    /// Depth at which Russian roulette starts.
+    #[arg(long, default_value_t = 5)]
+    rr_depth: u32,
+    /// Seed of the random streams.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Also write the per-pixel variance of a one-sample estimate (OpenEXR).
+    #[arg(long)]
+    variance: Option<PathBuf>,
+    /// Also write an sRGB PNG preview.
+    #[arg(long)]
+    png: Option<PathBuf>,
+    #[command(flatten)]
+    camera: CameraArgs,
+}
+
+#[derive(Args)]
+struct DemoArgs {
+    /// Output folder.
+    #[arg(short, long, default_value = "wpbgi-demo")]
+    output: PathBuf,
+    /// Samples per pixel.
+    #[arg(long, default_value_t = 64)]
+    spp: u32,
+    /// Image size as WIDTHxHEIGHT.
+    #[arg(long, default_value = "256x256", value_parser = parse_size)]
+    size: (u32, u32),
+}
+
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or("expected WIDTHxHEIGHT, e.g. 512x512")?;
+    let w: u32 = w.trim().parse().map_err(|_| format!("bad width \"{w}\""))?;
+    let h: u32 = h
+        .trim()
+        .parse()
+        .map_err(|_| format!("bad height \"{h}\""))?;
+    if w == 0 || h == 0 || w > 16384 || h > 16384 {
+        return Err("each side must be between 1 and 16384".into());
+    }
+    Ok((w, h))
+}
+
+fn parse_vec3(s: &str) -> Result<Vec3, String> {
+    let v: Vec<f32> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| format!("expected x,y,z numbers, got \"{s}\""))?;
+    if v.len() != 3 || v.iter().any(|x| !x.is_finite()) {
+        return Err(format!("expected three finite numbers x,y,z, got \"{s}\""));
+    }
+    Ok(Vec3::from_slice(&v))
+}
+
+fn progress_bar(what: &str) -> ProgressBar {
+    let bar = ProgressBar::new(1000);
+    bar.set_style(
+        ProgressStyle::with_template("{msg} [{bar:40}] {percent}% ({elapsed}, eta {eta})")
+            .unwrap_or_else(|_| ProgressStyle::default_bar())
+            .progress_chars("=> "),
+    );
+    bar.set_message(what.to_string());
+    bar
+}
+
+fn run_render(scene: &Scene, camera: &Camera, settings: &RenderSettings) -> Result<RenderOutput> {
+    let bar = progress_bar("path tracing");
+    let out = render(scene, camera, settings, &|f| {
+        bar.set_position((f * 1000.0) as u64)
+    })?;
+    bar.finish_and_clear();
+    Ok(out)
+}
+
+fn pick_camera(scene: &Scene, args: &CameraArgs) -> Result<Camera> {
+    let (w, h) = args.size;
+    if let (Some(eye), Some(target)) = (args.eye, args.target) {
+        if !(args.fov > 0.0 && args.fov < 180.0) {
+            bail!("--fov must be between 0 and 180 degrees");
+        }
+        return Camera::look_at("command line", eye, target, args.fov.to_radians(), w, h)
+            .context("--eye and --target must be different points");
+    }
+    Ok(scene.camera(args.camera.as_deref(), w, h)?)
+}
+
+fn warn(scene: &Scene) {
+    for w in &scene.warnings {
+        eprintln!("warning: {}: {}", scene.path.display(), w.0);
+    }
+}
+
+fn reference(a: ReferenceArgs) -> Result<()> {
+    let scene = Scene::load(&a.scene)?;
+    warn(&scene);
+    let camera = pick_camera(&scene, &a.camera)?;
+    let settings = RenderSettings {
+        spp: a.spp.unwrap_or(4),
+        max_depth: a.max_depth,
+        rr_depth: a.rr_depth,
+        seed: a.seed,
+        time_limit: match a.time {
+            Some(t) if t > 0.0 && t.is_finite() => Some(Duration::from_secs_f64(t)),
+            Some(_) => bail!("--time must be a positive number of seconds"),
+            None => None,
+        },
+    };
+    let out = run_render(&scene, &camera, &settings)?;
+    write_exr(&a.output, &out.mean)?;
+    if let Some(p) = &a.variance {
+        write_exr(p, &out.variance)?;
+    }
+    if let Some(p) = &a.png {
+        write_png(p, &out.mean)?;
+    }
+    let mp = (camera.width as f64 * camera.height as f64) / 1e6;
+    eprintln!(
+        "wrote {} ({}x{}, {} spp, {:.2} s, {:.3} s/spp/MP)",
+        a.output.display(),
+        camera.width,
+        camera.height,
+        out.spp,
+        out.seconds,
+        out.seconds / (out.spp as f64 * mp)
+    );
+    Ok(())
+}
+
+fn demo(a: DemoArgs) -> Result<()> {
+    std::fs::create_dir_all(&a.output)
+        .with_context(|| format!("cannot create the folder {}", a.output.display()))?;
+    let scene = Scene::from_gltf_bytes(Path::new("cbox-rough.gltf (bundled)"), DEMO_SCENE)?;
+    warn(&scene);
+    let camera = scene.default_camera(a.size.0, a.size.1)?;
+    let settings = RenderSettings {
+        spp: a.spp,
+        max_depth: 8,
+        ..Default::default()
+    };
+    let out = run_render(&scene, &camera, &settings)?;
+    let exr = a.output.join("demo.exr");
+    let png = a.output.join("demo.png");
+    write_exr(&exr, &out.mean)?;
+    write_png(&png, &out.mean)?;
+    eprintln!(
+        "wrote {} and {} ({} spp, max depth 8, {:.2} s)",
+        exr.display(),
+        png.display(),
+        out.spp,
+        out.seconds
+    );
+    Ok(())
+}
+
+fn main() {
+    let cli = Cli::parse();
+    if let Some(n) = cli.threads {
+        if n == 0
+            || rayon::ThreadPoolBuilder::new()
+                .num_threads(n)
+                .build_global()
+                .is_err()
+        {
+            eprintln!("error: --threads must be a positive number");
+            std::process::exit(2);
+        }
+    }
+    let result = match cli.command {
+        Command::Reference(a) => reference(a),
+        Command::Demo(a) => demo(a),
+    };
+    if let Err(e) = result {
+        eprintln!("error: {e:#}");
+        std::process::exit(1);
+    }
+}

@@ -79,7 +79,11 @@ impl RoughDielectric {
     /// `u0` chooses the lobe (reflection iff `u0 <= F`), `u` drives the microfacet sampler.
     pub fn sample(&self, wi: Vec3, u0: f32, u: Vec2, mode: TransportMode) -> Option<BsdfSample> {
         let cos_theta_i = wi.z;
-        let wi_up = if cos_theta_i.is_sign_negative() { -wi } else { wi };
+        let wi_up = if cos_theta_i.is_sign_negative() {
+            -wi
+        } else {
+            wi
+        };
         let (m, pdf_m) = self.distr.sample(wi_up, u);
         let fr = fresnel_dielectric(wi.dot(m), self.eta);
         let f = fr.r;

@@ -21,7 +21,11 @@ pub struct DielectricFresnel {
 pub fn fresnel_dielectric(cos_theta_i: f32, eta: f32) -> DielectricFresnel {
     let outside = cos_theta_i >= 0.0;
     let rcp_eta = 1.0 / eta;
-    let (eta_it, eta_ti) = if outside { (eta, rcp_eta) } else { (rcp_eta, eta) };
+    let (eta_it, eta_ti) = if outside {
+        (eta, rcp_eta)
+    } else {
+        (rcp_eta, eta)
+    };
     // Snell's law: cos² of the transmitted angle.
     let cos_theta_t_sqr = 1.0 - (1.0 - cos_theta_i * cos_theta_i) * (eta_ti * eta_ti);
     let cos_i = cos_theta_i.abs();

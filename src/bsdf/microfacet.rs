@@ -152,8 +152,7 @@ impl Microfacet {
                         + INV_SQRT_PI * tan_theta_i * (-cot_theta_i * cot_theta_i).exp());
                 for _ in 0..3 {
                     let slope = erfinv(x);
-                    let value =
-                        1.0 + x + INV_SQRT_PI * tan_theta_i * (-slope * slope).exp() - ux;
+                    let value = 1.0 + x + INV_SQRT_PI * tan_theta_i * (-slope * slope).exp() - ux;
                     let derivative = 1.0 - slope * tan_theta_i;
                     x -= value / derivative;
                 }

@@ -52,10 +52,15 @@ pub fn parse_bsdf(v: &Value) -> Result<Bsdf, String> {
         }
     };
     if let Some(k) = obj.keys().find(|k| !known.contains(&k.as_str())) {
-        return Err(format!("unknown parameter \"{k}\" for Mitsuba BSDF \"{ty}\""));
+        return Err(format!(
+            "unknown parameter \"{k}\" for Mitsuba BSDF \"{ty}\""
+        ));
     }
     if obj.get("sample_visible").and_then(Value::as_bool) == Some(false) {
-        return Err("sample_visible = false is not supported (visible-normal sampling is always used)".into());
+        return Err(
+            "sample_visible = false is not supported (visible-normal sampling is always used)"
+                .into(),
+        );
     }
     match ty {
         "diffuse" => Ok(Bsdf::Diffuse(Diffuse {
@@ -91,7 +96,10 @@ pub fn parse_bsdf(v: &Value) -> Result<Bsdf, String> {
             let int_ior = ior(obj, "int_ior", "bk7")?;
             let ext_ior = ior(obj, "ext_ior", "air")?;
             if int_ior == ext_ior {
-                return Err("int_ior and ext_ior must differ (an index-matched interface is invisible)".into());
+                return Err(
+                    "int_ior and ext_ior must differ (an index-matched interface is invisible)"
+                        .into(),
+                );
             }
             Ok(Bsdf::Dielectric(RoughDielectric {
                 distr,
@@ -140,17 +148,30 @@ fn ior(obj: &Map<String, Value>, key: &str, default: &str) -> Result<f32, String
         Some(v) => v,
     };
     if let Some(name) = v.as_str() {
-        return dielectric_ior(name).ok_or_else(|| format!("unknown index of refraction \"{name}\" for \"{key}\""));
+        return dielectric_ior(name)
+            .ok_or_else(|| format!("unknown index of refraction \"{name}\" for \"{key}\""));
     }
-    let x = v.as_f64().ok_or_else(|| format!("\"{key}\" must be a number or a named IOR"))? as f32;
+    let x = v
+        .as_f64()
+        .ok_or_else(|| format!("\"{key}\" must be a number or a named IOR"))? as f32;
     if !(x > 0.0 && x.is_finite()) {
-        return Err(format!("\"{key}\" must be a positive finite number, got {x}"));
+        return Err(format!(
+            "\"{key}\" must be a positive finite number, got {x}"
+        ));
     }
     Ok(x)
 }
 
-fn scalar(obj: &Map<String, Value>, key: &str, default: f32, lo: f32, hi: f32) -> Result<f32, String> {
-    let Some(v) = obj.get(key) else { return Ok(default) };
+fn scalar(
+    obj: &Map<String, Value>,
+    key: &str,
+    default: f32,
+    lo: f32,
+    hi: f32,
+) -> Result<f32, String> {
+    let Some(v) = obj.get(key) else {
+        return Ok(default);
+    };
     let x = v
         .as_f64()
         .ok_or_else(|| format!("\"{key}\" must be a number (textures are not supported here)"))?
@@ -163,7 +184,9 @@ fn scalar(obj: &Map<String, Value>, key: &str, default: f32, lo: f32, hi: f32) -
 
 /// A spectrum parameter: a number, an `[r, g, b]` list or `{"type": "rgb", "value": [...]}`.
 fn rgb(obj: &Map<String, Value>, key: &str, default: f32, lo: f32, hi: f32) -> Result<Rgb, String> {
-    let Some(v) = obj.get(key) else { return Ok(Rgb::splat(default)) };
+    let Some(v) = obj.get(key) else {
+        return Ok(Rgb::splat(default));
+    };
     let v = match v {
         Value::Object(o) if o.get("type").and_then(Value::as_str) == Some("rgb") => {
             o.get("value").unwrap_or(&Value::Null)
@@ -175,7 +198,10 @@ fn rgb(obj: &Map<String, Value>, key: &str, default: f32, lo: f32, hi: f32) -> R
         Value::Array(a) if a.len() == 3 => {
             let mut c = [0.0_f32; 3];
             for (i, x) in a.iter().enumerate() {
-                c[i] = x.as_f64().ok_or_else(|| format!("\"{key}\" must hold numbers"))? as f32;
+                c[i] = x
+                    .as_f64()
+                    .ok_or_else(|| format!("\"{key}\" must hold numbers"))?
+                    as f32;
             }
             Rgb::from(c)
         }
@@ -186,7 +212,9 @@ fn rgb(obj: &Map<String, Value>, key: &str, default: f32, lo: f32, hi: f32) -> R
         }
     };
     if !c.to_array().iter().all(|&x| x >= lo && x <= hi) {
-        return Err(format!("\"{key}\" = {c:?} has a component outside [{lo}, {hi}] or not finite"));
+        return Err(format!(
+            "\"{key}\" = {c:?} has a component outside [{lo}, {hi}] or not finite"
+        ));
     }
     Ok(c)
 }

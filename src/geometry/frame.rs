@@ -34,7 +34,11 @@ impl Frame {
             return Self::from_normal(n);
         }
         let s = s / len2.sqrt();
-        Frame { s, t: n.cross(s), n }
+        Frame {
+            s,
+            t: n.cross(s),
+            n,
+        }
     }
 
     #[inline]

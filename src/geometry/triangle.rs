@@ -63,7 +63,14 @@ impl WatertightRay {
 
     /// Intersect the triangle `(p0, p1, p2)` within the open interval `(tmin, tmax)`.
     #[inline]
-    pub fn intersect(&self, p0: Vec3A, p1: Vec3A, p2: Vec3A, tmin: f32, tmax: f32) -> Option<TriangleHit> {
+    pub fn intersect(
+        &self,
+        p0: Vec3A,
+        p1: Vec3A,
+        p2: Vec3A,
+        tmin: f32,
+        tmax: f32,
+    ) -> Option<TriangleHit> {
         let (kx, ky, kz) = (self.kx, self.ky, self.kz);
         let a = p0 - self.origin;
         let b = p1 - self.origin;
@@ -78,7 +85,8 @@ impl WatertightRay {
         let mut v = ax * cy - ay * cx;
         let mut w = bx * ay - by * ax;
         if u == 0.0 || v == 0.0 || w == 0.0 {
-            let f = |p: f32, q: f32, r: f32, s: f32| (p as f64 * q as f64 - r as f64 * s as f64) as f32;
+            let f =
+                |p: f32, q: f32, r: f32, s: f32| (p as f64 * q as f64 - r as f64 * s as f64) as f32;
             u = f(cx, by, cy, bx);
             v = f(ax, cy, ay, cx);
             w = f(bx, ay, by, ax);
@@ -95,7 +103,11 @@ impl WatertightRay {
         let cz = self.sz * c[kz];
         let t_scaled = u * az + v * bz + w * cz;
         // Compare t = t_scaled / det with the interval without dividing.
-        let (ts, d) = if det < 0.0 { (-t_scaled, -det) } else { (t_scaled, det) };
+        let (ts, d) = if det < 0.0 {
+            (-t_scaled, -det)
+        } else {
+            (t_scaled, det)
+        };
         if !(ts > tmin * d && ts < tmax * d) {
             return None;
         }

@@ -1,0 +1,16 @@
+#!/usr/bin/env bash
+# Install what the test suite needs on a fresh Debian machine, then run every test.
+# Tests are compiled with optimisation (profile.test opt-level = 3): they render images.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+if ! command -v cargo >/dev/null 2>&1; then
+  echo "error: cargo is not installed (https://rustup.rs)" >&2
+  exit 1
+fi
+SUDO=""
+if [ "$(id -u)" -ne 0 ] && command -v sudo >/dev/null 2>&1; then SUDO="sudo"; fi
+# A C compiler for crates with C parts. Installed only when missing.
+if ! command -v cc >/dev/null 2>&1; then
+  $SUDO apt-get update -qq && $SUDO apt-get install -y -qq build-essential
+fi
+cargo test --release --workspace --all-targets "$@"

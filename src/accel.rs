@@ -1,0 +1,147 @@
+//! Ray tracing against all scene triangles: an obvhs compressed wide BVH (CWBVH) traversed with
+//! the watertight triangle test of [`crate::geometry::triangle`] (obvhs's own test is not
+//! watertight).
+
+use crate::geometry::triangle::{TriangleHit, WatertightRay};
+use crate::scene::Scene;
+use glam::{Vec3, Vec3A};
+use obvhs::cwbvh::builder::build_cwbvh_from_tris;
+use obvhs::cwbvh::CwBvh;
+use obvhs::ray::{Ray, RayHit};
+use obvhs::triangle::Triangle;
+use obvhs::BvhBuildParams;
+use std::time::Duration;
+
+/// A closest hit: which triangle, where along the ray, and its barycentrics.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    pub t: f32,
+    pub mesh: u32,
+    pub triangle: u32,
+    /// Weights of the triangle's three vertices.
+    pub b: [f32; 3],
+}
+
+/// The acceleration structure over every triangle of a scene.
+pub struct Accel {
+    bvh: CwBvh,
+    tris: Vec<Triangle>,
+    /// `(mesh, triangle within mesh)` of each entry of `tris`.
+    ids: Vec<(u32, u32)>,
+}
+
+impl Accel {
+    /// Build over all triangles of `scene` (PLOC, obvhs's "medium" preset).
+    pub fn build(scene: &Scene) -> Accel {
+        let mut tris = Vec::with_capacity(scene.triangle_count());
+        let mut ids = Vec::with_capacity(scene.triangle_count());
+        for (mi, m) in scene.meshes.iter().enumerate() {
+            for (ti, t) in m.triangles.iter().enumerate() {
+                let p = |i: u32| Vec3A::from(m.positions[i as usize]);
+                tris.push(Triangle {
+                    v0: p(t[0]),
+                    v1: p(t[1]),
+                    v2: p(t[2]),
+                });
+                ids.push((mi as u32, ti as u32));
+            }
+        }
+        Self::from_triangles(tris, ids)
+    }
+
+    fn from_triangles(tris: Vec<Triangle>, ids: Vec<(u32, u32)>) -> Accel {
+        let bvh = if tris.is_empty() {
+            CwBvh::default()
+        } else {
+            build_cwbvh_from_tris(
+                &tris,
+                BvhBuildParams::medium_build(),
+                &mut Duration::default(),
+            )
+        };
+        Accel { bvh, tris, ids }
+    }
+
+    /// Number of triangles.
+    pub fn len(&self) -> usize {
+        self.tris.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.tris.is_empty()
+    }
+
+    /// Closest intersection in `(tmin, tmax)` along `origin + t·dir` (`dir` need not be unit).
+    pub fn closest_hit(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<Hit> {
+        if self.tris.is_empty() {
+            return None;
+        }
+        let (o, d) = (Vec3A::from(origin), Vec3A::from(dir));
+        let wt = WatertightRay::new(o, d);
+        let mut best: Option<(usize, TriangleHit)> = None;
+        let mut hit = RayHit::none();
+        hit.t = tmax;
+        self.bvh
+            .ray_traverse(Ray::new(o, d, tmin, tmax), &mut hit, |ray, i| {
+                let id = self.bvh.primitive_indices[i] as usize;
+                let tri = &self.tris[id];
+                match wt.intersect(tri.v0, tri.v1, tri.v2, ray.tmin, ray.tmax) {
+                    Some(h) => {
+                        best = Some((id, h));
+                        h.t
+                    }
+                    None => f32::INFINITY,
+                }
+            });
+        best.map(|(id, h)| {
+            let (mesh, triangle) = self.ids[id];
+            Hit {
+                t: h.t,
+                mesh,
+                triangle,
+                b: h.b,
+            }
+        })
+    }
+
+    /// True when anything lies in `(tmin, tmax)` along the ray.
+    pub fn occluded(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> bool {
+        if self.tris.is_empty() {
+            return false;
+        }
+        let (o, d) = (Vec3A::from(origin), Vec3A::from(dir));
+        let wt = WatertightRay::new(o, d);
+        !self
+            .bvh
+            .ray_traverse_miss(Ray::new(o, d, tmin, tmax), |ray, i| {
+                let tri = &self.tris[self.bvh.primitive_indices[i] as usize];
+                wt.intersect(tri.v0, tri.v1, tri.v2, ray.tmin, ray.tmax)
+                    .map_or(f32::INFINITY, |h| h.t)
+            })
+    }
+
+    /// Every intersection along the ray in `(tmin, tmax)`, unsorted (for tests and diagnostics).
+    pub fn all_hits(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Vec<Hit> {
+        let mut out = Vec::new();
+        if self.tris.is_empty() {
+            return out;
+        }
+        let (o, d) = (Vec3A::from(origin), Vec3A::from(dir));
+        let wt = WatertightRay::new(o, d);
+        self.bvh
+            .ray_traverse_anyhit(Ray::new(o, d, tmin, tmax), |_, i| {
+                let id = self.bvh.primitive_indices[i] as usize;
+                let tri = &self.tris[id];
+                if let Some(h) = wt.intersect(tri.v0, tri.v1, tri.v2, tmin, tmax) {
+                    let (mesh, triangle) = self.ids[id];
+                    out.push(Hit {
+                        t: h.t,
+                        mesh,
+                        triangle,
+                        b: h.b,
+                    });
+                }
+            });
+        out
+    }
+}

@@ -1,0 +1,222 @@
+//! Sampling of every emitter in a scene for next-event estimation: emissive triangles (uniform
+//! by area within a triangle) and punctual lights, chosen with probability proportional to their
+//! power. Kinds the scene does not have cost nothing.
+
+use crate::geometry::offset::interpolate_with_error;
+use crate::geometry::warp::square_to_uniform_triangle;
+use crate::scene::{LightKind, Scene};
+use crate::spectrum::{luminance, Rgb};
+use glam::{Vec2, Vec3, Vec3A};
+
+/// Where an emitter sample lies and what it delivers.
+#[derive(Clone, Copy, Debug)]
+pub struct EmitterSample {
+    /// Unit direction from the shading point towards the emitter.
+    pub wi: Vec3,
+    /// Distance to the emitter point (infinite for directional lights).
+    pub dist: f32,
+    /// Emitted radiance (area) or intensity/irradiance terms, divided by the sampling density
+    /// and multiplied by the geometry term: the value to multiply with the BSDF.
+    pub value: Rgb,
+    /// Solid-angle density of this sample, emitter selection included (0 for delta lights).
+    pub pdf: f32,
+    pub delta: bool,
+    /// For area emitters: the point and its rounding bound and geometric normal (for the
+    /// shadow ray's far end).
+    pub point: Vec3,
+    pub point_err: Vec3,
+    pub normal: Vec3,
+}
+
+struct EmissiveTriangle {
+    mesh: u32,
+    tri: u32,
+    area: f32,
+}
+
+/// Power-proportional emitter selection.
+pub struct EmitterSampler {
+    tris: Vec<EmissiveTriangle>,
+    /// Index of the first emitter entry of each mesh (`u32::MAX` for non-emissive meshes).
+    mesh_base: Vec<u32>,
+    /// Cumulative selection weights over `tris` followed by the scene's punctual lights.
+    cdf: Vec<f64>,
+    /// Bounding-sphere radius, for the power of directional lights.
+    scene_radius: f32,
+}
+
+impl EmitterSampler {
+    pub fn new(scene: &Scene) -> Self {
+        let mut tris = Vec::new();
+        let mut mesh_base = vec![u32::MAX; scene.meshes.len()];
+        let mut weights = Vec::new();
+        for (mi, m) in scene.meshes.iter().enumerate() {
+            let Some(e) = &scene.materials[m.material].emission else {
+                continue;
+            };
+            mesh_base[mi] = tris.len() as u32;
+            let sides = if e.two_sided { 2.0 } else { 1.0 };
+            for (ti, t) in m.triangles.iter().enumerate() {
+                let p = |i: u32| m.positions[i as usize];
+                let area = 0.5 * (p(t[1]) - p(t[0])).cross(p(t[2]) - p(t[0])).length();
+                tris.push(EmissiveTriangle {
+                    mesh: mi as u32,
+                    tri: ti as u32,
+                    area,
+                });
+                weights.push(
+                    (area * luminance(e.radiance).max(1e-12) * sides * std::f32::consts::PI) as f64,
+                );
+            }
+        }
+        let (lo, hi) = scene.bounds();
+        let scene_radius = if lo.is_finite() {
+            0.5 * (hi - lo).length()
+        } else {
+            1.0
+        };
+        for l in &scene.lights {
+            let w = match l.kind {
+                LightKind::Directional => {
+                    luminance(l.intensity) * std::f32::consts::PI * scene_radius * scene_radius
+                }
+                _ => luminance(l.intensity) * 4.0 * std::f32::consts::PI,
+            };
+            weights.push(w.max(0.0) as f64);
+        }
+        let mut acc = 0.0;
+        let cdf = weights
+            .iter()
+            .map(|w| {
+                acc += w;
+                acc
+            })
+            .collect();
+        EmitterSampler {
+            tris,
+            mesh_base,
+            cdf,
+            scene_radius,
+        }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.cdf.last().is_none_or(|&t| t <= 0.0)
+    }
+
+    fn selection_probability(&self, i: usize) -> f32 {
+        let total = *self.cdf.last().unwrap_or(&1.0);
+        let prev = if i == 0 { 0.0 } else { self.cdf[i - 1] };
+        ((self.cdf[i] - prev) / total) as f32
+    }
+
+    /// Solid-angle density with which [`EmitterSampler::sample`] would pick the point hit on
+    /// `(mesh, tri)` at distance `dist` along unit direction `w`, from a surface with geometric
+    /// normal `ng` there.
+    pub fn pdf_hit(&self, mesh: u32, tri: u32, dist: f32, w: Vec3, ng: Vec3) -> f32 {
+        let base = self
+            .mesh_base
+            .get(mesh as usize)
+            .copied()
+            .unwrap_or(u32::MAX);
+        if base == u32::MAX {
+            return 0.0;
+        }
+        let i = (base + tri) as usize;
+        let cos = w.dot(ng).abs();
+        if cos <= 0.0 {
+            return 0.0;
+        }
+        self.selection_probability(i) / self.tris[i].area * dist * dist / cos
+    }
+
+    /// Sample an emitter as seen from `p`: `u_sel` picks the emitter, `u` the point on it.
+    pub fn sample(&self, scene: &Scene, p: Vec3, u_sel: f32, u: Vec2) -> Option<EmitterSample> {
+        if self.is_empty() {
+            return None;
+        }
+        let total = *self.cdf.last()?;
+        let target = u_sel as f64 * total;
+        let i = self
+            .cdf
+            .partition_point(|&c| c <= target)
+            .min(self.cdf.len() - 1);
+        let sel = self.selection_probability(i);
+        if sel <= 0.0 {
+            return None;
+        }
+        if let Some(et) = self.tris.get(i) {
+            let m = &scene.meshes[et.mesh as usize];
+            let t = m.triangles[et.tri as usize];
+            let v = [t[0], t[1], t[2]].map(|k| Vec3A::from(m.positions[k as usize]));
+            let bb = square_to_uniform_triangle(u);
+            let b = [1.0 - bb.x - bb.y, bb.x, bb.y];
+            let (q, err) = interpolate_with_error(v, b);
+            let (q, err) = (Vec3::from(q), Vec3::from(err));
+            let ng = Vec3::from((v[1] - v[0]).cross(v[2] - v[0])).normalize();
+            let d = q - p;
+            let dist2 = d.length_squared();
+            let dist = dist2.sqrt();
+            if !(dist > 0.0) {
+                return None;
+            }
+            let wi = d / dist;
+            let cos_light = -wi.dot(ng);
+            let uv = match &m.uvs {
+                Some(uvs) => {
+                    b[0] * uvs[t[0] as usize]
+                        + b[1] * uvs[t[1] as usize]
+                        + b[2] * uvs[t[2] as usize]
+                }
+                None => Vec2::ZERO,
+            };
+            let le = scene.materials[m.material].emission_at(&scene.textures, uv, cos_light > 0.0);
+            if le == Rgb::ZERO || cos_light == 0.0 {
+                return None;
+            }
+            let pdf = sel / et.area * dist2 / cos_light.abs();
+            return Some(EmitterSample {
+                wi,
+                dist,
+                value: le / pdf,
+                pdf,
+                delta: false,
+                point: q,
+                point_err: err,
+                normal: ng,
+            });
+        }
+        let l = &scene.lights[i - self.tris.len()];
+        match l.kind {
+            LightKind::Directional => Some(EmitterSample {
+                wi: -l.direction,
+                dist: f32::INFINITY,
+                value: l.intensity / sel,
+                pdf: 0.0,
+                delta: true,
+                point: p - l.direction * (4.0 * self.scene_radius),
+                point_err: Vec3::ZERO,
+                normal: l.direction,
+            }),
+            _ => {
+                let d = l.position - p;
+                let dist = d.length();
+                if !(dist > 0.0) {
+                    return None;
+                }
+                let wi = d / dist;
+                let value = l.intensity * l.falloff(-wi) / (dist * dist * sel);
+                (value != Rgb::ZERO).then_some(EmitterSample {
+                    wi,
+                    dist,
+                    value,
+                    pdf: 0.0,
+                    delta: true,
+                    point: l.position,
+                    point_err: Vec3::ZERO,
+                    normal: -wi,
+                })
+            }
+        }
+    }
+}

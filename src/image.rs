@@ -1,0 +1,133 @@
+//! Float RGB images and their files: OpenEXR (float32, lossless) for data, PNG (sRGB, clamped)
+//! for looking at. Files are written atomically: to a temporary name in the same folder, then
+//! renamed, so a failed or interrupted write never leaves a broken file under the target name.
+
+use crate::error::{Error, Result};
+use crate::spectrum::Rgb;
+use std::path::{Path, PathBuf};
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image {
+    pub width: u32,
+    pub height: u32,
+    /// Row-major, top row first.
+    pub pixels: Vec<Rgb>,
+}
+
+impl Image {
+    pub fn new(width: u32, height: u32) -> Self {
+        Image {
+            width,
+            height,
+            pixels: vec![Rgb::ZERO; width as usize * height as usize],
+        }
+    }
+
+    #[inline]
+    pub fn get(&self, x: u32, y: u32) -> Rgb {
+        self.pixels[(y * self.width + x) as usize]
+    }
+
+    /// Mean over all pixels.
+    pub fn mean(&self) -> Rgb {
+        let s: glam::DVec3 = self.pixels.iter().map(|p| p.as_dvec3()).sum();
+        (s / self.pixels.len().max(1) as f64).as_vec3()
+    }
+}
+
+fn output_error(path: &Path, reason: impl ToString) -> Error {
+    Error::Output {
+        path: path.to_path_buf(),
+        reason: reason.to_string(),
+    }
+}
+
+/// Write through a temporary file next to `path`, then rename it into place.
+fn write_atomically(
+    path: &Path,
+    write: impl FnOnce(&Path) -> std::result::Result<(), String>,
+) -> Result<()> {
+    let name = path
+        .file_name()
+        .ok_or_else(|| output_error(path, "not a file name"))?
+        .to_string_lossy()
+        .into_owned();
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let tmp: PathBuf = path.with_file_name(format!(".{name}.{}.tmp.{ext}", std::process::id()));
+    if let Err(e) = write(&tmp) {
+        let _ = std::fs::remove_file(&tmp);
+        return Err(output_error(path, e));
+    }
+    std::fs::File::open(&tmp)
+        .and_then(|f| f.sync_all())
+        .map_err(|e| output_error(path, e))?;
+    std::fs::rename(&tmp, path).map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        output_error(path, e)
+    })
+}
+
+/// Write a float32 RGB OpenEXR file.
+pub fn write_exr(path: &Path, img: &Image) -> Result<()> {
+    if img.pixels.iter().any(|p| !p.is_finite()) {
+        return Err(output_error(
+            path,
+            "the image holds NaN or infinite values (a bug: please report it)",
+        ));
+    }
+    write_atomically(path, |tmp| {
+        exr::prelude::write_rgb_file(tmp, img.width as usize, img.height as usize, |x, y| {
+            let p = img.get(x as u32, y as u32);
+            (p.x, p.y, p.z)
+        })
+        .map_err(|e| e.to_string())
+    })
+}
+
+/// Write an 8-bit sRGB PNG (values clamped to [0, 1], no tone mapping).
+pub fn write_png(path: &Path, img: &Image) -> Result<()> {
+    let to8 = |c: f32| {
+        let c = c.clamp(0.0, 1.0);
+        let s = if c <= 0.003_130_8 {
+            12.92 * c
+        } else {
+            1.055 * c.powf(1.0 / 2.4) - 0.055
+        };
+        (s * 255.0 + 0.5) as u8
+    };
+    let mut buf = Vec::with_capacity(img.pixels.len() * 3);
+    for p in &img.pixels {
+        buf.extend_from_slice(&[to8(p.x), to8(p.y), to8(p.z)]);
+    }
+    write_atomically(path, |tmp| {
+        image::save_buffer_with_format(
+            tmp,
+            &buf,
+            img.width,
+            img.height,
+            image::ExtendedColorType::Rgb8,
+            image::ImageFormat::Png,
+        )
+        .map_err(|e| e.to_string())
+    })
+}
+
+/// Read the RGB channels of an OpenEXR file's first layer.
+pub fn read_exr(path: &Path) -> Result<Image> {
+    let img = exr::prelude::read_first_rgba_layer_from_file(
+        path,
+        |res: exr::prelude::Vec2<usize>, _| Image::new(res.width() as u32, res.height() as u32),
+        |img: &mut Image, pos: exr::prelude::Vec2<usize>, (r, g, b, _a): (f32, f32, f32, f32)| {
+            let w = img.width as usize;
+            img.pixels[pos.y() * w + pos.x()] = Rgb::new(r, g, b);
+        },
+    )
+    .map_err(|e| Error::ImageRead {
+        path: path.to_path_buf(),
+        reason: e.to_string(),
+    })?;
+    Ok(img.layer_data.channel_data.pixels)
+}

@@ -1,0 +1,188 @@
+//! The path-tracing loop for one camera sample (Mitsuba's `path` integrator).
+
+use super::RenderContext;
+use crate::bsdf::TransportMode;
+use crate::geometry::frame::Frame;
+use crate::geometry::offset::{interpolate_with_error, offset_origin, SHADOW_EPSILON};
+use crate::sampler::Sampler;
+use crate::spectrum::{max_component, Rgb};
+use glam::{Vec2, Vec3, Vec3A};
+
+/// A ray–surface intersection with what shading needs.
+pub struct SurfaceHit {
+    pub p: Vec3,
+    /// Rounding bound of `p`.
+    pub err: Vec3,
+    /// Unit geometric normal of the front face (counter-clockwise winding).
+    pub ng: Vec3,
+    /// Shading frame around the interpolated normal (or `ng` for flat meshes).
+    pub frame: Frame,
+    pub uv: Vec2,
+    pub mesh: u32,
+    pub triangle: u32,
+    pub t: f32,
+}
+
+impl SurfaceHit {
+    /// A ray leaving this point along `w`, offset to the side `w` points to.
+    pub fn spawn(&self, w: Vec3) -> Vec3 {
+        Vec3::from(offset_origin(
+            Vec3A::from(self.p),
+            Vec3A::from(self.err),
+            Vec3A::from(self.ng),
+            Vec3A::from(w),
+        ))
+    }
+}
+
+/// Trace a ray and describe the closest hit.
+pub fn intersect(ctx: &RenderContext, o: Vec3, d: Vec3) -> Option<SurfaceHit> {
+    let hit = ctx.accel.closest_hit(o, d, 0.0, f32::INFINITY)?;
+    let m = &ctx.scene.meshes[hit.mesh as usize];
+    let t = m.triangles[hit.triangle as usize];
+    let v = [t[0], t[1], t[2]].map(|k| Vec3A::from(m.positions[k as usize]));
+    let (p, err) = interpolate_with_error(v, hit.b);
+    let ng = Vec3::from((v[1] - v[0]).cross(v[2] - v[0])).normalize();
+    let ns = match &m.normals {
+        Some(n) => (hit.b[0] * n[t[0] as usize]
+            + hit.b[1] * n[t[1] as usize]
+            + hit.b[2] * n[t[2] as usize])
+            .try_normalize()
+            .unwrap_or(ng),
+        None => ng,
+    };
+    let uv = match &m.uvs {
+        Some(uv) => {
+            hit.b[0] * uv[t[0] as usize]
+                + hit.b[1] * uv[t[1] as usize]
+                + hit.b[2] * uv[t[2] as usize]
+        }
+        None => Vec2::ZERO,
+    };
+    Some(SurfaceHit {
+        p: Vec3::from(p),
+        err: Vec3::from(err),
+        ng,
+        frame: Frame::from_normal(ns),
+        uv,
+        mesh: hit.mesh,
+        triangle: hit.triangle,
+        t: hit.t,
+    })
+}
+
+/// Power heuristic with exponent 2.
+#[inline]
+fn mis(a: f32, b: f32) -> f32 {
+    let (a2, b2) = (a * a, b * b);
+    if a2 + b2 > 0.0 && a2.is_finite() {
+        a2 / (a2 + b2)
+    } else if a.is_infinite() {
+        1.0
+    } else {
+        0.0
+    }
+}
+
+/// Radiance arriving at the camera along the unit ray `(o, d)`.
+pub fn radiance(ctx: &RenderContext, mut o: Vec3, mut d: Vec3, sampler: &mut Sampler) -> Rgb {
+    let scene = ctx.scene;
+    let mut result = Rgb::ZERO;
+    let mut throughput = Rgb::ONE;
+    let mut eta = 1.0_f32;
+    let mut depth: u32 = 0;
+    // The BSDF density of the direction that led here (for MIS at emitter hits).
+    let mut prev_bsdf_pdf = 1.0_f32;
+    let mut prev_delta = true;
+    loop {
+        let Some(si) = intersect(ctx, o, d) else {
+            break;
+        };
+        let material = &scene.materials[scene.meshes[si.mesh as usize].material as usize];
+        let wi = si.frame.to_local(-d);
+        // Emission, weighted against the emitter sampling that could have found it.
+        if material.emission.is_some() {
+            let le = material.emission_at(&scene.textures, si.uv, wi.z > 0.0);
+            if le != Rgb::ZERO {
+                let w = if prev_delta {
+                    1.0
+                } else {
+                    mis(
+                        prev_bsdf_pdf,
+                        ctx.emitters.pdf_hit(si.mesh, si.triangle, si.t, d, si.ng),
+                    )
+                };
+                result += throughput * le * w;
+            }
+        }
+        if ctx.max_depth >= 0 && depth as i64 + 1 >= ctx.max_depth as i64 {
+            break;
+        }
+        let bsdf = material.bsdf_at(&scene.textures, si.uv);
+        // Next-event estimation.
+        let u_sel = sampler.next_1d();
+        let u_em = sampler.next_2d();
+        if let Some(es) = ctx.emitters.sample(scene, si.p, u_sel, u_em) {
+            let wo = si.frame.to_local(es.wi);
+            let f = bsdf.eval(wi, wo, TransportMode::Radiance);
+            if f != Rgb::ZERO {
+                let origin = si.spawn(es.wi);
+                let visible = if es.dist.is_finite() {
+                    let target = if es.delta {
+                        es.point
+                    } else {
+                        Vec3::from(offset_origin(
+                            Vec3A::from(es.point),
+                            Vec3A::from(es.point_err),
+                            Vec3A::from(es.normal),
+                            Vec3A::from(origin - es.point),
+                        ))
+                    };
+                    !ctx.accel
+                        .occluded(origin, target - origin, 0.0, 1.0 - SHADOW_EPSILON)
+                } else {
+                    !ctx.accel.occluded(origin, es.wi, 0.0, f32::INFINITY)
+                };
+                if visible {
+                    let w = if es.delta {
+                        1.0
+                    } else {
+                        mis(es.pdf, bsdf.pdf(wi, wo))
+                    };
+                    result += throughput * f * es.value * w;
+                }
+            }
+        }
+        // BSDF sampling.
+        let u0 = sampler.next_1d();
+        let u = sampler.next_2d();
+        let Some(bs) = bsdf.sample(wi, u0, u, TransportMode::Radiance) else {
+            break;
+        };
+        let wo_world = si.frame.to_world(bs.wo);
+        throughput *= bs.weight;
+        eta *= bs.eta;
+        prev_bsdf_pdf = bs.pdf;
+        prev_delta = false;
+        o = si.spawn(wo_world);
+        d = wo_world.normalize();
+        depth += 1;
+        // Russian roulette.
+        let tmax = max_component(throughput);
+        if !(tmax > 0.0) || !throughput.is_finite() {
+            break;
+        }
+        if depth >= ctx.rr_depth {
+            let q = (tmax * eta * eta).min(0.95);
+            if sampler.next_1d() >= q {
+                break;
+            }
+            throughput /= q;
+        }
+    }
+    if result.is_finite() {
+        result
+    } else {
+        Rgb::ZERO
+    }
+}

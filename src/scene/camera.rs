@@ -1,0 +1,85 @@
+//! Cameras: glTF conventions (looks down local −Z, +Y up, +X to image right; pixel (0, 0) is the
+//! top-left pixel). A perspective camera's `yfov` is the vertical field of view for any aspect.
+
+use glam::{Vec2, Vec3};
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Projection {
+    /// Vertical field of view in radians.
+    Perspective { yfov: f32 },
+    /// Half extents of the view in world units.
+    Orthographic { xmag: f32, ymag: f32 },
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Camera {
+    pub name: String,
+    pub position: Vec3,
+    /// Unit vectors: image right, image up, and the viewing direction.
+    pub right: Vec3,
+    pub up: Vec3,
+    pub forward: Vec3,
+    pub projection: Projection,
+    pub width: u32,
+    pub height: u32,
+}
+
+impl Camera {
+    /// A camera at `eye` looking at `target`, world +Y up (or +Z when looking along Y).
+    pub fn look_at(
+        name: &str,
+        eye: Vec3,
+        target: Vec3,
+        yfov: f32,
+        width: u32,
+        height: u32,
+    ) -> Option<Self> {
+        let forward = (target - eye).try_normalize()?;
+        let world_up = if forward.y.abs() > 0.999 {
+            Vec3::Z
+        } else {
+            Vec3::Y
+        };
+        let right = forward.cross(world_up).normalize();
+        let up = right.cross(forward);
+        Some(Camera {
+            name: name.to_string(),
+            position: eye,
+            right,
+            up,
+            forward,
+            projection: Projection::Perspective { yfov },
+            width,
+            height,
+        })
+    }
+
+    /// The same camera rendering at another resolution.
+    pub fn with_size(mut self, width: u32, height: u32) -> Self {
+        self.width = width;
+        self.height = height;
+        self
+    }
+
+    /// Primary ray through film position `p` (in pixels, `[0, width) × [0, height)`):
+    /// `(origin, unit direction)`.
+    pub fn generate_ray(&self, p: Vec2) -> (Vec3, Vec3) {
+        let aspect = self.width as f32 / self.height as f32;
+        // Normalised device coordinates: x right, y up, in [-1, 1].
+        let ndc = Vec2::new(
+            2.0 * p.x / self.width as f32 - 1.0,
+            1.0 - 2.0 * p.y / self.height as f32,
+        );
+        match self.projection {
+            Projection::Perspective { yfov } => {
+                let t = (0.5 * yfov).tan();
+                let d = self.forward + self.right * (ndc.x * t * aspect) + self.up * (ndc.y * t);
+                (self.position, d.normalize())
+            }
+            Projection::Orthographic { xmag, ymag } => {
+                let o = self.position + self.right * (ndc.x * xmag) + self.up * (ndc.y * ymag);
+                (o, self.forward)
+            }
+        }
+    }
+}

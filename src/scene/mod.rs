@@ -1,0 +1,171 @@
+//! The scene IR: world-space triangle meshes, materials, textures, emitters and cameras. One IR
+//! for every importer (glTF now, USD later), validated on import (DESIGN.md §4).
+
+pub mod camera;
+mod gltf;
+pub mod light;
+pub mod material;
+pub mod texture;
+
+pub use camera::{Camera, Projection};
+pub use light::{LightKind, PunctualLight};
+pub use material::{Emission, Material, PbrParams, Scattering};
+pub use texture::{TexRef, Texture, Wrap};
+
+use crate::error::{Error, Result};
+use glam::{Vec2, Vec3};
+use std::path::{Path, PathBuf};
+
+/// A triangle mesh in world space.
+#[derive(Clone, Debug)]
+pub struct Mesh {
+    pub name: String,
+    pub positions: Vec<Vec3>,
+    /// Unit shading normals per vertex; `None` means flat shading with the face normal.
+    pub normals: Option<Vec<Vec3>>,
+    pub uvs: Option<Vec<Vec2>>,
+    pub triangles: Vec<[u32; 3]>,
+    pub material: usize,
+}
+
+/// Something the importer noticed and worked around.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Warning(pub String);
+
+#[derive(Clone, Debug, Default)]
+pub struct Scene {
+    /// The file the scene came from (named in every error).
+    pub path: PathBuf,
+    pub meshes: Vec<Mesh>,
+    pub materials: Vec<Material>,
+    pub textures: Vec<Texture>,
+    pub lights: Vec<PunctualLight>,
+    pub cameras: Vec<Camera>,
+    pub warnings: Vec<Warning>,
+}
+
+impl Scene {
+    /// Load a `.gltf` or `.glb` file.
+    pub fn load(path: &Path) -> Result<Scene> {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
+        match ext.as_deref() {
+            Some("gltf") | Some("glb") => {
+                let bytes = std::fs::read(path).map_err(|source| Error::Io {
+                    path: path.to_path_buf(),
+                    source,
+                })?;
+                gltf::import(path, &bytes)
+            }
+            _ => Err(Error::UnsupportedFormat {
+                path: path.to_path_buf(),
+            }),
+        }
+    }
+
+    /// Load a glTF/GLB from memory; `path` names it in errors and anchors relative URIs.
+    pub fn from_gltf_bytes(path: &Path, bytes: &[u8]) -> Result<Scene> {
+        gltf::import(path, bytes)
+    }
+
+    /// Number of triangles over all meshes.
+    pub fn triangle_count(&self) -> usize {
+        self.meshes.iter().map(|m| m.triangles.len()).sum()
+    }
+
+    /// Axis-aligned bounds `(min, max)` of all geometry.
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        let mut lo = Vec3::splat(f32::INFINITY);
+        let mut hi = Vec3::splat(f32::NEG_INFINITY);
+        for p in self.meshes.iter().flat_map(|m| &m.positions) {
+            lo = lo.min(*p);
+            hi = hi.max(*p);
+        }
+        (lo, hi)
+    }
+
+    /// True when anything emits light.
+    pub fn has_emitters(&self) -> bool {
+        !self.lights.is_empty()
+            || self.meshes.iter().any(|m| {
+                self.materials[m.material]
+                    .emission
+                    .as_ref()
+                    .is_some_and(|e| e.radiance.max_element() > 0.0)
+            })
+    }
+
+    /// Refuse scenes that would render black or empty, with a sentence that says why.
+    pub fn check_renderable(&self) -> Result<()> {
+        if self.triangle_count() == 0 {
+            return Err(Error::EmptyScene {
+                path: self.path.clone(),
+            });
+        }
+        if !self.has_emitters() {
+            return Err(Error::NoEmitter {
+                path: self.path.clone(),
+            });
+        }
+        Ok(())
+    }
+
+    /// The named camera (or the first one) at the given size.
+    pub fn camera(&self, name: Option<&str>, width: u32, height: u32) -> Result<Camera> {
+        match name {
+            Some(n) => self
+                .cameras
+                .iter()
+                .find(|c| c.name == n)
+                .map(|c| c.clone().with_size(width, height))
+                .ok_or_else(|| Error::Camera {
+                    path: self.path.clone(),
+                    reason: format!(
+                        "no camera named \"{n}\" (cameras: {})",
+                        if self.cameras.is_empty() {
+                            "none".to_string()
+                        } else {
+                            self.cameras
+                                .iter()
+                                .map(|c| format!("\"{}\"", c.name))
+                                .collect::<Vec<_>>()
+                                .join(", ")
+                        }
+                    ),
+                }),
+            None => self.default_camera(width, height),
+        }
+    }
+
+    /// The scene's first camera, or one that frames the whole scene from +Z.
+    pub fn default_camera(&self, width: u32, height: u32) -> Result<Camera> {
+        if let Some(c) = self.cameras.first() {
+            return Ok(c.clone().with_size(width, height));
+        }
+        self.framing_camera(width, height)
+    }
+
+    /// A camera on the +Z side looking at the centre of the bounding sphere, far enough back
+    /// (with a 10 % margin) that the sphere fits a 40° vertical field of view.
+    pub fn framing_camera(&self, width: u32, height: u32) -> Result<Camera> {
+        let (lo, hi) = self.bounds();
+        if !(lo.is_finite() && hi.is_finite()) {
+            return Err(Error::EmptyScene {
+                path: self.path.clone(),
+            });
+        }
+        let center = 0.5 * (lo + hi);
+        let radius = (0.5 * (hi - lo).length()).max(1e-6);
+        let yfov = 40f32.to_radians();
+        let aspect = (width as f32 / height as f32).min(1.0);
+        let dist = 1.1 * radius / ((0.5 * yfov).tan() * aspect).atan().sin();
+        Camera::look_at("auto", center + Vec3::Z * dist, center, yfov, width, height).ok_or_else(
+            || Error::Camera {
+                path: self.path.clone(),
+                reason: "cannot frame the scene automatically".into(),
+            },
+        )
+    }
+}
