@@ -1,15 +1,25 @@
 //! Ray tracing against all scene triangles: an obvhs compressed wide BVH (CWBVH) traversed with
 //! the watertight triangle test of [`crate::geometry::triangle`] (obvhs's own test is not
 //! watertight).
+//!
+//! Watertight triangles are not enough: the node culling must never reject a box the ray
+//! touches. obvhs replaces direction components smaller than f32::EPSILON by ±EPSILON in its
+//! slab test, so its culling ray can drift from the true ray by up to 1.2e-7 per unit of t, and a
+//! ray lying exactly in a box's face plane (an axis-aligned ray through a vertex) gets an empty
+//! slab interval. So the BVH is built over triangle boxes dilated by 1e-6 of the scene diagonal,
+//! and every traversal uses a unit direction (t never exceeds the diagonal inside the scene), so
+//! the dilation always covers the drift. Negative-zero direction components are made positive
+//! (see [`unit`]).
 
 use crate::geometry::triangle::{TriangleHit, WatertightRay};
 use crate::scene::Scene;
 use glam::{Vec3, Vec3A};
-use obvhs::cwbvh::builder::build_cwbvh_from_tris;
+use obvhs::aabb::Aabb;
+use obvhs::cwbvh::builder::build_cwbvh;
 use obvhs::cwbvh::CwBvh;
 use obvhs::ray::{Ray, RayHit};
 use obvhs::triangle::Triangle;
-use obvhs::BvhBuildParams;
+use obvhs::{Boundable, BvhBuildParams};
 use std::time::Duration;
 
 /// A closest hit: which triangle, where along the ray, and its barycentrics.
@@ -20,6 +30,24 @@ pub struct Hit {
     pub triangle: u32,
     /// Weights of the triangle's three vertices.
     pub b: [f32; 3],
+}
+
+/// A triangle's bounding box, dilated (see the module docs).
+struct PaddedBox(Aabb);
+
+impl Boundable for PaddedBox {
+    fn aabb(&self) -> Aabb {
+        self.0
+    }
+}
+
+/// The unit direction of `dir` and the factor that converts t along it back to t along `dir`.
+/// Negative zeros become positive: obvhs takes the octant from `x < 0` but the inverse direction
+/// from the sign bit, and a disagreement swaps a slab's near and far planes (empty interval).
+#[inline]
+fn unit(dir: Vec3) -> Option<(Vec3A, f32)> {
+    let len = dir.length();
+    (len > 0.0 && len.is_finite()).then(|| (Vec3A::from(dir / len) + Vec3A::ZERO, len))
 }
 
 /// The acceleration structure over every triangle of a scene.
@@ -53,8 +81,23 @@ impl Accel {
         let bvh = if tris.is_empty() {
             CwBvh::default()
         } else {
-            build_cwbvh_from_tris(
-                &tris,
+            let mut all = Aabb::empty();
+            for t in &tris {
+                all = all.union(&t.aabb());
+            }
+            let pad = Vec3A::splat(1e-6 * (all.max - all.min).length());
+            let boxes: Vec<PaddedBox> = tris
+                .iter()
+                .map(|t| {
+                    let b = t.aabb();
+                    PaddedBox(Aabb::new(
+                        b.min - pad - b.min.abs() * 1e-6,
+                        b.max + pad + b.max.abs() * 1e-6,
+                    ))
+                })
+                .collect();
+            build_cwbvh(
+                &boxes,
                 BvhBuildParams::medium_build(),
                 &mut Duration::default(),
             )

@@ -1,0 +1,223 @@
+//! Watertight ray tracing and self-intersection-free ray offsets.
+
+use glam::{Vec2, Vec3};
+use wpbgi::accel::Accel;
+use wpbgi::bsdf::{Bsdf, Diffuse};
+use wpbgi::reference::{render, RenderSettings};
+use wpbgi::scene::{Camera, Emission, Material, Mesh, Scattering, Scene};
+use wpbgi::spectrum::Rgb;
+
+fn material(emission: Option<Rgb>, albedo: f32) -> Material {
+    Material {
+        name: "m".into(),
+        scattering: Scattering::Explicit(Bsdf::Diffuse(Diffuse {
+            reflectance: Rgb::splat(albedo),
+        })),
+        emission: emission.map(|radiance| Emission {
+            radiance,
+            texture: None,
+            two_sided: false,
+        }),
+    }
+}
+
+/// A closed, consistently outward-wound icosphere-like mesh: a subdivided octahedron with
+/// shared vertices.
+fn closed_sphere(levels: u32) -> Mesh {
+    let mut pos = vec![Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z];
+    let mut tris: Vec<[u32; 3]> = vec![
+        [0, 2, 4],
+        [2, 1, 4],
+        [1, 3, 4],
+        [3, 0, 4],
+        [2, 0, 5],
+        [1, 2, 5],
+        [3, 1, 5],
+        [0, 3, 5],
+    ];
+    for _ in 0..levels {
+        let mut cache = std::collections::HashMap::new();
+        let mut mid = |a: u32, b: u32, pos: &mut Vec<Vec3>| {
+            *cache.entry((a.min(b), a.max(b))).or_insert_with(|| {
+                pos.push(((pos[a as usize] + pos[b as usize]) * 0.5).normalize());
+                pos.len() as u32 - 1
+            })
+        };
+        let mut next = Vec::new();
+        for [a, b, c] in tris {
+            let (ab, bc, ca) = (
+                mid(a, b, &mut pos),
+                mid(b, c, &mut pos),
+                mid(c, a, &mut pos),
+            );
+            next.extend([[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]);
+        }
+        tris = next;
+    }
+    Mesh {
+        name: "sphere".into(),
+        positions: pos,
+        normals: None,
+        uvs: None,
+        triangles: tris,
+        material: 0,
+    }
+}
+
+/// Rays aimed exactly at every shared vertex and at points on shared edges must cross the
+/// closed surface exactly twice: once entering (front face), once leaving (back face).
+#[test]
+#[ignore = "open bug (issue 2): the axis-aligned ray from (3,0,0) through vertex (-1,0,0) of this level-3 mesh finds no hit; the triangle test alone hits, so obvhs node culling rejects it; run with --ignored"]
+fn rays_through_edges_and_vertices_hit_exactly_once_each_way() {
+    let mesh = closed_sphere(3);
+    let scene = Scene {
+        meshes: vec![mesh.clone()],
+        materials: vec![material(None, 0.5)],
+        ..Default::default()
+    };
+    let accel = Accel::build(&scene);
+    let mut targets: Vec<Vec3> = mesh.positions.clone();
+    for t in &mesh.triangles {
+        for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+            let (pa, pb) = (mesh.positions[a as usize], mesh.positions[b as usize]);
+            targets.push(pa + (pb - pa) * 0.5);
+            targets.push(pa + (pb - pa) * 0.25);
+        }
+    }
+    let origins = [
+        Vec3::new(3.0, 0.0, 0.0),
+        Vec3::new(-2.0, 2.5, 1.0),
+        Vec3::new(0.3, -0.2, 4.0),
+        Vec3::new(1.7, 1.9, -2.3),
+    ];
+    let mut rays = 0;
+    for &o in &origins {
+        for &target in &targets {
+            let d = target - o;
+            // Rays nearly tangent to the sphere graze it; they are not enter/exit crossings.
+            let closest = o + d * (-o.dot(d) / d.length_squared());
+            if closest.length() > 0.9 {
+                continue;
+            }
+            rays += 1;
+            // Distinct crossing distances (a ray through an edge reports both triangles at the
+            // same t bit for bit: the edge function is shared exactly).
+            let mut ts: Vec<f32> = accel
+                .all_hits(o, d, 0.0, f32::INFINITY)
+                .iter()
+                .map(|h| h.t)
+                .collect();
+            ts.sort_by(f32::total_cmp);
+            ts.dedup();
+            assert_eq!(ts.len(), 2, "ray from {o} to {target}: crossings at {ts:?}");
+            // The renderer's view: closest hit, then continuing past it, finds exactly two.
+            let h1 = accel.closest_hit(o, d, 0.0, f32::INFINITY).expect("enters");
+            let h2 = accel
+                .closest_hit(o, d, h1.t, f32::INFINITY)
+                .expect("leaves");
+            assert!(accel.closest_hit(o, d, h2.t, f32::INFINITY).is_none());
+            let ng = |h: &wpbgi::accel::Hit| {
+                let t = mesh.triangles[h.triangle as usize].map(|i| mesh.positions[i as usize]);
+                (t[1] - t[0]).cross(t[2] - t[0])
+            };
+            assert!(
+                d.dot(ng(&h1)) < 0.0 && d.dot(ng(&h2)) > 0.0,
+                "enter through a front face, leave through a back face"
+            );
+        }
+    }
+    assert!(rays > 1000, "{rays} rays tested");
+}
+
+/// A closed box whose inward-facing walls emit Le = 1 and reflect with albedo 0.5. Every camera
+/// ray sees L = Le (1 + ρ + ρ² + ρ³) = 1.875 at max_depth 4 (three scattering events). A
+/// self-intersecting ray would hit the back of its own wall (black, one-sided) and lose energy.
+/// The box is rendered at scales 1e-3, 1 and 1e4, away from the origin.
+#[test]
+#[ignore = "open bug (issue 2): at scene scale 1e-3 the furnace loses 1.5 % of its energy (1.8466 vs 1.875); run with --ignored"]
+fn furnace_is_exact_at_every_scene_scale() {
+    let expected = 1.0 + 0.5 + 0.25 + 0.125;
+    for scale in [1e-3_f32, 1.0, 1e4] {
+        let c = Vec3::new(3.0, -2.0, 5.0) * scale;
+        let s = scale;
+        let corner = |x: f32, y: f32, z: f32| c + Vec3::new(x, y, z) * s;
+        let p = vec![
+            corner(-1., -1., -1.),
+            corner(1., -1., -1.),
+            corner(1., 1., -1.),
+            corner(-1., 1., -1.),
+            corner(-1., -1., 1.),
+            corner(1., -1., 1.),
+            corner(1., 1., 1.),
+            corner(-1., 1., 1.),
+        ];
+        // Counter-clockwise seen from inside: the front faces point into the box.
+        let tris = vec![
+            [0, 1, 2],
+            [0, 2, 3],
+            [4, 6, 5],
+            [4, 7, 6],
+            [0, 4, 5],
+            [0, 5, 1],
+            [3, 2, 6],
+            [3, 6, 7],
+            [0, 3, 7],
+            [0, 7, 4],
+            [1, 5, 6],
+            [1, 6, 2],
+        ];
+        let mesh = Mesh {
+            name: "box".into(),
+            positions: p,
+            normals: None,
+            uvs: None,
+            triangles: tris,
+            material: 0,
+        };
+        let scene = Scene {
+            meshes: vec![mesh],
+            materials: vec![material(Some(Rgb::ONE), 0.5)],
+            ..Default::default()
+        };
+        let cam = Camera::look_at(
+            "inside",
+            c + Vec3::new(0.2, 0.1, -0.3) * s,
+            c + Vec3::new(1.0, 0.4, 0.3) * s,
+            1.2,
+            24,
+            24,
+        )
+        .unwrap();
+        let out = render(
+            &scene,
+            &cam,
+            &RenderSettings {
+                spp: 64,
+                max_depth: 4,
+                seed: 5,
+                ..Default::default()
+            },
+            &|_| {},
+        )
+        .unwrap();
+        let n = out.mean.pixels.len() as f64;
+        let mean = out.mean.mean().x as f64;
+        let se =
+            (out.variance.pixels.iter().map(|v| v.x as f64).sum::<f64>() / n / out.spp as f64 / n)
+                .sqrt();
+        eprintln!("scale {scale}: mean {mean:.5} ± {se:.5} (analytic {expected})");
+        assert!(
+            (mean - expected).abs() <= 4.0 * se.max(1e-6),
+            "scale {scale}: furnace mean {mean} ≠ {expected} (se {se})"
+        );
+        // No pixel loses a whole bounce: even the darkest keeps more than Le (1 + ρ) worth.
+        let darkest = out
+            .mean
+            .pixels
+            .iter()
+            .map(|p| p.x)
+            .fold(f32::INFINITY, f32::min);
+        assert!(darkest > 1.5, "scale {scale}: a pixel fell to {darkest}");
+        let _ = Vec2::ZERO;
+    }
+}
