@@ -119,11 +119,15 @@ impl Accel {
         if self.tris.is_empty() {
             return None;
         }
-        let (o, d) = (Vec3A::from(origin), Vec3A::from(dir));
+        let Some((d, len)) = unit(dir) else {
+            return Default::default();
+        };
+        let o = Vec3A::from(origin);
+        let (tmin, tmax) = (tmin * len, tmax * len);
         let wt = WatertightRay::new(o, d);
         let mut best: Option<(usize, TriangleHit)> = None;
         let mut hit = RayHit::none();
-        hit.t = tmax;
+        hit.t = tmax; // already scaled to the unit direction
         self.bvh
             .ray_traverse(Ray::new(o, d, tmin, tmax), &mut hit, |ray, i| {
                 let id = self.bvh.primitive_indices[i] as usize;
@@ -139,7 +143,7 @@ impl Accel {
         best.map(|(id, h)| {
             let (mesh, triangle) = self.ids[id];
             Hit {
-                t: h.t,
+                t: h.t / len,
                 mesh,
                 triangle,
                 b: h.b,
@@ -152,7 +156,11 @@ impl Accel {
         if self.tris.is_empty() {
             return false;
         }
-        let (o, d) = (Vec3A::from(origin), Vec3A::from(dir));
+        let Some((d, len)) = unit(dir) else {
+            return Default::default();
+        };
+        let o = Vec3A::from(origin);
+        let (tmin, tmax) = (tmin * len, tmax * len);
         let wt = WatertightRay::new(o, d);
         !self
             .bvh
@@ -169,7 +177,11 @@ impl Accel {
         if self.tris.is_empty() {
             return out;
         }
-        let (o, d) = (Vec3A::from(origin), Vec3A::from(dir));
+        let Some((d, len)) = unit(dir) else {
+            return Default::default();
+        };
+        let o = Vec3A::from(origin);
+        let (tmin, tmax) = (tmin * len, tmax * len);
         let wt = WatertightRay::new(o, d);
         self.bvh
             .ray_traverse_anyhit(Ray::new(o, d, tmin, tmax), |_, i| {
@@ -178,7 +190,7 @@ impl Accel {
                 if let Some(h) = wt.intersect(tri.v0, tri.v1, tri.v2, tmin, tmax) {
                     let (mesh, triangle) = self.ids[id];
                     out.push(Hit {
-                        t: h.t,
+                        t: h.t / len,
                         mesh,
                         triangle,
                         b: h.b,

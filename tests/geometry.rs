@@ -67,7 +67,7 @@ fn closed_sphere(levels: u32) -> Mesh {
 /// Rays aimed exactly at every shared vertex and at points on shared edges must cross the
 /// closed surface exactly twice: once entering (front face), once leaving (back face).
 #[test]
-#[ignore = "open bug (issue 2): the axis-aligned ray from (3,0,0) through vertex (-1,0,0) of this level-3 mesh finds no hit; the triangle test alone hits, so obvhs node culling rejects it; run with --ignored"]
+#[ignore = "open bug (issue 2): a ray aimed at a shared vertex reports crossings at t = 0.9999999 and 1.0 (one ulp apart), which this test still counts as two crossings; run with --ignored"]
 fn rays_through_edges_and_vertices_hit_exactly_once_each_way() {
     let mesh = closed_sphere(3);
     let scene = Scene {
