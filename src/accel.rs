@@ -9,7 +9,8 @@
 //! slab interval. So the BVH is built over triangle boxes dilated by 1e-6 of the scene diagonal,
 //! and every traversal uses a unit direction (t never exceeds the diagonal inside the scene), so
 //! the dilation always covers the drift. Negative-zero direction components are made positive
-//! (see [`unit`]).
+//! (see [`unit`]), and the traversal ray starts slightly behind the true origin because obvhs
+//! culls nodes that end before an absolute t of 1e-4 (see [`ORIGIN_SHIFT`]).
 
 use crate::geometry::triangle::{TriangleHit, WatertightRay};
 use crate::scene::Scene;
@@ -114,36 +115,51 @@ impl Accel {
         self.tris.is_empty()
     }
 
-    /// Closest intersection in `(tmin, tmax)` along `origin + t·dir` (`dir` need not be unit).
-    pub fn closest_hit(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<Hit> {
+    /// The traversal set-up shared by every query, or `None` when nothing can be hit.
+    fn query(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<Query> {
         if self.tris.is_empty() {
             return None;
         }
-        let Some((d, len)) = unit(dir) else {
-            return Default::default();
-        };
+        let (d, len) = unit(dir)?;
         let o = Vec3A::from(origin);
         let (tmin, tmax) = (tmin * len, tmax * len);
-        let wt = WatertightRay::new(o, d);
+        Some(Query {
+            wt: WatertightRay::new(o, d),
+            ray: Ray::new(
+                o - d * ORIGIN_SHIFT,
+                d,
+                tmin + ORIGIN_SHIFT,
+                tmax + ORIGIN_SHIFT,
+            ),
+            len,
+            tmin,
+            tmax,
+        })
+    }
+
+    /// Closest intersection in `(tmin, tmax)` along `origin + t·dir` (`dir` need not be unit).
+    pub fn closest_hit(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<Hit> {
+        let q = self.query(origin, dir, tmin, tmax)?;
         let mut best: Option<(usize, TriangleHit)> = None;
+        let mut closest = q.tmax;
         let mut hit = RayHit::none();
-        hit.t = tmax; // already scaled to the unit direction
-        self.bvh
-            .ray_traverse(Ray::new(o, d, tmin, tmax), &mut hit, |ray, i| {
-                let id = self.bvh.primitive_indices[i] as usize;
-                let tri = &self.tris[id];
-                match wt.intersect(tri.v0, tri.v1, tri.v2, ray.tmin, ray.tmax) {
-                    Some(h) => {
-                        best = Some((id, h));
-                        h.t
-                    }
-                    None => f32::INFINITY,
+        hit.t = q.ray.tmax;
+        self.bvh.ray_traverse(q.ray, &mut hit, |_, i| {
+            let id = self.bvh.primitive_indices[i] as usize;
+            let tri = &self.tris[id];
+            match q.wt.intersect(tri.v0, tri.v1, tri.v2, q.tmin, closest) {
+                Some(h) => {
+                    best = Some((id, h));
+                    closest = h.t;
+                    to_traversal_t(h.t)
                 }
-            });
+                None => f32::INFINITY,
+            }
+        });
         best.map(|(id, h)| {
             let (mesh, triangle) = self.ids[id];
             Hit {
-                t: h.t / len,
+                t: h.t / q.len,
                 mesh,
                 triangle,
                 b: h.b,
@@ -153,50 +169,60 @@ impl Accel {
 
     /// True when anything lies in `(tmin, tmax)` along the ray.
     pub fn occluded(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> bool {
-        if self.tris.is_empty() {
+        let Some(q) = self.query(origin, dir, tmin, tmax) else {
             return false;
-        }
-        let Some((d, len)) = unit(dir) else {
-            return Default::default();
         };
-        let o = Vec3A::from(origin);
-        let (tmin, tmax) = (tmin * len, tmax * len);
-        let wt = WatertightRay::new(o, d);
-        !self
-            .bvh
-            .ray_traverse_miss(Ray::new(o, d, tmin, tmax), |ray, i| {
-                let tri = &self.tris[self.bvh.primitive_indices[i] as usize];
-                wt.intersect(tri.v0, tri.v1, tri.v2, ray.tmin, ray.tmax)
-                    .map_or(f32::INFINITY, |h| h.t)
-            })
+        !self.bvh.ray_traverse_miss(q.ray, |_, i| {
+            let tri = &self.tris[self.bvh.primitive_indices[i] as usize];
+            match q.wt.intersect(tri.v0, tri.v1, tri.v2, q.tmin, q.tmax) {
+                Some(_) => f32::NEG_INFINITY,
+                None => f32::INFINITY,
+            }
+        })
     }
 
     /// Every intersection along the ray in `(tmin, tmax)`, unsorted (for tests and diagnostics).
     pub fn all_hits(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Vec<Hit> {
         let mut out = Vec::new();
-        if self.tris.is_empty() {
+        let Some(q) = self.query(origin, dir, tmin, tmax) else {
             return out;
-        }
-        let Some((d, len)) = unit(dir) else {
-            return Default::default();
         };
-        let o = Vec3A::from(origin);
-        let (tmin, tmax) = (tmin * len, tmax * len);
-        let wt = WatertightRay::new(o, d);
-        self.bvh
-            .ray_traverse_anyhit(Ray::new(o, d, tmin, tmax), |_, i| {
-                let id = self.bvh.primitive_indices[i] as usize;
-                let tri = &self.tris[id];
-                if let Some(h) = wt.intersect(tri.v0, tri.v1, tri.v2, tmin, tmax) {
-                    let (mesh, triangle) = self.ids[id];
-                    out.push(Hit {
-                        t: h.t / len,
-                        mesh,
-                        triangle,
-                        b: h.b,
-                    });
-                }
-            });
+        self.bvh.ray_traverse_anyhit(q.ray, |_, i| {
+            let id = self.bvh.primitive_indices[i] as usize;
+            let tri = &self.tris[id];
+            if let Some(h) = q.wt.intersect(tri.v0, tri.v1, tri.v2, q.tmin, q.tmax) {
+                let (mesh, triangle) = self.ids[id];
+                out.push(Hit {
+                    t: h.t / q.len,
+                    mesh,
+                    triangle,
+                    b: h.b,
+                });
+            }
+        });
         out
     }
+}
+
+/// One query's rays: `wt` is the true ray for the triangle tests, `ray` the BVH traversal ray
+/// (origin moved back by [`ORIGIN_SHIFT`]); `tmin`, `tmax` and `len` are along the unit direction.
+struct Query {
+    wt: WatertightRay,
+    ray: Ray,
+    len: f32,
+    tmin: f32,
+    tmax: f32,
+}
+
+/// obvhs culls every node whose slab interval ends before t = 1e-4 (an absolute constant in its
+/// node test, ignoring the ray's tmin), which in a millimetre-scale scene throws away the wall a
+/// ray leaving a corner is about to hit. The traversal ray therefore starts this far behind the
+/// true origin, so every t ≥ 0 of the true ray is ≥ 2e-4 for the node test.
+const ORIGIN_SHIFT: f32 = 2e-4;
+
+/// A hit distance of the true ray as a traversal-ray distance, rounded up so the node culling
+/// can never drop a node holding an equally close hit.
+#[inline]
+fn to_traversal_t(t: f32) -> f32 {
+    (t + ORIGIN_SHIFT) * (1.0 + 4.0 * f32::EPSILON)
 }

@@ -17,9 +17,3 @@ pub fn max_component(c: Rgb) -> f32 {
 pub fn luminance(c: Rgb) -> f32 {
     0.212_671 * c.x + 0.715_160 * c.y + 0.072_169 * c.z
 }
-
-/// True when every component is finite.
-#[inline]
-pub fn is_finite(c: Rgb) -> bool {
-    c.is_finite()
-}

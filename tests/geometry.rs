@@ -1,9 +1,12 @@
 //! Watertight ray tracing and self-intersection-free ray offsets.
 
 use glam::Vec3;
+use glam::Vec3A;
 use wpbgi::accel::Accel;
 use wpbgi::bsdf::{Bsdf, Diffuse};
+use wpbgi::geometry::offset::{interpolate_with_error, offset_origin, SHADOW_EPSILON};
 use wpbgi::reference::{render, RenderSettings};
+use wpbgi::sampler::Sampler;
 use wpbgi::scene::{Camera, Emission, Material, Mesh, Scattering, Scene};
 use wpbgi::spectrum::Rgb;
 
@@ -67,7 +70,6 @@ fn closed_sphere(levels: u32) -> Mesh {
 /// Rays aimed exactly at every shared vertex and at points on shared edges must cross the
 /// closed surface exactly twice: once entering (front face), once leaving (back face).
 #[test]
-#[ignore = "open bug (issue 2): a ray aimed at a shared vertex reports crossings at t = 0.9999999 and 1.0 (one ulp apart), which this test still counts as two crossings; run with --ignored"]
 fn rays_through_edges_and_vertices_hit_exactly_once_each_way() {
     let mesh = closed_sphere(3);
     let scene = Scene {
@@ -100,22 +102,24 @@ fn rays_through_edges_and_vertices_hit_exactly_once_each_way() {
                 continue;
             }
             rays += 1;
-            // Distinct crossing distances (a ray through an edge reports both triangles at the
-            // same t bit for bit: the edge function is shared exactly).
+            // Distinct crossing distances. Triangles sharing an edge or vertex compute t from
+            // their own vertex order, so one crossing can be reported a few ulps apart: hits
+            // within 1e-6 (relative) of each other are one crossing.
             let mut ts: Vec<f32> = accel
                 .all_hits(o, d, 0.0, f32::INFINITY)
                 .iter()
                 .map(|h| h.t)
                 .collect();
             ts.sort_by(f32::total_cmp);
-            ts.dedup();
+            ts.dedup_by(|b, a| *b <= *a * (1.0 + 1e-6));
             assert_eq!(ts.len(), 2, "ray from {o} to {target}: crossings at {ts:?}");
             // The renderer's view: closest hit, then continuing past it, finds exactly two.
+            let past = |t: f32| t * (1.0 + 1e-6);
             let h1 = accel.closest_hit(o, d, 0.0, f32::INFINITY).expect("enters");
             let h2 = accel
-                .closest_hit(o, d, h1.t, f32::INFINITY)
+                .closest_hit(o, d, past(h1.t), f32::INFINITY)
                 .expect("leaves");
-            assert!(accel.closest_hit(o, d, h2.t, f32::INFINITY).is_none());
+            assert!(accel.closest_hit(o, d, past(h2.t), f32::INFINITY).is_none());
             let ng = |h: &wpbgi::accel::Hit| {
                 let t = mesh.triangles[h.triangle as usize].map(|i| mesh.positions[i as usize]);
                 (t[1] - t[0]).cross(t[2] - t[0])
@@ -129,51 +133,121 @@ fn rays_through_edges_and_vertices_hit_exactly_once_each_way() {
     assert!(rays > 1000, "{rays} rays tested");
 }
 
-/// A closed box whose inward-facing walls emit Le = 1 and reflect with albedo 0.5. Every camera
-/// ray sees L = Le (1 + ρ + ρ² + ρ³) = 1.875 at max_depth 4 (three scattering events). A
-/// self-intersecting ray would hit the back of its own wall (black, one-sided) and lose energy.
-/// The box is rendered at scales 1e-3, 1 and 1e4, away from the origin.
+/// A closed box of half-size `scale` centred at `(3, −2, 5)·scale` (away from the origin, so
+/// coordinates carry rounding error), with its 12 triangles wound counter-clockwise as seen
+/// from inside: the front faces point into the box.
+fn closed_box(scale: f32) -> (Mesh, Vec3) {
+    let c = Vec3::new(3.0, -2.0, 5.0) * scale;
+    let corner = |x: f32, y: f32, z: f32| c + Vec3::new(x, y, z) * scale;
+    let positions = vec![
+        corner(-1., -1., -1.),
+        corner(1., -1., -1.),
+        corner(1., 1., -1.),
+        corner(-1., 1., -1.),
+        corner(-1., -1., 1.),
+        corner(1., -1., 1.),
+        corner(1., 1., 1.),
+        corner(-1., 1., 1.),
+    ];
+    let triangles = vec![
+        [0, 1, 2],
+        [0, 2, 3],
+        [4, 6, 5],
+        [4, 7, 6],
+        [0, 4, 5],
+        [0, 5, 1],
+        [3, 2, 6],
+        [3, 6, 7],
+        [0, 3, 7],
+        [0, 7, 4],
+        [1, 5, 6],
+        [1, 6, 2],
+    ];
+    let mesh = Mesh {
+        name: "box".into(),
+        positions,
+        normals: None,
+        uvs: None,
+        triangles,
+        material: 0,
+    };
+    (mesh, c)
+}
+
+const SCALES: [f32; 3] = [1e-3, 1.0, 1e4];
+
+/// A random walk inside a closed box, each step leaving the last hit point (offset as the
+/// renderer does) in a random inward direction, must never escape, never see the back of a wall
+/// and never find a shadow ray between two walls blocked. Rays that leave a wall near an edge
+/// reach the adjacent wall after a tiny distance: exactly the case where an absolute epsilon in
+/// BVH culling or an over-conservative t bound leaks.
 #[test]
-#[ignore = "open bug (issue 2): at scene scale 1e-3 the furnace loses 1.5 % of its energy (1.8466 vs 1.875); run with --ignored"]
+fn random_walks_never_leave_a_closed_box_at_any_scale() {
+    for scale in SCALES {
+        let (mesh, c) = closed_box(scale);
+        let scene = Scene {
+            meshes: vec![mesh.clone()],
+            materials: vec![material(None, 0.5)],
+            ..Default::default()
+        };
+        let accel = Accel::build(&scene);
+        let corners =
+            |h: u32| mesh.triangles[h as usize].map(|k| Vec3A::from(mesh.positions[k as usize]));
+        let normal = |v: [Vec3A; 3]| (v[1] - v[0]).cross(v[2] - v[0]).normalize();
+        let mut sampler = Sampler::new(11, 0, 0);
+        let mut inward = |n: Vec3A| loop {
+            let w = Vec3A::new(sampler.next_1d(), sampler.next_1d(), sampler.next_1d()) * 2.0 - 1.0;
+            if w.length_squared() < 1.0 && w.dot(n) > 1e-3 {
+                return w;
+            }
+        };
+        let (mut o, mut d) = (c, Vec3::new(0.3, 0.2, 0.9));
+        let (mut shadow_rays, steps) = (0, 50_000);
+        for step in 0..steps {
+            let h = accel
+                .closest_hit(o, d, 0.0, f32::INFINITY)
+                .unwrap_or_else(|| panic!("scale {scale}, step {step}: ray {o} + t·{d} escaped"));
+            let v = corners(h.triangle);
+            let (p, err) = interpolate_with_error(v, h.b);
+            let n = normal(v);
+            assert!(
+                n.dot(Vec3A::from(d)) < 0.0,
+                "scale {scale}: hit a wall's back"
+            );
+            // A shadow ray to a point on another wall facing this one.
+            let other = (h.triangle as usize + 1 + step % 11) % 12;
+            let v2 = corners(other as u32);
+            let n2 = normal(v2);
+            let b = [0.2, 0.3, 0.5];
+            let (q, q_err) = interpolate_with_error(v2, b);
+            if (q - p).dot(n) > 1e-3 * scale && (p - q).dot(n2) > 1e-3 * scale {
+                let from = offset_origin(p, err, n, q - p);
+                let to = offset_origin(q, q_err, n2, from - q);
+                shadow_rays += 1;
+                assert!(
+                    !accel.occluded(from.into(), (to - from).into(), 0.0, 1.0 - SHADOW_EPSILON),
+                    "scale {scale}: shadow ray between two walls blocked"
+                );
+            }
+            let w = inward(n);
+            o = offset_origin(p, err, n, w).into();
+            d = w.into();
+        }
+        assert!(shadow_rays > steps / 4, "{shadow_rays} shadow rays tested");
+    }
+}
+
+/// The box of [`closed_box`] with walls that emit Le = 1 and reflect with albedo 0.5. Every
+/// camera ray sees L = Le (1 + ρ + ρ² + ρ³) = 1.875 at max_depth 4 (three scattering events).
+/// A self-intersecting ray would hit the back of its own wall (black, one-sided) and a leaking
+/// one would escape: both lose energy. At scales 1e-3, 1 and 1e4 the images must agree.
+#[test]
 fn furnace_is_exact_at_every_scene_scale() {
     let expected = 1.0 + 0.5 + 0.25 + 0.125;
-    for scale in [1e-3_f32, 1.0, 1e4] {
-        let c = Vec3::new(3.0, -2.0, 5.0) * scale;
+    let mut images = Vec::new();
+    for scale in SCALES {
+        let (mesh, c) = closed_box(scale);
         let s = scale;
-        let corner = |x: f32, y: f32, z: f32| c + Vec3::new(x, y, z) * s;
-        let p = vec![
-            corner(-1., -1., -1.),
-            corner(1., -1., -1.),
-            corner(1., 1., -1.),
-            corner(-1., 1., -1.),
-            corner(-1., -1., 1.),
-            corner(1., -1., 1.),
-            corner(1., 1., 1.),
-            corner(-1., 1., 1.),
-        ];
-        // Counter-clockwise seen from inside: the front faces point into the box.
-        let tris = vec![
-            [0, 1, 2],
-            [0, 2, 3],
-            [4, 6, 5],
-            [4, 7, 6],
-            [0, 4, 5],
-            [0, 5, 1],
-            [3, 2, 6],
-            [3, 6, 7],
-            [0, 3, 7],
-            [0, 7, 4],
-            [1, 5, 6],
-            [1, 6, 2],
-        ];
-        let mesh = Mesh {
-            name: "box".into(),
-            positions: p,
-            normals: None,
-            uvs: None,
-            triangles: tris,
-            material: 0,
-        };
         let scene = Scene {
             meshes: vec![mesh],
             materials: vec![material(Some(Rgb::ONE), 0.5)],
@@ -218,5 +292,18 @@ fn furnace_is_exact_at_every_scene_scale() {
             .map(|p| p.x)
             .fold(f32::INFINITY, f32::min);
         assert!(darkest > 1.5, "scale {scale}: a pixel fell to {darkest}");
+        images.push(out.mean);
+    }
+    // The same sample sequences meet the same (scaled) geometry, so the images agree up to the
+    // rounding of scaled coordinates, which moves a few paths: per pixel within 1 %.
+    for (img, scale) in images.iter().zip(SCALES).skip(1) {
+        for (a, b) in img.pixels.iter().zip(&images[0].pixels) {
+            assert!(
+                (a.x - b.x).abs() <= 0.01 * b.x,
+                "scale {scale}: {} vs {}",
+                a.x,
+                b.x
+            );
+        }
     }
 }

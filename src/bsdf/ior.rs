@@ -1,6 +1,10 @@
 //! Named indices of refraction: Mitsuba 3.9.1's dielectric table and the RGB complex indices of
 //! its named conductors (as its RGB variants resolve the spectral data, taken from Mitsuba's own
 //! output in `tests/data/bsdf_reference.json`, key `conductor_ior_rgb`).
+//!
+//! The literals are copied digit for digit from those sources, so some carry more digits than an
+//! f32 holds; rounding them by hand would only add a chance of a typo.
+#![allow(clippy::excessive_precision)]
 
 use crate::spectrum::Rgb;
 

@@ -25,22 +25,6 @@ impl Frame {
         Frame { s, t, n }
     }
 
-    /// A frame around `n` whose tangent follows `tangent` as closely as possible (Gram-Schmidt).
-    /// Falls back to [`Frame::from_normal`] when the tangent is parallel to `n` or not finite.
-    pub fn from_normal_tangent(n: Vec3, tangent: Vec3) -> Self {
-        let s = tangent - n * n.dot(tangent);
-        let len2 = s.length_squared();
-        if !(len2 > 1e-12) || !len2.is_finite() {
-            return Self::from_normal(n);
-        }
-        let s = s / len2.sqrt();
-        Frame {
-            s,
-            t: n.cross(s),
-            n,
-        }
-    }
-
     #[inline]
     pub fn to_local(&self, v: Vec3) -> Vec3 {
         Vec3::new(v.dot(self.s), v.dot(self.t), v.dot(self.n))

@@ -1,4 +1,7 @@
 //! Special functions used by the samplers, in single precision like Mitsuba's `scalar_rgb`.
+//!
+//! Polynomial coefficients are Giles's, digit for digit (some exceed f32 precision).
+#![allow(clippy::excessive_precision)]
 
 /// Error function (libm's single-precision `erff`, max error < 1 ulp).
 #[inline]

@@ -14,6 +14,7 @@ use glam::Vec3A;
 #[derive(Clone, Copy, Debug)]
 pub struct WatertightRay {
     pub origin: Vec3A,
+    dir: Vec3A,
     kx: usize,
     ky: usize,
     kz: usize,
@@ -52,6 +53,7 @@ impl WatertightRay {
         }
         WatertightRay {
             origin,
+            dir,
             kx,
             ky,
             kz,
@@ -102,20 +104,17 @@ impl WatertightRay {
         let bz = self.sz * b[kz];
         let cz = self.sz * c[kz];
         let t_scaled = u * az + v * bz + w * cz;
-        // Compare t = t_scaled / det with the interval without dividing.
+        // Reject hits beyond tmax without dividing (the common case in closest-hit traversal).
         let (ts, d) = if det < 0.0 {
             (-t_scaled, -det)
         } else {
             (t_scaled, det)
         };
-        if !(ts > tmin * d && ts < tmax * d) {
+        if !(ts < tmax * d) {
             return None;
         }
         let inv = 1.0 / det;
-        let t = t_scaled * inv;
-        if !(t > tmin && t < tmax) {
-            return None;
-        }
+        let mut t = t_scaled * inv;
         // pbrt-v4 §6.8.6: t must be conservatively positive given the rounding of every step
         // above; together with `offset::offset_origin` this rules out self-intersection.
         let max_zt = az.abs().max(bz.abs()).max(cz.abs());
@@ -128,13 +127,65 @@ impl WatertightRay {
         let max_e = u.abs().max(v.abs()).max(w.abs());
         let delta_t =
             3.0 * (gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv.abs();
-        if t <= delta_t {
+        if !(t > delta_t) {
+            // The bound grows with the triangle's extent as seen from the origin, so for a large
+            // triangle it can exceed the distance to a genuine hit (a ray leaving a box's wall
+            // near a corner towards the adjacent wall) and the ray would leak. Decide such
+            // hits in double precision, where the same bound is 2²⁹ times tighter. The inside
+            // test above stays in single precision, so watertightness is untouched.
+            t = self.refined_t(p0, p1, p2)?;
+        }
+        if !(t > tmin && t < tmax) {
             return None;
         }
         Some(TriangleHit {
             t,
             b: [u * inv, v * inv, w * inv],
         })
+    }
+
+    /// The hit distance to the plane of `(p0, p1, p2)` computed in double precision, or `None`
+    /// when it is not conservatively positive (pbrt-v4's bound with f64 rounding). The f32
+    /// vertices and origin convert exactly, so only the f64 operations contribute error.
+    #[cold]
+    fn refined_t(&self, p0: Vec3A, p1: Vec3A, p2: Vec3A) -> Option<f32> {
+        let (kx, ky, kz) = (self.kx, self.ky, self.kz);
+        let o = self.origin.as_dvec3();
+        let dir = self.dir.as_dvec3();
+        let (sx, sy, sz) = (dir[kx] / dir[kz], dir[ky] / dir[kz], 1.0 / dir[kz]);
+        let shear = |p: Vec3A| {
+            let a = p.as_dvec3() - o;
+            (a[kx] - sx * a[kz], a[ky] - sy * a[kz], sz * a[kz])
+        };
+        let (ax, ay, az) = shear(p0);
+        let (bx, by, bz) = shear(p1);
+        let (cx, cy, cz) = shear(p2);
+        let u = cx * by - cy * bx;
+        let v = ax * cy - ay * cx;
+        let w = bx * ay - by * ax;
+        let det = u + v + w;
+        if det == 0.0 {
+            return None;
+        }
+        let t = (u * az + v * bz + w * cz) / det;
+        let g = |n: f64| {
+            let e = f64::EPSILON * 0.5;
+            n * e / (1.0 - n * e)
+        };
+        // As in `intersect`, with one more rounding in each sheared coordinate (the shear
+        // constants are computed here rather than given).
+        let max_zt = az.abs().max(bz.abs()).max(cz.abs());
+        let max_xt = ax.abs().max(bx.abs()).max(cx.abs());
+        let max_yt = ay.abs().max(by.abs()).max(cy.abs());
+        let delta_z = g(4.0) * max_zt;
+        let delta_x = g(6.0) * (max_xt + max_zt);
+        let delta_y = g(6.0) * (max_yt + max_zt);
+        let delta_e = 2.0 * (g(2.0) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
+        let max_e = u.abs().max(v.abs()).max(w.abs());
+        let delta_t =
+            3.0 * (g(3.0) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) / det.abs();
+        let t32 = t as f32;
+        (t > delta_t && t32 > 0.0).then_some(t32)
     }
 }
 

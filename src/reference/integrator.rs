@@ -94,11 +94,8 @@ pub fn radiance(ctx: &RenderContext, mut o: Vec3, mut d: Vec3, sampler: &mut Sam
     // The BSDF density of the direction that led here (for MIS at emitter hits).
     let mut prev_bsdf_pdf = 1.0_f32;
     let mut prev_delta = true;
-    loop {
-        let Some(si) = intersect(ctx, o, d) else {
-            break;
-        };
-        let material = &scene.materials[scene.meshes[si.mesh as usize].material as usize];
+    while let Some(si) = intersect(ctx, o, d) {
+        let material = &scene.materials[scene.meshes[si.mesh as usize].material];
         let wi = si.frame.to_local(-d);
         // Emission, weighted against the emitter sampling that could have found it.
         if material.emission.is_some() {

@@ -115,10 +115,12 @@ pub fn render(
     let mut sum2 = vec![DVec3::ZERO; w * h];
     let mut taken = 0u32;
     let done_rows = AtomicU64::new(0);
+    // A time-limited render takes passes of `spp` samples until the time is up and reports
+    // progress against the time; otherwise one pass, with progress per finished row.
+    let row_progress = settings.time_limit.is_none();
+    let pass_spp = settings.spp;
     loop {
         let first = taken;
-        let pass_spp = settings.spp;
-        let passes_hint = if settings.time_limit.is_some() { 0 } else { 1 };
         sum.par_chunks_mut(w)
             .zip(sum2.par_chunks_mut(w))
             .enumerate()
@@ -134,7 +136,7 @@ pub fn render(
                         row2[x] += l * l;
                     }
                 }
-                if passes_hint == 1 {
+                if row_progress {
                     let n = done_rows.fetch_add(1, Ordering::Relaxed) + 1;
                     progress(n as f32 / h as f32);
                 }
