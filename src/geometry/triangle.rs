@@ -128,6 +128,10 @@ impl WatertightRay {
         let delta_t =
             3.0 * (gamma(3) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * inv.abs();
         if !(t > delta_t) {
+            if t <= -delta_t {
+                // Certainly behind the origin (the common case: triangles behind the ray).
+                return None;
+            }
             // The bound grows with the triangle's extent as seen from the origin, so for a large
             // triangle it can exceed the distance to a genuine hit (a ray leaving a box's wall
             // near a corner towards the adjacent wall) and the ray would leak. Decide such
