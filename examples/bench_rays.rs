@@ -115,13 +115,16 @@ fn scene() -> Scene {
     }
 }
 
+/// One ray query: true when the ray hit something.
+type RayQuery<'a> = dyn Fn(Vec3, Vec3) -> bool + Sync + 'a;
+
 struct RaySet {
     origins: Vec<Vec3>,
     dirs: Vec<Vec3>,
 }
 
 /// Mrays/s of `f` over every ray, on the current rayon pool, best of three runs.
-fn measure(rays: &RaySet, f: impl Fn(Vec3, Vec3) -> bool + Sync) -> (f64, f64) {
+fn measure(rays: &RaySet, f: &RayQuery<'_>) -> (f64, f64) {
     let mut best = f64::INFINITY;
     let mut hits = 0;
     for _ in 0..3 {
@@ -240,7 +243,7 @@ fn main() -> anyhow::Result<()> {
     for (name, rays) in [("coherent", &coherent), ("incoherent", &incoherent)] {
         let closest = |o: Vec3, d: Vec3| accel.closest_hit(o, d, 0.0, f32::INFINITY).is_some();
         let shadow = |o: Vec3, d: Vec3| accel.occluded(o, d, 0.0, f32::INFINITY);
-        let queries: [(&str, &(dyn Fn(Vec3, Vec3) -> bool + Sync)); 3] = [
+        let queries: [(&str, &RayQuery<'_>); 3] = [
             ("closest hit", &closest),
             ("occlusion", &shadow),
             ("closest hit, obvhs alone", &native_closest),
