@@ -9,13 +9,15 @@
 //! same rays (any hit ends them). "obvhs alone" is obvhs's own traversal and (non-watertight)
 //! triangle test on the same rays, to compare with the figures its authors publish.
 
+#[path = "../tests/common/mod.rs"]
+mod common;
+
 use glam::{Vec2, Vec3, Vec3A};
 use obvhs::cwbvh::builder::build_cwbvh_from_tris;
 use obvhs::ray::{Ray, RayHit};
 use obvhs::triangle::Triangle;
 use obvhs::BvhBuildParams;
 use rayon::prelude::*;
-use std::collections::HashMap;
 use std::time::Duration;
 use std::time::Instant;
 use wpbgi::accel::Accel;
@@ -27,40 +29,11 @@ use wpbgi::scene::{Camera, Material, Mesh, Scattering, Scene};
 use wpbgi::spectrum::Rgb;
 
 fn sphere(center: Vec3, radius: f32, levels: u32) -> Mesh {
-    let mut pos = vec![Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z];
-    let mut tris: Vec<[u32; 3]> = vec![
-        [0, 2, 4],
-        [2, 1, 4],
-        [1, 3, 4],
-        [3, 0, 4],
-        [2, 0, 5],
-        [1, 2, 5],
-        [3, 1, 5],
-        [0, 3, 5],
-    ];
-    for _ in 0..levels {
-        let mut cache = HashMap::new();
-        let mut next = Vec::with_capacity(tris.len() * 4);
-        for [a, b, c] in tris {
-            let mut mid = |p: u32, q: u32| {
-                *cache.entry((p.min(q), p.max(q))).or_insert_with(|| {
-                    pos.push(((pos[p as usize] + pos[q as usize]) * 0.5).normalize());
-                    pos.len() as u32 - 1
-                })
-            };
-            let (ab, bc, ca) = (mid(a, b), mid(b, c), mid(c, a));
-            next.extend([[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]);
-        }
-        tris = next;
+    let mut m = common::closed_sphere(levels);
+    for p in &mut m.positions {
+        *p = center + *p * radius;
     }
-    Mesh {
-        name: "sphere".into(),
-        positions: pos.into_iter().map(|p| center + p * radius).collect(),
-        normals: None,
-        uvs: None,
-        triangles: tris,
-        material: 0,
-    }
+    m
 }
 
 fn floor(n: u32, half: f32) -> Mesh {

@@ -80,6 +80,7 @@ fn parameter_neighbours(b: &Bsdf) -> Vec<Bsdf> {
         let mut v = *b;
         match &mut v {
             Bsdf::Dielectric(d) => d.eta = step_ulp(d.eta, up),
+            Bsdf::ThinDielectric(d) => d.eta = step_ulp(d.eta, up),
             Bsdf::Conductor(_) | Bsdf::Diffuse(_) => {}
         }
         out.push(v);
@@ -88,6 +89,7 @@ fn parameter_neighbours(b: &Bsdf) -> Vec<Bsdf> {
             let distr = match &mut v {
                 Bsdf::Dielectric(d) => &mut d.distr,
                 Bsdf::Conductor(c) => &mut c.distr,
+                Bsdf::ThinDielectric(d) => &mut d.distr,
                 Bsdf::Diffuse(_) => continue,
             };
             if axis == 0 {

@@ -20,7 +20,7 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use serde_json::Value;
 use wpbgi::bsdf::{mitsuba::parse_bsdf, Bsdf, Diffuse, TransportMode};
-use wpbgi::bsdf::{Distribution, Microfacet, RoughConductor, RoughDielectric};
+use wpbgi::bsdf::{Distribution, Microfacet, RoughConductor, RoughDielectric, ThinDielectric};
 use wpbgi::sampler::Sampler;
 use wpbgi::spectrum::Rgb;
 
@@ -45,6 +45,28 @@ fn configurations() -> Vec<(String, Bsdf)> {
             (id, bsdf)
         })
         .collect();
+    // The thin-walled dielectric (not in Mitsuba's table).
+    for (id, kind, au, av, eta) in [
+        ("thin_ggx_a0.1_ior1.5", Distribution::Ggx, 0.1, 0.1, 1.5),
+        ("thin_ggx_a0.5_ior2.4", Distribution::Ggx, 0.5, 0.5, 2.4),
+        (
+            "thin_beckmann_au0.05_av0.3_ior1.33",
+            Distribution::Beckmann,
+            0.05,
+            0.3,
+            1.33,
+        ),
+    ] {
+        out.push((
+            id.into(),
+            Bsdf::ThinDielectric(ThinDielectric {
+                distr: Microfacet::new(kind, au, av),
+                eta,
+                specular_reflectance: Rgb::ONE,
+                specular_transmittance: Rgb::ONE,
+            }),
+        ));
+    }
     out.push((
         "diffuse".into(),
         Bsdf::Diffuse(Diffuse {
@@ -62,7 +84,7 @@ fn incident_directions(bsdf: &Bsdf) -> Vec<Vec3> {
         Vec3::new(sin * 0.7f32.cos(), sin * 0.7f32.sin(), cos)
     };
     let mut v = vec![dir(0.9), dir(0.4), dir(0.1)];
-    if let Bsdf::Dielectric(_) = bsdf {
+    if bsdf.is_two_sided() {
         v.push(dir(-0.7));
     }
     v
@@ -299,6 +321,7 @@ fn distribution(bsdf: &Bsdf) -> Option<&Microfacet> {
     match bsdf {
         Bsdf::Conductor(c) => Some(&c.distr),
         Bsdf::Dielectric(d) => Some(&d.distr),
+        Bsdf::ThinDielectric(d) => Some(&d.distr),
         Bsdf::Diffuse(_) => None,
     }
 }
@@ -491,7 +514,7 @@ fn chi_square_rejects_slightly_wrong_samplers() {
                 distr.alpha_u *= 1.05;
                 distr.alpha_v *= 1.05;
             }
-            Bsdf::Diffuse(_) => unreachable!("the configurations above are microfacet BSDFs"),
+            _ => unreachable!("the configurations above are conductors and dielectrics"),
         }
         if let Bsdf::Dielectric(d) = &mut other_index {
             d.eta *= 1.02;

@@ -1,6 +1,9 @@
 //! Watertight ray tracing and self-intersection-free ray offsets.
 
 use glam::Vec3;
+mod common;
+
+use common::closed_sphere;
 use glam::Vec3A;
 use wpbgi::accel::Accel;
 use wpbgi::bsdf::{Bsdf, Diffuse};
@@ -21,49 +24,6 @@ fn material(emission: Option<Rgb>, albedo: f32) -> Material {
             texture: None,
             two_sided: false,
         }),
-    }
-}
-
-/// A closed, consistently outward-wound icosphere-like mesh: a subdivided octahedron with
-/// shared vertices.
-fn closed_sphere(levels: u32) -> Mesh {
-    let mut pos = vec![Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z];
-    let mut tris: Vec<[u32; 3]> = vec![
-        [0, 2, 4],
-        [2, 1, 4],
-        [1, 3, 4],
-        [3, 0, 4],
-        [2, 0, 5],
-        [1, 2, 5],
-        [3, 1, 5],
-        [0, 3, 5],
-    ];
-    for _ in 0..levels {
-        let mut cache = std::collections::HashMap::new();
-        let mut mid = |a: u32, b: u32, pos: &mut Vec<Vec3>| {
-            *cache.entry((a.min(b), a.max(b))).or_insert_with(|| {
-                pos.push(((pos[a as usize] + pos[b as usize]) * 0.5).normalize());
-                pos.len() as u32 - 1
-            })
-        };
-        let mut next = Vec::new();
-        for [a, b, c] in tris {
-            let (ab, bc, ca) = (
-                mid(a, b, &mut pos),
-                mid(b, c, &mut pos),
-                mid(c, a, &mut pos),
-            );
-            next.extend([[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]);
-        }
-        tris = next;
-    }
-    Mesh {
-        name: "sphere".into(),
-        positions: pos,
-        normals: None,
-        uvs: None,
-        triangles: tris,
-        material: 0,
     }
 }
 

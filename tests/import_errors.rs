@@ -5,51 +5,8 @@ use std::path::{Path, PathBuf};
 use wpbgi::scene::Scene;
 use wpbgi::Error;
 
-fn b64(data: &[u8]) -> String {
-    const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::new();
-    for c in data.chunks(3) {
-        let n = (c[0] as u32) << 16
-            | (*c.get(1).unwrap_or(&0) as u32) << 8
-            | *c.get(2).unwrap_or(&0) as u32;
-        for i in 0..4 {
-            if i <= c.len() {
-                out.push(A[(n >> (18 - 6 * i) & 63) as usize] as char);
-            } else {
-                out.push('=');
-            }
-        }
-    }
-    out
-}
-
-/// A one-triangle glTF with the given positions and indices, embedded as a data URI.
-fn triangle_gltf(positions: &[[f32; 3]], indices: &[u32], extra_material: &str) -> String {
-    let mut bin = Vec::new();
-    for p in positions {
-        for x in p {
-            bin.extend_from_slice(&x.to_le_bytes());
-        }
-    }
-    let pos_len = bin.len();
-    for i in indices {
-        bin.extend_from_slice(&i.to_le_bytes());
-    }
-    format!(
-        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0,"name":"tri"}}],
-"meshes":[{{"name":"tri","primitives":[{{"attributes":{{"POSITION":0}},"indices":1,"material":0}}]}}],
-"materials":[{{"name":"lamp","emissiveFactor":[1,1,1]{extra_material}}}],
-"buffers":[{{"byteLength":{},"uri":"data:application/octet-stream;base64,{}"}}],
-"bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":{pos_len}}},{{"buffer":0,"byteOffset":{pos_len},"byteLength":{}}}],
-"accessors":[{{"bufferView":0,"componentType":5126,"count":{},"type":"VEC3","min":[0,0,0],"max":[1,1,1]}},
-{{"bufferView":1,"componentType":5125,"count":{},"type":"SCALAR"}}]}}"#,
-        bin.len(),
-        b64(&bin),
-        indices.len() * 4,
-        positions.len(),
-        indices.len()
-    )
-}
+mod common;
+use common::{b64, triangle_gltf};
 
 const TRI: [[f32; 3]; 3] = [[0., 0., 0.], [1., 0., 0.], [0., 1., 0.]];
 

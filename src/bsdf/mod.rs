@@ -20,11 +20,13 @@ pub mod fresnel;
 pub mod ior;
 pub mod microfacet;
 pub mod mitsuba;
+pub mod thin;
 
 pub use conductor::RoughConductor;
 pub use dielectric::RoughDielectric;
 pub use diffuse::Diffuse;
 pub use microfacet::{Distribution, Microfacet};
+pub use thin::ThinDielectric;
 
 use crate::spectrum::Rgb;
 use glam::{Vec2, Vec3};
@@ -65,6 +67,8 @@ pub enum Bsdf {
     Diffuse(Diffuse),
     Conductor(RoughConductor),
     Dielectric(RoughDielectric),
+    /// Not a Mitsuba plugin: glTF's thin-walled transmission (see [`thin`]).
+    ThinDielectric(ThinDielectric),
 }
 
 impl Bsdf {
@@ -75,6 +79,7 @@ impl Bsdf {
             Bsdf::Diffuse(b) => b.eval(wi, wo),
             Bsdf::Conductor(b) => b.eval(wi, wo),
             Bsdf::Dielectric(b) => b.eval(wi, wo, mode),
+            Bsdf::ThinDielectric(b) => b.eval(wi, wo),
         }
     }
 
@@ -85,6 +90,7 @@ impl Bsdf {
             Bsdf::Diffuse(b) => b.pdf(wi, wo),
             Bsdf::Conductor(b) => b.pdf(wi, wo),
             Bsdf::Dielectric(b) => b.pdf(wi, wo),
+            Bsdf::ThinDielectric(b) => b.pdf(wi, wo),
         }
     }
 
@@ -96,11 +102,12 @@ impl Bsdf {
             Bsdf::Diffuse(b) => b.sample(wi, u),
             Bsdf::Conductor(b) => b.sample(wi, u),
             Bsdf::Dielectric(b) => b.sample(wi, u0, u, mode),
+            Bsdf::ThinDielectric(b) => b.sample(wi, u0, u),
         }
     }
 
     /// True when the BSDF scatters light arriving from below the shading normal.
     pub fn is_two_sided(&self) -> bool {
-        matches!(self, Bsdf::Dielectric(_))
+        matches!(self, Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_))
     }
 }

@@ -69,6 +69,7 @@ pub(super) fn import(path: &Path, bytes: &[u8]) -> Result<Scene> {
             transmission: 0.0,
             transmission_texture: None,
             ior: 1.5,
+            thin_walled: false,
         }),
         emission: None,
     });
@@ -422,15 +423,6 @@ fn pbr_scattering(
 ) -> Scattering {
     let [r, g_, b, _] = pbr.base_color_factor();
     let transmission = m.transmission();
-    if transmission
-        .as_ref()
-        .is_some_and(|t| t.transmission_factor() > 0.0)
-        && m.volume().is_none()
-    {
-        warnings.push(Warning(format!(
-            "{what} is transmissive without KHR_materials_volume (thin-walled); it is rendered as a solid refracting interface"
-        )));
-    }
     Scattering::Pbr(PbrParams {
         base_color: Rgb::new(r, g_, b).clamp(Rgb::ZERO, Rgb::ONE),
         base_color_texture: pbr
@@ -452,6 +444,8 @@ fn pbr_scattering(
             .ior()
             .filter(|x| x.is_finite() && *x >= 1.0)
             .unwrap_or(1.5),
+        // glTF: without a volume, or with zero thickness, the surface is thin-walled.
+        thin_walled: m.volume().is_none_or(|v| v.thickness_factor() <= 0.0),
     })
 }
 

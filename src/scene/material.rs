@@ -2,13 +2,17 @@
 //!
 //! An explicit Mitsuba description always wins. Otherwise glTF metallic-roughness maps as:
 //! `alpha = roughness²` with GGX; transmission > 0 → `roughdielectric` (`int_ior` = the glTF
-//! IOR, exterior 1.0, `specular_transmittance` = base colour); metallic ≥ 0.5 →
+//! IOR, exterior 1.0, `specular_transmittance` = base colour), or the thin-walled
+//! [`ThinDielectric`] when the material has no `KHR_materials_volume` or a zero thickness (the
+//! glTF definition of thin-walled); metallic ≥ 0.5 →
 //! `roughconductor` with `material: none` and `specular_reflectance` = base colour; otherwise
 //! `diffuse(base colour)`. Textured factors are resolved per shading point, so a metallic mask
 //! switches the BSDF per texel.
 
 use super::texture::{TexRef, Texture};
-use crate::bsdf::{Bsdf, Diffuse, Distribution, Microfacet, RoughConductor, RoughDielectric};
+use crate::bsdf::{
+    Bsdf, Diffuse, Distribution, Microfacet, RoughConductor, RoughDielectric, ThinDielectric,
+};
 use crate::spectrum::Rgb;
 use glam::Vec2;
 
@@ -25,6 +29,8 @@ pub struct PbrParams {
     pub transmission_texture: Option<TexRef>,
     /// Index of refraction of the interior (KHR_materials_ior, default 1.5).
     pub ior: f32,
+    /// A transmissive surface without a volume behind it (a pane, a leaf).
+    pub thin_walled: bool,
 }
 
 /// What scatters light at a surface.
@@ -74,7 +80,14 @@ impl Material {
                 }
                 let alpha = roughness.clamp(0.0, 1.0).powi(2);
                 let distr = Microfacet::new(Distribution::Ggx, alpha, alpha);
-                if transmission > 0.0 {
+                if transmission > 0.0 && p.thin_walled {
+                    Bsdf::ThinDielectric(ThinDielectric {
+                        distr,
+                        eta: p.ior,
+                        specular_reflectance: Rgb::ONE,
+                        specular_transmittance: base,
+                    })
+                } else if transmission > 0.0 {
                     Bsdf::Dielectric(RoughDielectric {
                         distr,
                         eta: p.ior,

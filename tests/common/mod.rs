@@ -1,0 +1,96 @@
+//! Helpers shared by the integration tests (and the ray benchmark). Each test binary uses a
+//! subset, hence the `dead_code` allowance.
+#![allow(dead_code)]
+
+use glam::Vec3;
+use wpbgi::scene::Mesh;
+
+/// Standard base64 (for data URIs).
+pub fn b64(data: &[u8]) -> String {
+    const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    let mut out = String::new();
+    for c in data.chunks(3) {
+        let n = (c[0] as u32) << 16
+            | (*c.get(1).unwrap_or(&0) as u32) << 8
+            | *c.get(2).unwrap_or(&0) as u32;
+        for i in 0..4 {
+            if i <= c.len() {
+                out.push(A[(n >> (18 - 6 * i) & 63) as usize] as char);
+            } else {
+                out.push('=');
+            }
+        }
+    }
+    out
+}
+
+/// A one-triangle glTF with the given positions and indices, embedded as a data URI.
+pub fn triangle_gltf(positions: &[[f32; 3]], indices: &[u32], extra_material: &str) -> String {
+    let mut bin = Vec::new();
+    for p in positions {
+        for x in p {
+            bin.extend_from_slice(&x.to_le_bytes());
+        }
+    }
+    let pos_len = bin.len();
+    for i in indices {
+        bin.extend_from_slice(&i.to_le_bytes());
+    }
+    format!(
+        r#"{{"asset":{{"version":"2.0"}},"scene":0,"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0,"name":"tri"}}],
+"meshes":[{{"name":"tri","primitives":[{{"attributes":{{"POSITION":0}},"indices":1,"material":0}}]}}],
+"materials":[{{"name":"lamp","emissiveFactor":[1,1,1]{extra_material}}}],
+"buffers":[{{"byteLength":{},"uri":"data:application/octet-stream;base64,{}"}}],
+"bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":{pos_len}}},{{"buffer":0,"byteOffset":{pos_len},"byteLength":{}}}],
+"accessors":[{{"bufferView":0,"componentType":5126,"count":{},"type":"VEC3","min":[0,0,0],"max":[1,1,1]}},
+{{"bufferView":1,"componentType":5125,"count":{},"type":"SCALAR"}}]}}"#,
+        bin.len(),
+        b64(&bin),
+        indices.len() * 4,
+        positions.len(),
+        indices.len()
+    )
+}
+
+/// A closed, consistently outward-wound icosphere-like mesh: a subdivided octahedron with
+/// shared vertices.
+pub fn closed_sphere(levels: u32) -> Mesh {
+    let mut pos = vec![Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z];
+    let mut tris: Vec<[u32; 3]> = vec![
+        [0, 2, 4],
+        [2, 1, 4],
+        [1, 3, 4],
+        [3, 0, 4],
+        [2, 0, 5],
+        [1, 2, 5],
+        [3, 1, 5],
+        [0, 3, 5],
+    ];
+    for _ in 0..levels {
+        let mut cache = std::collections::HashMap::new();
+        let mut mid = |a: u32, b: u32, pos: &mut Vec<Vec3>| {
+            *cache.entry((a.min(b), a.max(b))).or_insert_with(|| {
+                pos.push(((pos[a as usize] + pos[b as usize]) * 0.5).normalize());
+                pos.len() as u32 - 1
+            })
+        };
+        let mut next = Vec::new();
+        for [a, b, c] in tris {
+            let (ab, bc, ca) = (
+                mid(a, b, &mut pos),
+                mid(b, c, &mut pos),
+                mid(c, a, &mut pos),
+            );
+            next.extend([[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]);
+        }
+        tris = next;
+    }
+    Mesh {
+        name: "sphere".into(),
+        positions: pos,
+        normals: None,
+        uvs: None,
+        triangles: tris,
+        material: 0,
+    }
+}
