@@ -28,6 +28,7 @@ pub mod bsdf;
 pub mod emitters;
 pub mod error;
 pub mod geometry;
+pub mod haar;
 pub mod image;
 pub mod reference;
 pub mod sampler;

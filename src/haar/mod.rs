@@ -1,0 +1,9 @@
+//! Directional functions on the sphere as Haar wavelets (DESIGN.md §5.3, spec §4–§5): the
+//! equal-area octahedral map from directions to the unit square, and the orthonormal
+//! non-standard 2D Haar transform over it.
+
+pub mod sphere_map;
+pub mod transform;
+
+pub use sphere_map::{direction_to_square, square_to_direction, texel_of};
+pub use transform::{detail_index, Coefficient, Haar2d};

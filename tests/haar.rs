@@ -1,0 +1,164 @@
+//! The Haar transform and the equal-area octahedral map (spec §4.2, DESIGN.md §5.3).
+
+use glam::{DVec2, Vec2, Vec3};
+use wpbgi::haar::sphere_map::square_to_direction_f64;
+use wpbgi::haar::{direction_to_square, square_to_direction, texel_of, Haar2d};
+use wpbgi::sampler::Sampler;
+
+fn random_image(n: usize, seed: u64) -> Vec<Vec3> {
+    (0..n * n)
+        .map(|i| {
+            let mut s = Sampler::new(seed, i as u64, 0);
+            // Spread over orders of magnitude, as radiance is.
+            Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()) * 10f32.powf(4.0 * s.next_1d() - 2.0)
+        })
+        .collect()
+}
+
+fn max_abs(v: &[Vec3]) -> f32 {
+    v.iter().map(|c| c.abs().max_element()).fold(0.0, f32::max)
+}
+
+#[test]
+fn round_trip_is_exact_to_1e6() {
+    for (n, seed) in [(1, 1), (2, 2), (8, 3), (32, 4), (64, 5)] {
+        let img = random_image(n, seed);
+        let back = Haar2d::forward(&img, n).inverse();
+        let scale = max_abs(&img);
+        for (a, b) in img.iter().zip(&back) {
+            assert!(
+                (*a - *b).abs().max_element() <= 1e-6 * scale,
+                "n = {n}: {a} came back as {b}"
+            );
+        }
+    }
+}
+
+#[test]
+fn parseval_energy_is_preserved() {
+    for (n, seed) in [(2, 6), (16, 7), (64, 8)] {
+        let img = random_image(n, seed);
+        let h = Haar2d::forward(&img, n);
+        for c in 0..3 {
+            // ‖f‖² over the unit square: each texel covers 1/N².
+            let space: f64 =
+                img.iter().map(|v| (v[c] as f64).powi(2)).sum::<f64>() / (n * n) as f64;
+            let coeffs: f64 = (h.scale[c] as f64).powi(2)
+                + h.details
+                    .iter()
+                    .flat_map(|d| d.iter().map(move |v| (v[c] as f64).powi(2)))
+                    .sum::<f64>();
+            // Each coefficient carries ≤ J+1 f32 roundings (3.6e-7 relative at J = 6), so the
+            // energies agree to about twice that.
+            assert!(
+                (space - coeffs).abs() <= 2e-6 * space,
+                "n = {n}, channel {c}: {space} vs {coeffs}"
+            );
+        }
+    }
+}
+
+#[test]
+fn point_evaluation_equals_the_texel_value() {
+    for (n, seed) in [(1, 9), (4, 10), (32, 11)] {
+        let img = random_image(n, seed);
+        let h = Haar2d::forward(&img, n);
+        let scale = max_abs(&img);
+        for y in 0..n {
+            for x in 0..n {
+                // Centre and a point near a corner of the texel.
+                for (fx, fy) in [(0.5, 0.5), (0.01, 0.99)] {
+                    let v = h.eval((x as f32 + fx) / n as f32, (y as f32 + fy) / n as f32);
+                    let t = img[y * n + x];
+                    assert!(
+                        (v - t).abs().max_element() <= 1e-6 * scale,
+                        "({x}, {y}): {v} vs {t}"
+                    );
+                }
+            }
+        }
+    }
+}
+
+/// The map is bijective: square → sphere → square and sphere → square → sphere return the start.
+#[test]
+fn octahedral_map_is_bijective() {
+    let mut s = Sampler::new(12, 0, 0);
+    for _ in 0..100_000 {
+        let p = s.next_2d();
+        let back = direction_to_square(square_to_direction(p));
+        assert!((back - p).length() < 1e-6, "{p} → {back}");
+        let w = square_to_direction(p);
+        assert!((w.length() - 1.0).abs() < 1e-6);
+        let w2 = square_to_direction(direction_to_square(w));
+        assert!((w2 - w).length() < 1e-6, "{w} → {w2}");
+    }
+    // Distinct texel centres map to distinct directions, and back to their own texel.
+    let n = 64;
+    for y in 0..n {
+        for x in 0..n {
+            let c = Vec2::new((x as f32 + 0.5) / n as f32, (y as f32 + 0.5) / n as f32);
+            assert_eq!(texel_of(square_to_direction(c), n), (x, y));
+        }
+    }
+}
+
+/// Equal area: |∂w/∂u × ∂w/∂v| = 4π everywhere (so an N × N texel subtends 4π/N²), measured by
+/// central differences in f64 off the map's creases (the diamond edges, the axes and the
+/// square's border, where the map is only piecewise smooth).
+#[test]
+fn octahedral_map_is_equal_area() {
+    let mut s = Sampler::new(13, 0, 0);
+    let mut tested = 0;
+    for _ in 0..20_000 {
+        let p = s.next_2d().as_dvec2();
+        let q = p * 2.0 - 1.0;
+        let crease =
+            q.x.abs()
+                .min(q.y.abs())
+                .min((1.0 - q.x.abs() - q.y.abs()).abs())
+                .min(1.0 - q.x.abs())
+                .min(1.0 - q.y.abs());
+        // The map bends sharply near the poles (the centre and the corners, which are crease
+        // crossings), so the step shrinks with the distance d to the nearest crease: the
+        // difference error is O((h/d)²) = 1e-8, the rounding error O(1e-16/h) ≤ 1e-9.
+        if crease < 1e-3 {
+            continue;
+        }
+        let h = 1e-4 * crease / 2.0;
+        let du = (square_to_direction_f64(p + DVec2::new(h, 0.0))
+            - square_to_direction_f64(p - DVec2::new(h, 0.0)))
+            / (2.0 * h);
+        let dv = (square_to_direction_f64(p + DVec2::new(0.0, h))
+            - square_to_direction_f64(p - DVec2::new(0.0, h)))
+            / (2.0 * h);
+        let j = du.cross(dv).length();
+        assert!(
+            (j - 4.0 * std::f64::consts::PI).abs() < 1e-6 * 4.0 * std::f64::consts::PI,
+            "Jacobian {j} at {p}"
+        );
+        tested += 1;
+    }
+    assert!(tested > 19_000, "{tested} points tested");
+}
+
+/// And independently of any derivative: directions drawn uniformly on the sphere (by a method
+/// that does not use the map) fall into the 16 × 16 texels equally often (Pearson, p ≥ 0.001).
+#[test]
+fn uniform_directions_fill_texels_uniformly() {
+    let (n, draws) = (16u32, 1_000_000u64);
+    let mut counts = vec![0u64; (n * n) as usize];
+    for i in 0..draws {
+        let mut s = Sampler::new(14, i, 0);
+        let u = s.next_2d();
+        let z = 1.0 - 2.0 * u.y;
+        let r = (1.0 - z * z).max(0.0).sqrt();
+        let (sn, cs) = (std::f32::consts::TAU * u.x).sin_cos();
+        let (x, y) = texel_of(Vec3::new(r * cs, r * sn, z), n);
+        counts[(y * n + x) as usize] += 1;
+    }
+    let e = draws as f64 / (n * n) as f64;
+    let chi2: f64 = counts.iter().map(|&c| (c as f64 - e).powi(2) / e).sum();
+    // 255 degrees of freedom: the 0.999 quantile is 330.5.
+    assert!(chi2 < 330.5, "chi2 = {chi2} on 255 dof");
+}
