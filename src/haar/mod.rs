@@ -2,8 +2,10 @@
 //! equal-area octahedral map from directions to the unit square, and the orthonormal
 //! non-standard 2D Haar transform over it.
 
+pub mod sparse;
 pub mod sphere_map;
 pub mod transform;
 
+pub use sparse::SparseHaar;
 pub use sphere_map::{direction_to_square, square_to_direction, texel_of};
 pub use transform::{detail_index, Coefficient, Haar2d};

@@ -15,13 +15,24 @@ use std::ops::{Add, Mul, Sub};
 
 /// What a coefficient can be: a scalar or an RGB triple.
 pub trait Coefficient:
-    Copy + Default + Add<Output = Self> + Sub<Output = Self> + Mul<f32, Output = Self>
+    Copy + Default + PartialEq + Add<Output = Self> + Sub<Output = Self> + Mul<f32, Output = Self>
 {
+    /// The size that thresholding compares: |c| for a scalar, the largest |component| for RGB.
+    fn magnitude(self) -> f32;
 }
 
-impl<T> Coefficient for T where
-    T: Copy + Default + Add<Output = T> + Sub<Output = T> + Mul<f32, Output = T>
-{
+impl Coefficient for f32 {
+    #[inline]
+    fn magnitude(self) -> f32 {
+        self.abs()
+    }
+}
+
+impl Coefficient for glam::Vec3 {
+    #[inline]
+    fn magnitude(self) -> f32 {
+        self.abs().max_element()
+    }
 }
 
 /// The three details of one cell: `[ψφ (varies along x), φψ (along y), ψψ]`.
