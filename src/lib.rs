@@ -24,6 +24,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod accel;
+pub mod bake;
 pub mod bsdf;
 pub mod emitters;
 pub mod error;

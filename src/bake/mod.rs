@@ -1,0 +1,5 @@
+//! The bake (DESIGN.md §5): surfels, their direct light, the surfel tree and its wavelet coding.
+
+pub mod surfels;
+
+pub use surfels::{sample_surfels, Surfel};

@@ -1,0 +1,351 @@
+//! Poisson-disk surfels on every surface by weighted sample elimination (Yuksel, "Sample
+//! Elimination for Generating Poisson Disk Sample Sets", Eurographics 2015), DESIGN.md §5.1 and
+//! spec §2.1.
+//!
+//! 1. Draw `CANDIDATES_PER_SURFEL × N` candidates uniformly by area (each from its own counter-
+//!    based random stream, so the set does not depend on the thread count).
+//! 2. Give each candidate the weight Σ (1 − d/2r_max)⁸ over its neighbours closer than 2r_max,
+//!    with r_max = √(A / (2√3 N)), the radius of N discs in hexagonal packing over the area A.
+//!    Then repeatedly remove the heaviest candidate (ties: the higher index) and lower its
+//!    neighbours' weights, until N remain. This runs sequentially, so it is deterministic.
+//! 3. Every candidate stands for A / (candidate count) of surface. Each surfel's area is the
+//!    total of the candidates nearest to it: the local density decides the area (Voronoi by
+//!    counting), and the areas sum to the total surface area.
+//!
+//! Neighbours count only when they face the same way (n·n' > 0). The two sides of a thin wall
+//! then do not thin each other out, and the area of one side is never credited to the other.
+
+use crate::geometry::warp::square_to_uniform_triangle;
+use crate::sampler::Sampler;
+use crate::scene::Scene;
+use glam::{IVec3, Vec2, Vec3};
+use rayon::prelude::*;
+use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
+
+/// Candidates drawn per surfel kept (Yuksel's recommendation is 3–5).
+pub const CANDIDATES_PER_SURFEL: usize = 5;
+
+/// A surface sample.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Surfel {
+    pub p: Vec3,
+    /// Unit geometric normal (the front face of the triangle).
+    pub n: Vec3,
+    /// Area of surface this surfel stands for.
+    pub area: f32,
+    pub mesh: u32,
+    pub triangle: u32,
+    /// Barycentric weights of the triangle's vertices 1 and 2 (vertex 0 has 1 − b.x − b.y).
+    pub b: Vec2,
+}
+
+impl Surfel {
+    /// Radius of the disc of the surfel's area.
+    pub fn radius(&self) -> f32 {
+        (self.area / std::f32::consts::PI).sqrt()
+    }
+}
+
+/// `n` Poisson-disk surfels over every triangle of `scene` (fewer if the scene has fewer
+/// candidates' worth of area: never more than requested).
+pub fn sample_surfels(scene: &Scene, n: usize, seed: u64) -> Vec<Surfel> {
+    let (cdf, tris) = area_table(scene);
+    let total = cdf.last().copied().unwrap_or(0.0);
+    if n == 0 || !(total > 0.0) {
+        return Vec::new();
+    }
+    let count = n * CANDIDATES_PER_SURFEL;
+    let mut candidates: Vec<Surfel> = (0..count as u64)
+        .into_par_iter()
+        .map(|i| candidate(scene, &cdf, &tris, total, seed, i))
+        .collect();
+    let r_max = ((total / (2.0 * 3f64.sqrt() * n as f64)).sqrt()) as f32;
+    let grid = Grid::new(&mut candidates, 2.0 * r_max);
+    let alive = eliminate(&candidates, &grid, r_max, n);
+    assign_areas(&candidates, &grid, &alive, (total / count as f64) as f32)
+}
+
+/// Cumulative triangle areas (f64) and the `(mesh, triangle)` of each entry.
+fn area_table(scene: &Scene) -> (Vec<f64>, Vec<(u32, u32)>) {
+    let mut cdf = Vec::with_capacity(scene.triangle_count());
+    let mut tris = Vec::with_capacity(scene.triangle_count());
+    let mut acc = 0.0f64;
+    for (mi, m) in scene.meshes.iter().enumerate() {
+        for (ti, t) in m.triangles.iter().enumerate() {
+            let p = |k: u32| m.positions[k as usize].as_dvec3();
+            let area = 0.5 * (p(t[1]) - p(t[0])).cross(p(t[2]) - p(t[0])).length();
+            if area > 0.0 {
+                acc += area;
+                cdf.push(acc);
+                tris.push((mi as u32, ti as u32));
+            }
+        }
+    }
+    (cdf, tris)
+}
+
+fn candidate(
+    scene: &Scene,
+    cdf: &[f64],
+    tris: &[(u32, u32)],
+    total: f64,
+    seed: u64,
+    i: u64,
+) -> Surfel {
+    let mut s = Sampler::new(seed, i, 0);
+    // Two uniforms for the triangle choice, for 48 bits of resolution over the area.
+    let u = (s.next_1d() as f64 + s.next_1d() as f64 * 2f64.powi(-24)) * total;
+    let k = cdf.partition_point(|&c| c <= u).min(cdf.len() - 1);
+    let (mesh, triangle) = tris[k];
+    let m = &scene.meshes[mesh as usize];
+    let t = m.triangles[triangle as usize];
+    let v = t.map(|k| m.positions[k as usize]);
+    let b = square_to_uniform_triangle(s.next_2d());
+    Surfel {
+        p: v[0] * (1.0 - b.x - b.y) + v[1] * b.x + v[2] * b.y,
+        n: (v[1] - v[0]).cross(v[2] - v[0]).normalize(),
+        area: 0.0,
+        mesh,
+        triangle,
+        b,
+    }
+}
+
+/// A multiplicative hash for grid cells (the default SipHash is a third of the run time here,
+/// and the keys are not adversarial).
+#[derive(Default)]
+struct CellHasher(u64);
+
+impl Hasher for CellHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+    fn write(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            self.write_u64(b as u64);
+        }
+    }
+    fn write_i32(&mut self, i: i32) {
+        self.write_u64(i as u32 as u64);
+    }
+    fn write_u64(&mut self, i: u64) {
+        self.0 = (self.0.rotate_left(5) ^ i).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
+    }
+}
+
+/// A uniform hash grid over the candidates, which it reorders so each cell is one contiguous
+/// slice and neighbouring cells lie close in memory (Morton order of the cells): elimination
+/// touches each candidate's neighbours thousands of times, and random order made it
+/// memory-bound.
+struct Grid {
+    cell: f32,
+    ranges: HashMap<IVec3, (u32, u32), BuildHasherDefault<CellHasher>>,
+}
+
+/// Interleave the low 21 bits of three coordinates (a Morton code).
+fn morton(k: IVec3) -> u64 {
+    fn spread(v: i32) -> u64 {
+        let mut x = (v as u32 as u64) & 0x1f_ffff;
+        x = (x | x << 32) & 0x1f_0000_0000_ffff;
+        x = (x | x << 16) & 0x1f_0000_ff00_00ff;
+        x = (x | x << 8) & 0x100f_00f0_0f00_f00f;
+        x = (x | x << 4) & 0x10c3_0c30_c30c_30c3;
+        (x | x << 2) & 0x1249_2492_4924_9249
+    }
+    spread(k.x) | spread(k.y) << 1 | spread(k.z) << 2
+}
+
+impl Grid {
+    /// Sort `points` by cell (deterministically: ties keep their order) and index the cells.
+    fn new(points: &mut [Surfel], cell: f32) -> Grid {
+        let key = |p: Vec3| (p / cell).floor().as_ivec3();
+        points.par_sort_by_cached_key(|s| {
+            let k = key(s.p);
+            (morton(k), k.x, k.y, k.z)
+        });
+        let mut ranges = HashMap::default();
+        let mut start = 0;
+        for i in 1..=points.len() {
+            let k = key(points[start].p);
+            if i == points.len() || key(points[i].p) != k {
+                ranges.insert(k, (start as u32, i as u32));
+                start = i;
+            }
+        }
+        Grid { cell, ranges }
+    }
+
+    /// Call `f` for every candidate in the 3 × 3 × 3 cells around `p` (a superset of those
+    /// within one cell size), in a fixed order.
+    #[inline]
+    fn for_each_around(&self, p: Vec3, mut f: impl FnMut(u32)) {
+        let c = (p / self.cell).floor().as_ivec3();
+        for dz in -1..=1 {
+            for dy in -1..=1 {
+                for dx in -1..=1 {
+                    if let Some(&(a, b)) = self.ranges.get(&(c + IVec3::new(dx, dy, dz))) {
+                        (a..b).for_each(&mut f);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Yuksel's weight of a neighbour at distance `d`, for candidates facing the same way.
+#[inline]
+fn weight(a: &Surfel, b: &Surfel, r_max: f32) -> f32 {
+    let d = a.p.distance(b.p);
+    if d < 2.0 * r_max && a.n.dot(b.n) > 0.0 {
+        (1.0 - d / (2.0 * r_max)).powi(8)
+    } else {
+        0.0
+    }
+}
+
+/// A binary max-heap over candidate indices keyed by their weights, with the position of
+/// every index so a weight can be lowered in place (weights only ever decrease here). Ties go
+/// to the higher index, so the order of removal is a total order: deterministic.
+struct WeightHeap {
+    heap: Vec<u32>,
+    pos: Vec<u32>,
+    w: Vec<f32>,
+}
+
+impl WeightHeap {
+    fn new(w: Vec<f32>) -> Self {
+        let heap: Vec<u32> = (0..w.len() as u32).collect();
+        let pos = heap.clone();
+        let mut h = WeightHeap { heap, pos, w };
+        for i in (0..h.heap.len() / 2).rev() {
+            h.sift_down(i);
+        }
+        h
+    }
+
+    #[inline]
+    fn above(&self, a: u32, b: u32) -> bool {
+        let (wa, wb) = (self.w[a as usize], self.w[b as usize]);
+        wa > wb || (wa == wb && a > b)
+    }
+
+    fn swap(&mut self, i: usize, j: usize) {
+        self.heap.swap(i, j);
+        self.pos[self.heap[i] as usize] = i as u32;
+        self.pos[self.heap[j] as usize] = j as u32;
+    }
+
+    fn sift_down(&mut self, mut i: usize) {
+        loop {
+            let (l, r) = (2 * i + 1, 2 * i + 2);
+            let mut top = i;
+            if l < self.heap.len() && self.above(self.heap[l], self.heap[top]) {
+                top = l;
+            }
+            if r < self.heap.len() && self.above(self.heap[r], self.heap[top]) {
+                top = r;
+            }
+            if top == i {
+                return;
+            }
+            self.swap(i, top);
+            i = top;
+        }
+    }
+
+    fn pop(&mut self) -> Option<u32> {
+        let top = *self.heap.first()?;
+        let last = self.heap.len() - 1;
+        self.swap(0, last);
+        self.heap.pop();
+        self.pos[top as usize] = u32::MAX;
+        self.sift_down(0);
+        Some(top)
+    }
+
+    /// Lower the weight of `i` (still in the heap) by `dw ≥ 0`.
+    fn decrease(&mut self, i: u32, dw: f32) {
+        self.w[i as usize] -= dw;
+        self.sift_down(self.pos[i as usize] as usize);
+    }
+}
+
+/// Which candidates survive elimination down to `keep`.
+fn eliminate(c: &[Surfel], grid: &Grid, r_max: f32, keep: usize) -> Vec<bool> {
+    let w: Vec<f32> = (0..c.len())
+        .into_par_iter()
+        .map(|i| {
+            let mut sum = 0.0;
+            grid.for_each_around(c[i].p, |j| {
+                if j as usize != i {
+                    sum += weight(&c[i], &c[j as usize], r_max);
+                }
+            });
+            sum
+        })
+        .collect();
+    let mut heap = WeightHeap::new(w);
+    let mut alive = vec![true; c.len()];
+    let mut remaining = c.len();
+    while remaining > keep {
+        let Some(i) = heap.pop() else {
+            break;
+        };
+        alive[i as usize] = false;
+        remaining -= 1;
+        grid.for_each_around(c[i as usize].p, |j| {
+            if alive[j as usize] {
+                let dw = weight(&c[i as usize], &c[j as usize], r_max);
+                if dw > 0.0 {
+                    heap.decrease(j, dw);
+                }
+            }
+        });
+    }
+    alive
+}
+
+/// The surviving candidates, each with the area of the candidates nearest to it.
+fn assign_areas(c: &[Surfel], grid: &Grid, alive: &[bool], area_each: f32) -> Vec<Surfel> {
+    let nearest: Vec<u32> = (0..c.len())
+        .into_par_iter()
+        .map(|i| {
+            if alive[i] {
+                return i as u32;
+            }
+            let mut best = (f32::INFINITY, u32::MAX);
+            grid.for_each_around(c[i].p, |j| {
+                let s = &c[j as usize];
+                if alive[j as usize] && s.n.dot(c[i].n) > 0.0 {
+                    let d = s.p.distance_squared(c[i].p);
+                    if (d, j) < best {
+                        best = (d, j);
+                    }
+                }
+            });
+            if best.1 == u32::MAX {
+                // No surfel nearby facing the same way (a sliver of surface that lost all its
+                // candidates): the nearest surfel anywhere takes the area.
+                best = (0..c.len() as u32)
+                    .filter(|&j| alive[j as usize])
+                    .map(|j| (c[j as usize].p.distance_squared(c[i].p), j))
+                    .fold((f32::INFINITY, u32::MAX), |a, b| if b < a { b } else { a });
+            }
+            best.1
+        })
+        .collect();
+    let mut counts = vec![0u32; c.len()];
+    for &k in &nearest {
+        counts[k as usize] += 1;
+    }
+    c.iter()
+        .zip(alive)
+        .zip(&counts)
+        .filter(|((_, a), _)| **a)
+        .map(|((s, _), &k)| Surfel {
+            area: k as f32 * area_each,
+            ..*s
+        })
+        .collect()
+}
