@@ -2,9 +2,10 @@
 //! for looking at. Files are written atomically: to a temporary name in the same folder, then
 //! renamed, so a failed or interrupted write never leaves a broken file under the target name.
 
+use crate::atomic::write_atomically;
 use crate::error::{Error, Result};
 use crate::spectrum::Rgb;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct Image {
@@ -40,34 +41,6 @@ fn output_error(path: &Path, reason: impl ToString) -> Error {
         path: path.to_path_buf(),
         reason: reason.to_string(),
     }
-}
-
-/// Write through a temporary file next to `path`, then rename it into place.
-fn write_atomically(
-    path: &Path,
-    write: impl FnOnce(&Path) -> std::result::Result<(), String>,
-) -> Result<()> {
-    let name = path
-        .file_name()
-        .ok_or_else(|| output_error(path, "not a file name"))?
-        .to_string_lossy()
-        .into_owned();
-    let ext = path
-        .extension()
-        .map(|e| e.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let tmp: PathBuf = path.with_file_name(format!(".{name}.{}.tmp.{ext}", std::process::id()));
-    if let Err(e) = write(&tmp) {
-        let _ = std::fs::remove_file(&tmp);
-        return Err(output_error(path, e));
-    }
-    std::fs::File::open(&tmp)
-        .and_then(|f| f.sync_all())
-        .map_err(|e| output_error(path, e))?;
-    std::fs::rename(&tmp, path).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        output_error(path, e)
-    })
 }
 
 /// Write a float32 RGB OpenEXR file.

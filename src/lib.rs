@@ -24,8 +24,10 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod accel;
+pub mod atomic;
 pub mod bake;
 pub mod bsdf;
+pub mod cache;
 pub mod emitters;
 pub mod error;
 pub mod geometry;

@@ -1,0 +1,319 @@
+//! The `.wpc` cache file (DESIGN.md §6): a validated container of named sections.
+//!
+//! Layout, all integers little-endian:
+//!
+//! ```text
+//! offset  size  header (64 bytes)
+//!      0     8  magic 89 'W' 'P' 'C' 0D 0A 1A 0A   (PNG-style: catches text-mode mangling)
+//!      8     4  format version
+//!     12     4  byte-order mark 0x01020304 (reads 0x04030201 on a big-endian writer's file)
+//!     16    16  content hash: scene content + every bake setting + crate version (XXH3-128)
+//!     32     8  section table offset
+//!     40     4  section count
+//!     44     4  reserved (0)
+//!     48     8  XXH3-64 of the section table
+//!     56     8  XXH3-64 of header bytes 0..56
+//! then the sections, each starting on a 64-byte boundary (so every section can be memory-mapped
+//! and cast in place), in the order given, coarse to fine, then the table: per section a
+//! 16-byte name (NUL-padded), offset, length and XXH3-64 of its bytes (40 bytes each).
+//! ```
+//!
+//! Writing goes to a temporary file in the same directory, is synced, then renamed over the
+//! target: a killed bake leaves the previous file or none, never a half-written one. Reading
+//! checks everything before handing out a byte and says exactly what is wrong.
+
+use crate::atomic::write_atomically;
+use std::path::{Path, PathBuf};
+use xxhash_rust::xxh3::{xxh3_128, xxh3_64};
+
+/// The first eight bytes of every cache file.
+pub const MAGIC: [u8; 8] = [0x89, b'W', b'P', b'C', 0x0d, 0x0a, 0x1a, 0x0a];
+/// The format version this build writes and the newest it reads.
+pub const FORMAT_VERSION: u32 = 1;
+const BYTE_ORDER_MARK: u32 = 0x0102_0304;
+const HEADER_LEN: usize = 64;
+const ENTRY_LEN: usize = 40;
+/// Sections start on multiples of this.
+pub const ALIGNMENT: usize = 64;
+/// Longest section name.
+pub const NAME_LEN: usize = 16;
+
+/// Why a cache file was refused.
+#[derive(Debug, thiserror::Error)]
+pub enum CacheError {
+    #[error("cannot read the cache {path}: {source}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{path} is not a wpbgi cache (wrong magic bytes)")]
+    Foreign { path: PathBuf },
+    #[error("{path} was written by a newer wpbgi (cache format {found}, this build reads up to {supported}); rebake or upgrade")]
+    NewerVersion {
+        path: PathBuf,
+        found: u32,
+        supported: u32,
+    },
+    #[error("{path} was written with the other byte order and cannot be read here")]
+    ByteOrder { path: PathBuf },
+    #[error("{path} is truncated: {what}")]
+    Truncated { path: PathBuf, what: String },
+    #[error("{path} is corrupted: {what} fails its checksum")]
+    Corrupted { path: PathBuf, what: String },
+    #[error("{path} is malformed: {what}")]
+    Malformed { path: PathBuf, what: String },
+    #[error("{path} is stale: the scene or the bake settings changed since it was baked; rebake")]
+    Stale { path: PathBuf },
+    #[error("{path} has no \"{name}\" section")]
+    MissingSection { path: PathBuf, name: String },
+    #[error("cannot write the cache {path}: {reason}")]
+    Write { path: PathBuf, reason: String },
+}
+
+/// The content hash of a cache: XXH3-128 over everything that determines its contents.
+pub fn content_hash(parts: &[&[u8]]) -> [u8; 16] {
+    let mut all = Vec::new();
+    for p in parts {
+        // Length-prefixed, so ("ab", "c") and ("a", "bc") differ.
+        all.extend_from_slice(&(p.len() as u64).to_le_bytes());
+        all.extend_from_slice(p);
+    }
+    xxh3_128(&all).to_le_bytes()
+}
+
+/// Write `sections` (name, bytes), in order, to `path` atomically.
+pub fn write(path: &Path, hash: [u8; 16], sections: &[(&str, &[u8])]) -> Result<(), CacheError> {
+    let werr = |reason: String| CacheError::Write {
+        path: path.to_path_buf(),
+        reason,
+    };
+    let mut out = vec![0u8; HEADER_LEN];
+    let mut table = Vec::with_capacity(sections.len() * ENTRY_LEN);
+    for (name, bytes) in sections {
+        if name.is_empty() || name.len() > NAME_LEN || name.contains('\0') {
+            return Err(werr(format!("bad section name \"{name}\"")));
+        }
+        pad_to_alignment(&mut out);
+        let mut n = [0u8; NAME_LEN];
+        n[..name.len()].copy_from_slice(name.as_bytes());
+        table.extend_from_slice(&n);
+        table.extend_from_slice(&(out.len() as u64).to_le_bytes());
+        table.extend_from_slice(&(bytes.len() as u64).to_le_bytes());
+        table.extend_from_slice(&xxh3_64(bytes).to_le_bytes());
+        out.extend_from_slice(bytes);
+    }
+    pad_to_alignment(&mut out);
+    let table_offset = out.len() as u64;
+    out.extend_from_slice(&table);
+    let h = &mut out[..HEADER_LEN];
+    h[0..8].copy_from_slice(&MAGIC);
+    h[8..12].copy_from_slice(&FORMAT_VERSION.to_le_bytes());
+    h[12..16].copy_from_slice(&BYTE_ORDER_MARK.to_le_bytes());
+    h[16..32].copy_from_slice(&hash);
+    h[32..40].copy_from_slice(&table_offset.to_le_bytes());
+    h[40..44].copy_from_slice(&(sections.len() as u32).to_le_bytes());
+    h[48..56].copy_from_slice(&xxh3_64(&table).to_le_bytes());
+    let header_sum = xxh3_64(&h[..56]);
+    h[56..64].copy_from_slice(&header_sum.to_le_bytes());
+    write_atomically(path, |tmp| {
+        std::fs::write(tmp, &out).map_err(|e| e.to_string())
+    })
+    .map_err(|e| werr(e.to_string()))
+}
+
+fn pad_to_alignment(v: &mut Vec<u8>) {
+    v.resize(v.len().div_ceil(ALIGNMENT) * ALIGNMENT, 0);
+}
+
+/// One section of a read cache.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SectionInfo {
+    pub name: String,
+    pub offset: u64,
+    pub length: u64,
+    pub checksum: u64,
+}
+
+/// A cache file, fully validated.
+#[derive(Debug)]
+pub struct Cache {
+    pub path: PathBuf,
+    pub version: u32,
+    pub hash: [u8; 16],
+    pub sections: Vec<SectionInfo>,
+    bytes: Vec<u8>,
+}
+
+impl Cache {
+    /// Read and validate `path`. With `expected_hash`, a file baked from other content or
+    /// settings is refused as stale.
+    pub fn read(path: &Path, expected_hash: Option<[u8; 16]>) -> Result<Cache, CacheError> {
+        let bytes = std::fs::read(path).map_err(|source| CacheError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Self::parse(path, bytes, expected_hash)
+    }
+
+    /// Validate `bytes` as the contents of `path`.
+    pub fn parse(
+        path: &Path,
+        bytes: Vec<u8>,
+        expected_hash: Option<[u8; 16]>,
+    ) -> Result<Cache, CacheError> {
+        let p = || path.to_path_buf();
+        let truncated = |what: &str| CacheError::Truncated {
+            path: p(),
+            what: what.to_string(),
+        };
+        if bytes.is_empty() {
+            return Err(truncated("the file is empty"));
+        }
+        if bytes.len() < MAGIC.len() || bytes[..8] != MAGIC {
+            // A short file that starts like ours is truncated, not foreign.
+            return Err(if MAGIC.starts_with(&bytes[..bytes.len().min(8)]) {
+                truncated("the header is incomplete")
+            } else {
+                CacheError::Foreign { path: p() }
+            });
+        }
+        if bytes.len() < HEADER_LEN {
+            return Err(truncated("the header is incomplete"));
+        }
+        let u32_at = |o: usize| u32::from_le_bytes(bytes[o..o + 4].try_into().expect("4 bytes"));
+        let u64_at = |o: usize| u64::from_le_bytes(bytes[o..o + 8].try_into().expect("8 bytes"));
+        if u64_at(56) != xxh3_64(&bytes[..56]) {
+            return Err(CacheError::Corrupted {
+                path: p(),
+                what: "the header".into(),
+            });
+        }
+        let version = u32_at(8);
+        if u32_at(12) != BYTE_ORDER_MARK {
+            return Err(CacheError::ByteOrder { path: p() });
+        }
+        if version > FORMAT_VERSION {
+            return Err(CacheError::NewerVersion {
+                path: p(),
+                found: version,
+                supported: FORMAT_VERSION,
+            });
+        }
+        let hash: [u8; 16] = bytes[16..32].try_into().expect("16 bytes");
+        let table_offset = u64_at(32);
+        let count = u32_at(40) as u64;
+        let table_end = count
+            .checked_mul(ENTRY_LEN as u64)
+            .and_then(|l| l.checked_add(table_offset));
+        let Some(table_end) = table_end else {
+            return Err(CacheError::Malformed {
+                path: p(),
+                what: "the section table's extent overflows".into(),
+            });
+        };
+        if table_end > bytes.len() as u64 {
+            return Err(truncated("the section table is cut off"));
+        }
+        if table_end < bytes.len() as u64 {
+            return Err(CacheError::Malformed {
+                path: p(),
+                what: format!(
+                    "{} bytes follow the section table",
+                    bytes.len() as u64 - table_end
+                ),
+            });
+        }
+        let table = &bytes[table_offset as usize..table_end as usize];
+        if u64_at(48) != xxh3_64(table) {
+            return Err(CacheError::Corrupted {
+                path: p(),
+                what: "the section table".into(),
+            });
+        }
+        let mut sections = Vec::with_capacity(count as usize);
+        for e in table.chunks_exact(ENTRY_LEN) {
+            let name_bytes = &e[..NAME_LEN];
+            let end = name_bytes.iter().position(|&b| b == 0).unwrap_or(NAME_LEN);
+            let name = String::from_utf8_lossy(&name_bytes[..end]).into_owned();
+            let f = |o: usize| u64::from_le_bytes(e[o..o + 8].try_into().expect("8 bytes"));
+            let (offset, length, checksum) = (f(16), f(24), f(32));
+            let fits = offset % ALIGNMENT as u64 == 0
+                && offset >= HEADER_LEN as u64
+                && offset
+                    .checked_add(length)
+                    .is_some_and(|end| end <= table_offset);
+            if !fits {
+                return Err(CacheError::Malformed {
+                    path: p(),
+                    what: format!("section \"{name}\" lies outside the data area"),
+                });
+            }
+            let data = &bytes[offset as usize..(offset + length) as usize];
+            if xxh3_64(data) != checksum {
+                return Err(CacheError::Corrupted {
+                    path: p(),
+                    what: format!("section \"{name}\""),
+                });
+            }
+            sections.push(SectionInfo {
+                name,
+                offset,
+                length,
+                checksum,
+            });
+        }
+        // The padding between sections is not under any checksum: it must be zero, so that
+        // every byte of the file is checked.
+        let mut covered: Vec<(u64, u64)> = sections.iter().map(|s| (s.offset, s.length)).collect();
+        covered.sort_unstable();
+        let mut at = HEADER_LEN as u64;
+        for (offset, length) in covered.into_iter().chain([(table_offset, 0)]) {
+            if offset < at {
+                return Err(CacheError::Malformed {
+                    path: p(),
+                    what: "sections overlap".into(),
+                });
+            }
+            if bytes[at as usize..offset as usize].iter().any(|&b| b != 0) {
+                return Err(CacheError::Corrupted {
+                    path: p(),
+                    what: format!("the padding at byte {at}"),
+                });
+            }
+            at = offset + length;
+        }
+        if expected_hash.is_some_and(|h| h != hash) {
+            return Err(CacheError::Stale { path: p() });
+        }
+        Ok(Cache {
+            path: path.to_path_buf(),
+            version,
+            hash,
+            sections,
+            bytes,
+        })
+    }
+
+    /// The bytes of the section `name` (aligned to [`ALIGNMENT`] within the file).
+    pub fn section(&self, name: &str) -> Result<&[u8], CacheError> {
+        let s = self
+            .sections
+            .iter()
+            .find(|s| s.name == name)
+            .ok_or_else(|| CacheError::MissingSection {
+                path: self.path.clone(),
+                name: name.to_string(),
+            })?;
+        Ok(&self.bytes[s.offset as usize..(s.offset + s.length) as usize])
+    }
+
+    /// Size of the whole file.
+    pub fn len(&self) -> usize {
+        self.bytes.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.bytes.is_empty()
+    }
+}
