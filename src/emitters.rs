@@ -2,7 +2,8 @@
 //! by area within a triangle) and punctual lights, chosen with probability proportional to their
 //! power. Kinds the scene does not have cost nothing.
 
-use crate::geometry::offset::interpolate_with_error;
+use crate::accel::Accel;
+use crate::geometry::offset::{interpolate_with_error, offset_origin, SHADOW_EPSILON};
 use crate::geometry::warp::square_to_uniform_triangle;
 use crate::scene::{LightKind, Scene};
 use crate::spectrum::{luminance, Rgb};
@@ -26,6 +27,27 @@ pub struct EmitterSample {
     pub point: Vec3,
     pub point_err: Vec3,
     pub normal: Vec3,
+}
+
+impl EmitterSample {
+    /// Whether nothing blocks the segment from `origin` (already offset off its surface) to
+    /// the sampled point, whose own end is offset off the emitter the same way.
+    pub fn visible_from(&self, accel: &Accel, origin: Vec3) -> bool {
+        if !self.dist.is_finite() {
+            return !accel.occluded(origin, self.wi, 0.0, f32::INFINITY);
+        }
+        let target = if self.delta {
+            self.point
+        } else {
+            Vec3::from(offset_origin(
+                Vec3A::from(self.point),
+                Vec3A::from(self.point_err),
+                Vec3A::from(self.normal),
+                Vec3A::from(origin - self.point),
+            ))
+        };
+        !accel.occluded(origin, target - origin, 0.0, 1.0 - SHADOW_EPSILON)
+    }
 }
 
 struct EmissiveTriangle {

@@ -52,9 +52,46 @@ impl Sampler {
     }
 }
 
+/// Point `k` of the first two Sobol dimensions, a (0, 2)-sequence, xor-scrambled by
+/// `scramble`: any 2^m consecutive points from a multiple of 2^m are stratified in every
+/// elementary interval of area 2^−m, so K points integrate smooth 2D functions with error
+/// O(K^−3/4) instead of Monte Carlo's K^−1/2. A random `scramble` per item keeps the estimate
+/// unbiased and decorrelates items.
+#[inline]
+pub fn sobol02(k: u32, scramble: [u32; 2]) -> Vec2 {
+    let x = k.reverse_bits();
+    // Dimension 2: generator columns v_i = v_{i−1} ^ (v_{i−1} >> 1) from v_0 = 2^31.
+    let (mut y, mut v, mut bits) = (0u32, 1u32 << 31, k);
+    while bits != 0 {
+        if bits & 1 != 0 {
+            y ^= v;
+        }
+        bits >>= 1;
+        v ^= v >> 1;
+    }
+    let unit = |b: u32| (b >> 8) as f32 * (1.0 / (1u32 << 24) as f32);
+    Vec2::new(unit(x ^ scramble[0]), unit(y ^ scramble[1]))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn sobol_points_are_stratified() {
+        // 256 points: each of the 16 × 16 cells, and each 256 × 1 and 1 × 256 strip, holds one.
+        for scramble in [[0, 0], [0x1234_5678, 0x9abc_def0]] {
+            for (cols, rows) in [(16, 16), (256, 1), (1, 256), (32, 8)] {
+                let mut seen = vec![0; 256];
+                for k in 0..256 {
+                    let p = sobol02(k, scramble);
+                    let c = (p.x * cols as f32) as usize + cols * (p.y * rows as f32) as usize;
+                    seen[c] += 1;
+                }
+                assert!(seen.iter().all(|&n| n == 1), "{cols}x{rows}");
+            }
+        }
+    }
 
     #[test]
     fn uniform_mean_and_range() {

@@ -1,5 +1,7 @@
 //! The bake (DESIGN.md §5): surfels, their direct light, the surfel tree and its wavelet coding.
 
+pub mod direct;
 pub mod surfels;
 
+pub use direct::DirectLight;
 pub use surfels::{sample_surfels, Surfel};

@@ -3,7 +3,7 @@
 use super::RenderContext;
 use crate::bsdf::TransportMode;
 use crate::geometry::frame::Frame;
-use crate::geometry::offset::{interpolate_with_error, offset_origin, SHADOW_EPSILON};
+use crate::geometry::offset::{interpolate_with_error, offset_origin};
 use crate::sampler::Sampler;
 use crate::spectrum::{max_component, Rgb};
 use glam::{Vec2, Vec3, Vec3A};
@@ -122,32 +122,13 @@ pub fn radiance(ctx: &RenderContext, mut o: Vec3, mut d: Vec3, sampler: &mut Sam
         if let Some(es) = ctx.emitters.sample(scene, si.p, u_sel, u_em) {
             let wo = si.frame.to_local(es.wi);
             let f = bsdf.eval(wi, wo, TransportMode::Radiance);
-            if f != Rgb::ZERO {
-                let origin = si.spawn(es.wi);
-                let visible = if es.dist.is_finite() {
-                    let target = if es.delta {
-                        es.point
-                    } else {
-                        Vec3::from(offset_origin(
-                            Vec3A::from(es.point),
-                            Vec3A::from(es.point_err),
-                            Vec3A::from(es.normal),
-                            Vec3A::from(origin - es.point),
-                        ))
-                    };
-                    !ctx.accel
-                        .occluded(origin, target - origin, 0.0, 1.0 - SHADOW_EPSILON)
+            if f != Rgb::ZERO && es.visible_from(&ctx.accel, si.spawn(es.wi)) {
+                let w = if es.delta {
+                    1.0
                 } else {
-                    !ctx.accel.occluded(origin, es.wi, 0.0, f32::INFINITY)
+                    mis(es.pdf, bsdf.pdf(wi, wo))
                 };
-                if visible {
-                    let w = if es.delta {
-                        1.0
-                    } else {
-                        mis(es.pdf, bsdf.pdf(wi, wo))
-                    };
-                    result += throughput * f * es.value * w;
-                }
+                result += throughput * f * es.value * w;
             }
         }
         // BSDF sampling.

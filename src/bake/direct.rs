@@ -1,0 +1,106 @@
+//! Direct light at surfels by ray tracing (DESIGN.md §5.2, spec §5.1).
+//!
+//! Each surfel draws `samples` emitter samples, chosen by power and placed on the emitter by a
+//! scrambled (0, 2)-sequence (see [`crate::sampler::sobol02`]), each with a shadow ray. The same
+//! samples serve every outgoing direction of the surfel, so its radiance map is one consistent
+//! function rather than independent noise per texel:
+//!
+//! L(ω) = (1/K) Σₖ f(ω, ωₖ) |cos θₖ| Lₑ,ₖ / pₖ   for each texel centre ω of the octahedral map,
+//!
+//! and for diffuse surfels, which store RGB only, the irradiance E = (1/K) Σₖ max(0, n·ωₖ) Lₑ,ₖ/pₖ
+//! (the outgoing radiance is then ρE/π).
+
+use super::surfels::Surfel;
+use crate::accel::Accel;
+use crate::bsdf::{Bsdf, TransportMode};
+use crate::emitters::{EmitterSample, EmitterSampler};
+use crate::geometry::frame::Frame;
+use crate::geometry::offset::{interpolate_with_error, offset_origin};
+use crate::haar::square_to_direction;
+use crate::sampler::{sobol02, Sampler};
+use crate::scene::Scene;
+use crate::spectrum::Rgb;
+use glam::{Vec2, Vec3, Vec3A};
+
+/// What direct lighting needs of a scene.
+pub struct DirectLight<'a> {
+    pub scene: &'a Scene,
+    pub accel: &'a Accel,
+    pub emitters: &'a EmitterSampler,
+    /// Emitter samples per surfel.
+    pub samples: u32,
+    pub seed: u64,
+}
+
+/// One unoccluded emitter sample as seen from a surfel.
+struct Arrival {
+    /// Unit direction towards the emitter.
+    wi: Vec3,
+    /// Lₑ / p: radiance over solid-angle density.
+    value: Rgb,
+}
+
+impl DirectLight<'_> {
+    /// The visible emitter samples of surfel number `id`.
+    fn arrivals(&self, s: &Surfel, id: u64) -> Vec<Arrival> {
+        let m = &self.scene.meshes[s.mesh as usize];
+        let t = m.triangles[s.triangle as usize];
+        let v = t.map(|k| Vec3A::from(m.positions[k as usize]));
+        let (p, err) = interpolate_with_error(v, [1.0 - s.b.x - s.b.y, s.b.x, s.b.y]);
+        let ng = Vec3A::from(s.n);
+        let mut r = Sampler::new(self.seed, id, 0);
+        let scramble = [
+            (r.next_1d() * 16_777_216.0) as u32 * 256,
+            (r.next_1d() * 16_777_216.0) as u32 * 256,
+        ];
+        let shift = r.next_1d();
+        let k = self.samples.max(1);
+        (0..k)
+            .filter_map(|i| {
+                // Emitter choice stratified over the K samples, the point by the (0, 2)-sequence.
+                let u_sel = ((i as f32 + shift) / k as f32).min(1.0 - f32::EPSILON);
+                let es: EmitterSample =
+                    self.emitters
+                        .sample(self.scene, Vec3::from(p), u_sel, sobol02(i, scramble))?;
+                let origin = Vec3::from(offset_origin(p, err, ng, Vec3A::from(es.wi)));
+                es.visible_from(self.accel, origin).then_some(Arrival {
+                    wi: es.wi,
+                    value: es.value,
+                })
+            })
+            .collect()
+    }
+
+    /// Irradiance on the front face of surfel `id` (for diffuse surfels).
+    pub fn irradiance(&self, s: &Surfel, id: u64) -> Rgb {
+        let k = self.samples.max(1) as f32;
+        self.arrivals(s, id)
+            .iter()
+            .map(|a| a.value * s.n.dot(a.wi).max(0.0))
+            .fold(Rgb::ZERO, |acc, x| acc + x)
+            / k
+    }
+
+    /// Outgoing radiance of surfel `id` with BSDF `bsdf` at the centre of every texel of the
+    /// `n × n` octahedral map (row-major), over the whole sphere.
+    pub fn radiance_map(&self, s: &Surfel, id: u64, bsdf: &Bsdf, n: u32) -> Vec<Rgb> {
+        let frame = Frame::from_normal(s.n);
+        let arrivals: Vec<(Vec3, Rgb)> = self
+            .arrivals(s, id)
+            .into_iter()
+            .map(|a| (frame.to_local(a.wi), a.value))
+            .collect();
+        let k = self.samples.max(1) as f32;
+        (0..n * n)
+            .map(|t| {
+                let c = Vec2::new((t % n) as f32 + 0.5, (t / n) as f32 + 0.5) / n as f32;
+                let wo = frame.to_local(square_to_direction(c));
+                arrivals
+                    .iter()
+                    .map(|(wi, value)| bsdf.eval(wo, *wi, TransportMode::Radiance) * *value)
+                    .fold(Rgb::ZERO, |acc, x| acc + x)
+                    / k
+            })
+            .collect()
+    }
+}
