@@ -1,7 +1,11 @@
 //! The bake (DESIGN.md §5): surfels, their direct light, the surfel tree and its wavelet coding.
 
+pub mod coding;
 pub mod direct;
 pub mod surfels;
+pub mod tree;
 
+pub use coding::{encode, CodedTree, NodeCoding};
 pub use direct::DirectLight;
 pub use surfels::{sample_surfels, Surfel};
+pub use tree::{Node, SurfelTree};

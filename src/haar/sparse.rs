@@ -34,11 +34,12 @@ impl<T: Coefficient> SparseHaar<T> {
     /// Keep the coefficients of `h` whose magnitude is at least `tau · ‖f‖₂` (see the module
     /// docs); `tau = 0` keeps every non-zero detail.
     pub fn compress(h: &Haar2d<T>, tau: f32) -> Self {
-        let norm2: f64 = std::iter::once(h.scale)
-            .chain(h.details.iter().flat_map(|d| d.iter().copied()))
-            .map(|c| (c.magnitude() as f64).powi(2))
-            .sum();
-        let cut = tau * norm2.sqrt() as f32;
+        Self::compress_below(h, tau * h.norm())
+    }
+
+    /// Keep the coefficients of `h` whose magnitude is at least `cut` (an absolute value: the
+    /// caller makes it relative, e.g. to an aggregate the details belong to).
+    pub fn compress_below(h: &Haar2d<T>, cut: f32) -> Self {
         let mut out = SparseHaar {
             levels: h.levels,
             scale: h.scale,

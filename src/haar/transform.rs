@@ -96,6 +96,40 @@ impl<T: Coefficient> Haar2d<T> {
         }
     }
 
+    /// `a·x + b·y` coefficient by coefficient (both of the same size).
+    pub fn combine(x: &Self, a: f32, y: &Self, b: f32) -> Self {
+        assert_eq!(
+            x.levels, y.levels,
+            "combining maps of different resolutions"
+        );
+        Haar2d {
+            levels: x.levels,
+            scale: x.scale * a + y.scale * b,
+            details: x
+                .details
+                .iter()
+                .zip(&y.details)
+                .map(|(p, q)| {
+                    [
+                        p[0] * a + q[0] * b,
+                        p[1] * a + q[1] * b,
+                        p[2] * a + q[2] * b,
+                    ]
+                })
+                .collect(),
+        }
+    }
+
+    /// The L2 norm of the function (of its coefficient vector, by orthonormality), with each
+    /// coefficient measured by [`Coefficient::magnitude`].
+    pub fn norm(&self) -> f32 {
+        std::iter::once(self.scale)
+            .chain(self.details.iter().flat_map(|d| d.iter().copied()))
+            .map(|c| (c.magnitude() as f64).powi(2))
+            .sum::<f64>()
+            .sqrt() as f32
+    }
+
     /// The image back (exact up to rounding).
     pub fn inverse(&self) -> Vec<T> {
         let mut s = vec![self.scale];

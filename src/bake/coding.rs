@@ -1,0 +1,161 @@
+//! Hierarchical wavelet coding of the surfel tree (spec §6, DESIGN.md §5.5–§5.6).
+//!
+//! Every node has a directional function on the octahedral map: for a leaf, its surfel's
+//! radiant intensity I(ω) = A max(0, n·ω) L(ω); for an inner node the sum of its children's,
+//! G(j) = G(left) + G(right), so that a node seen from afar emits exactly what its surfels do
+//! (DESIGN.md replaces the thesis's plain average by this sum). Alongside, the detail
+//! H(j) = (G(left) − G(right)) / 2 recovers the children: G(left) = G(j)/2 + H(j) and
+//! G(right) = G(j)/2 − H(j).
+//!
+//! With the split level ε: nodes above ε store G only, nodes at ε store G and (if inner) H,
+//! inner nodes below ε store H only, and leaves below ε nothing (their parent's H gives them).
+//! A node below ε is rebuilt from its ancestor at ε down the path:
+//! G(j) = 2^−(l−ε) G(a) + Σₖ sₖ 2^−(l−lₖ−1) H(k), with sₖ = +1 towards a left child, −1 right.
+//!
+//! Compression is relative, never absolute: G(j) keeps its coefficients at least τ‖G(j)‖₂, and
+//! H(j) those at least τ‖G(j)‖₂ too (the details measured against the node they refine).
+//! Construction runs post-order with both subtrees in parallel (`rayon::join`); every stored
+//! function is compressed from the exact uncompressed G's of the children, so compression
+//! error never accumulates up the tree, and only the uncompressed G's of the pending path
+//! exist at once: O(depth) maps, never the whole set.
+
+use super::tree::{SurfelTree, NONE};
+use crate::haar::{Haar2d, SparseHaar};
+use crate::spectrum::Rgb;
+
+/// What one node stores.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct NodeCoding {
+    pub g: Option<SparseHaar<Rgb>>,
+    pub h: Option<SparseHaar<Rgb>>,
+}
+
+/// The coded tree: one [`NodeCoding`] per node of the [`SurfelTree`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct CodedTree {
+    pub split_level: u32,
+    pub tau: f32,
+    pub nodes: Vec<NodeCoding>,
+}
+
+/// Code `tree` with leaf functions `leaf(surfel index)` (the radiant-intensity map of one
+/// surfel, already transformed), split level `split_level` and relative threshold `tau`.
+pub fn encode(
+    tree: &SurfelTree,
+    leaf: &(dyn Fn(u32) -> Haar2d<Rgb> + Sync),
+    split_level: u32,
+    tau: f32,
+) -> CodedTree {
+    let mut nodes = vec![NodeCoding::default(); tree.nodes.len()];
+    if !tree.nodes.is_empty() {
+        let mut out = Vec::new();
+        encode_node(tree, leaf, split_level, tau, 0, &mut out);
+        for (i, c) in out {
+            nodes[i as usize] = c;
+        }
+    }
+    CodedTree {
+        split_level,
+        tau,
+        nodes,
+    }
+}
+
+/// Returns the uncompressed G of node `j`, appending what the subtree stores to `out`.
+fn encode_node(
+    tree: &SurfelTree,
+    leaf: &(dyn Fn(u32) -> Haar2d<Rgb> + Sync),
+    eps: u32,
+    tau: f32,
+    j: u32,
+    out: &mut Vec<(u32, NodeCoding)>,
+) -> Haar2d<Rgb> {
+    let node = &tree.nodes[j as usize];
+    let (g, h) = if node.is_leaf() {
+        (leaf(tree.order[node.first as usize]), None)
+    } else {
+        let [l, r] = node.children;
+        let (mut out_l, mut out_r) = (Vec::new(), Vec::new());
+        let (gl, gr) = rayon::join(
+            || encode_node(tree, leaf, eps, tau, l, &mut out_l),
+            || encode_node(tree, leaf, eps, tau, r, &mut out_r),
+        );
+        out.append(&mut out_l);
+        out.append(&mut out_r);
+        let g = Haar2d::combine(&gl, 1.0, &gr, 1.0);
+        let h = Haar2d::combine(&gl, 0.5, &gr, -0.5);
+        (g, Some(h))
+    };
+    let cut = tau * g.norm();
+    let stored = NodeCoding {
+        g: (node.level <= eps).then(|| SparseHaar::compress_below(&g, cut)),
+        h: h.filter(|_| node.level >= eps)
+            .map(|h| SparseHaar::compress_below(&h, cut)),
+    };
+    if stored.g.is_some() || stored.h.is_some() {
+        out.push((j, stored));
+    }
+    g
+}
+
+impl CodedTree {
+    /// Node `j`'s function rebuilt from what is stored (see the module docs).
+    pub fn reconstruct(&self, tree: &SurfelTree, j: u32) -> Option<Haar2d<Rgb>> {
+        let (anchor, path) = self.path_to_anchor(tree, j)?;
+        let mut g = self.nodes[anchor as usize].g.as_ref()?.to_dense();
+        // Walk down: each step halves the parent and adds ± its detail.
+        for (k, sign) in path.into_iter().rev() {
+            let h = self.nodes[k as usize].h.as_ref()?.to_dense();
+            g = Haar2d::combine(&g, 0.5, &h, sign);
+        }
+        Some(g)
+    }
+
+    /// Node `j`'s function at the point `(x, y)` of the map, without rebuilding it.
+    pub fn eval(&self, tree: &SurfelTree, j: u32, x: f32, y: f32) -> Option<Rgb> {
+        let (anchor, path) = self.path_to_anchor(tree, j)?;
+        let mut v = self.nodes[anchor as usize].g.as_ref()?.eval(x, y);
+        for (k, sign) in path.into_iter().rev() {
+            v = v * 0.5 + self.nodes[k as usize].h.as_ref()?.eval(x, y) * sign;
+        }
+        Some(v)
+    }
+
+    /// The nearest ancestor-or-self storing G, and the inner nodes on the way down to `j` with
+    /// the sign of the child taken at each (listed from `j` upwards).
+    fn path_to_anchor(&self, tree: &SurfelTree, j: u32) -> Option<(u32, Vec<(u32, f32)>)> {
+        let mut path = Vec::new();
+        let mut at = j;
+        while self.nodes.get(at as usize)?.g.is_none() {
+            let parent = tree.nodes[at as usize].parent;
+            if parent == NONE {
+                return None;
+            }
+            let sign = if tree.nodes[parent as usize].children[0] == at {
+                1.0
+            } else {
+                -1.0
+            };
+            path.push((parent, sign));
+            at = parent;
+        }
+        Some((at, path))
+    }
+
+    /// Nodes, maps and coefficients stored (for the bake summary).
+    pub fn stored_counts(&self) -> (usize, usize) {
+        let maps = self
+            .nodes
+            .iter()
+            .map(|n| usize::from(n.g.is_some()) + usize::from(n.h.is_some()))
+            .sum();
+        let coefficients = self
+            .nodes
+            .iter()
+            .flat_map(|n| [&n.g, &n.h])
+            .flatten()
+            .map(|s| s.coefficient_count())
+            .sum();
+        (maps, coefficients)
+    }
+}

@@ -1,0 +1,196 @@
+//! The surfel tree and its hierarchical wavelet coding (spec §6, DESIGN.md §5.5–§5.6).
+
+use glam::{Vec2, Vec3};
+use wpbgi::bake::{encode, Surfel, SurfelTree};
+use wpbgi::haar::{square_to_direction, Haar2d, SparseHaar};
+use wpbgi::sampler::Sampler;
+use wpbgi::spectrum::Rgb;
+
+/// Surfels on a wavy patch plus a few on a second, facing patch: normals vary.
+fn surfels(n: usize) -> Vec<Surfel> {
+    (0..n)
+        .map(|i| {
+            let mut s = Sampler::new(1, i as u64, 0);
+            let (x, y) = (s.next_1d() * 4.0, s.next_1d() * 4.0);
+            let flip = i % 7 == 0;
+            let p = Vec3::new(x, y, 0.3 * (x * 1.7).sin() + if flip { 2.0 } else { 0.0 });
+            let n = Vec3::new(-0.51 * (x * 1.7).cos(), 0.0, 1.0).normalize();
+            Surfel {
+                p,
+                n: if flip { -n } else { n },
+                area: 0.01 * (1.0 + s.next_1d()),
+                mesh: 0,
+                triangle: 0,
+                b: Vec2::ZERO,
+            }
+        })
+        .collect()
+}
+
+const N: usize = 8;
+
+/// A surfel's radiant-intensity map: A max(0, n·ω) L(ω) with a glossy-ish L that differs per
+/// surfel.
+fn texels(s: &Surfel, i: u32) -> Vec<Rgb> {
+    let lobe = Vec3::new((i as f32 * 0.37).sin(), (i as f32 * 0.91).cos(), 1.0).normalize();
+    (0..N * N)
+        .map(|t| {
+            let c = Vec2::new((t % N) as f32 + 0.5, (t / N) as f32 + 0.5) / N as f32;
+            let w = square_to_direction(c);
+            let l =
+                Rgb::new(0.5, 0.4, 0.3) + Rgb::new(2.0, 1.5, 1.0) * w.dot(lobe).max(0.0).powi(8);
+            l * (s.area * s.n.dot(w).max(0.0))
+        })
+        .collect()
+}
+
+fn leaf_maps(s: &[Surfel]) -> Vec<Haar2d<Rgb>> {
+    s.iter()
+        .enumerate()
+        .map(|(i, x)| Haar2d::forward(&texels(x, i as u32), N))
+        .collect()
+}
+
+/// The exact aggregate of node `j`: the sum of its surfels' maps.
+fn aggregate(tree: &SurfelTree, maps: &[Haar2d<Rgb>], j: usize) -> Haar2d<Rgb> {
+    let n = &tree.nodes[j];
+    let ids = &tree.order[n.first as usize..(n.first + n.count) as usize];
+    let mut g = maps[ids[0] as usize].clone();
+    for &i in &ids[1..] {
+        g = Haar2d::combine(&g, 1.0, &maps[i as usize], 1.0);
+    }
+    g
+}
+
+fn distance(a: &Haar2d<Rgb>, b: &Haar2d<Rgb>) -> f32 {
+    Haar2d::combine(a, 1.0, b, -1.0).norm()
+}
+
+#[test]
+fn tree_is_balanced_and_bounds_are_conservative() {
+    let s = surfels(1000);
+    let tree = SurfelTree::build(&s);
+    assert_eq!(tree.nodes.len(), 2 * s.len() - 1);
+    assert_eq!(tree.depth(), 11, "⌈log2 1000⌉ + 1 levels");
+    let mut sorted = tree.order.clone();
+    sorted.sort_unstable();
+    assert!(
+        sorted.iter().enumerate().all(|(i, &x)| i as u32 == x),
+        "a permutation"
+    );
+    for (j, n) in tree.nodes.iter().enumerate() {
+        if j > 0 {
+            assert!(
+                n.level >= tree.nodes[j - 1].level,
+                "breadth-first, coarse to fine"
+            );
+        }
+        let ids = &tree.order[n.first as usize..(n.first + n.count) as usize];
+        let area: f32 = ids.iter().map(|&i| s[i as usize].area).sum();
+        assert!((n.area - area).abs() <= 1e-5 * area);
+        for &i in ids {
+            let x = &s[i as usize];
+            assert!(
+                x.p.distance(n.center) + x.radius() <= n.radius * (1.0 + 1e-5),
+                "sphere"
+            );
+            let angle = x.n.cross(n.axis).length().atan2(x.n.dot(n.axis));
+            assert!(
+                angle <= n.cone_angle + 1e-6,
+                "normal cone of node {j}: {angle} > {}",
+                n.cone_angle
+            );
+        }
+    }
+}
+
+#[test]
+fn lossless_coding_reconstructs_every_node_exactly() {
+    let s = surfels(300);
+    let tree = SurfelTree::build(&s);
+    let maps = leaf_maps(&s);
+    for eps in [0, 3, tree.depth()] {
+        let coded = encode(&tree, &|i| maps[i as usize].clone(), eps, 0.0);
+        for j in 0..tree.nodes.len() {
+            let exact = aggregate(&tree, &maps, j);
+            let ours = coded.reconstruct(&tree, j as u32).expect("reconstructs");
+            assert!(
+                distance(&ours, &exact) <= 1e-5 * exact.norm(),
+                "eps {eps}, node {j}: off by {}",
+                distance(&ours, &exact)
+            );
+        }
+    }
+}
+
+/// With a threshold, each node's error is bounded by what was dropped on its path: the anchor's
+/// G contributes 2^−(l−ε) τ‖G(a)‖ √(dropped), each H(k) 2^−(l−lₖ−1) τ‖G(k)‖ √(dropped).
+#[test]
+fn thresholded_coding_error_is_bounded() {
+    let s = surfels(300);
+    let tree = SurfelTree::build(&s);
+    let maps = leaf_maps(&s);
+    let (eps, tau) = (3u32, 2e-3f32);
+    let coded = encode(&tree, &|i| maps[i as usize].clone(), eps, tau);
+    let total = 1 + 3 * maps[0].details.len();
+    let dropped = |m: &Option<SparseHaar<Rgb>>| {
+        (total - m.as_ref().expect("stored").coefficient_count()) as f32
+    };
+    let mut worst: f32 = 0.0;
+    for j in 0..tree.nodes.len() {
+        let exact = aggregate(&tree, &maps, j);
+        let ours = coded.reconstruct(&tree, j as u32).expect("reconstructs");
+        // Walk up to the anchor, accumulating the bound.
+        let level = tree.nodes[j].level;
+        let mut bound = 0.0;
+        let mut at = j;
+        while coded.nodes[at].g.is_none() {
+            let k = tree.nodes[at].parent as usize;
+            let lk = tree.nodes[k].level;
+            bound += 0.5f32.powi((level - lk - 1) as i32)
+                * tau
+                * aggregate(&tree, &maps, k).norm()
+                * dropped(&coded.nodes[k].h).sqrt();
+            at = k;
+        }
+        let la = tree.nodes[at].level;
+        bound += 0.5f32.powi((level - la) as i32)
+            * tau
+            * aggregate(&tree, &maps, at).norm()
+            * dropped(&coded.nodes[at].g).sqrt();
+        let err = distance(&ours, &exact);
+        assert!(
+            err <= bound * 1.001 + 1e-6 * exact.norm(),
+            "node {j}: error {err} > bound {bound}"
+        );
+        worst = worst.max(err / exact.norm());
+        // Point evaluation walks the same path.
+        let mut r = Sampler::new(2, j as u64, 0);
+        let p = r.next_2d();
+        let e = coded.eval(&tree, j as u32, p.x, p.y).expect("evaluates");
+        assert!((e - ours.eval(p.x, p.y)).abs().max_element() <= 1e-4 * exact.norm());
+    }
+    let (maps_stored, kept) = coded.stored_counts();
+    let dense = tree.nodes.len() * total;
+    eprintln!(
+        "tau {tau}, eps {eps}: {maps_stored} maps, {kept} coefficients kept of {dense} for every node's G \
+         ({:.1} % of the memory), worst relative L2 error {worst:.2e}",
+        100.0 * kept as f64 / dense as f64
+    );
+    assert!(kept < dense / 2, "hierarchical coding saves memory");
+}
+
+#[test]
+fn coding_is_independent_of_thread_count() {
+    let s = surfels(500);
+    let tree = SurfelTree::build(&s);
+    let maps = leaf_maps(&s);
+    let run = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("pool")
+            .install(|| encode(&tree, &|i| maps[i as usize].clone(), 2, 1e-3))
+    };
+    assert_eq!(run(1), run(2));
+}
