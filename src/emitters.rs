@@ -69,6 +69,12 @@ pub struct EmitterSampler {
 
 impl EmitterSampler {
     pub fn new(scene: &Scene) -> Self {
+        Self::with_punctual(scene, true)
+    }
+
+    /// Like [`EmitterSampler::new`], leaving out point and spot lights when `point_and_spot`
+    /// is false (when a light tree handles them).
+    pub fn with_punctual(scene: &Scene, point_and_spot: bool) -> Self {
         let mut tris = Vec::new();
         let mut mesh_base = vec![u32::MAX; scene.meshes.len()];
         let mut weights = Vec::new();
@@ -102,6 +108,7 @@ impl EmitterSampler {
                 LightKind::Directional => {
                     luminance(l.intensity) * std::f32::consts::PI * scene_radius * scene_radius
                 }
+                _ if !point_and_spot => 0.0,
                 _ => luminance(l.intensity) * 4.0 * std::f32::consts::PI,
             };
             weights.push(w.max(0.0) as f64);

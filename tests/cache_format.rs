@@ -4,8 +4,9 @@ use std::path::{Path, PathBuf};
 use wpbgi::cache::{content_hash, write, Cache, CacheError, ALIGNMENT, FORMAT_VERSION};
 use xxhash_rust::xxh3::xxh3_64;
 
-fn dir() -> PathBuf {
-    let d = std::env::temp_dir().join(format!("wpbgi-cache-{}", std::process::id()));
+/// A folder of its own per test (tests run in parallel, and one checks for leftover files).
+fn dir(test: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("wpbgi-cache-{test}-{}", std::process::id()));
     std::fs::create_dir_all(&d).expect("temp dir");
     d
 }
@@ -23,7 +24,7 @@ fn sections() -> Vec<(&'static str, Vec<u8>)> {
 }
 
 fn sample_file(name: &str) -> (PathBuf, Vec<u8>, [u8; 16]) {
-    let path = dir().join(name);
+    let path = dir(name).join(name);
     let hash = content_hash(&[b"scene bytes", b"settings"]);
     let s = sections();
     let refs: Vec<(&str, &[u8])> = s.iter().map(|(n, b)| (*n, b.as_slice())).collect();

@@ -110,6 +110,7 @@ fn irradiance(poly: &[Vec3], samples: u32) -> f32 {
         emitters: &emitters,
         samples,
         seed: 7,
+        light_tree: None,
     };
     d.irradiance(&surfel(), 0).x
 }
@@ -181,6 +182,7 @@ fn rough_conductor_surfel_under_a_small_light() {
         emitters: &emitters,
         samples: 1024,
         seed: 3,
+        light_tree: None,
     };
     let n = 64u32;
     let map = d.radiance_map(&surfel(), 0, &bsdf, n);

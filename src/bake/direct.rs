@@ -8,8 +8,10 @@
 //! L(ω) = (1/K) Σₖ f(ω, ωₖ) |cos θₖ| Lₑ,ₖ / pₖ   for each texel centre ω of the octahedral map,
 //!
 //! and for diffuse surfels, which store RGB only, the irradiance E = (1/K) Σₖ max(0, n·ωₖ) Lₑ,ₖ/pₖ
-//! (the outgoing radiance is then ρE/π).
+//! (the outgoing radiance is then ρE/π). With many point and spot lights, a light tree gives
+//! each surfel its lightcut instead (see [`super::lightcuts`]); its clusters join the samples.
 
+use super::lightcuts::LightTree;
 use super::surfels::Surfel;
 use crate::accel::Accel;
 use crate::bsdf::{Bsdf, TransportMode};
@@ -30,13 +32,22 @@ pub struct DirectLight<'a> {
     /// Emitter samples per surfel.
     pub samples: u32,
     pub seed: u64,
+    /// Point and spot lights through Lightcuts (then `emitters` must leave them out, see
+    /// [`EmitterSampler::with_punctual`]); `None` samples them with the other emitters.
+    pub light_tree: Option<&'a LightTree>,
 }
+
+/// Lightcuts' relative error target (DESIGN.md §5.2).
+pub const LIGHTCUT_ERROR: f32 = 0.02;
+/// Largest lightcut.
+pub const LIGHTCUT_MAX: usize = 1000;
 
 /// One unoccluded emitter sample as seen from a surfel.
 struct Arrival {
     /// Unit direction towards the emitter.
     wi: Vec3,
-    /// Lₑ / p: radiance over solid-angle density.
+    /// Its share of the estimate: Lₑ / (p K) for one of K samples, or a lightcut cluster's
+    /// irradiance on a surface facing it.
     value: Rgb,
 }
 
@@ -55,7 +66,7 @@ impl DirectLight<'_> {
         ];
         let shift = r.next_1d();
         let k = self.samples.max(1);
-        (0..k)
+        let mut out: Vec<Arrival> = (0..k)
             .filter_map(|i| {
                 // Emitter choice stratified over the K samples, the point by the (0, 2)-sequence.
                 let u_sel = ((i as f32 + shift) / k as f32).min(1.0 - f32::EPSILON);
@@ -65,20 +76,34 @@ impl DirectLight<'_> {
                 let origin = Vec3::from(offset_origin(p, err, ng, Vec3A::from(es.wi)));
                 es.visible_from(self.accel, origin).then_some(Arrival {
                     wi: es.wi,
-                    value: es.value,
+                    value: es.value / k as f32,
                 })
             })
-            .collect()
+            .collect();
+        if let Some(tree) = self.light_tree {
+            let origin = Vec3::from(offset_origin(p, err, ng, ng));
+            let (cut, _) = tree.cut(
+                self.accel,
+                Vec3::from(p),
+                origin,
+                s.n,
+                LIGHTCUT_ERROR,
+                LIGHTCUT_MAX,
+            );
+            out.extend(cut.into_iter().map(|c| Arrival {
+                wi: c.wi,
+                value: c.value,
+            }));
+        }
+        out
     }
 
     /// Irradiance on the front face of surfel `id` (for diffuse surfels).
     pub fn irradiance(&self, s: &Surfel, id: u64) -> Rgb {
-        let k = self.samples.max(1) as f32;
         self.arrivals(s, id)
             .iter()
             .map(|a| a.value * s.n.dot(a.wi).max(0.0))
             .fold(Rgb::ZERO, |acc, x| acc + x)
-            / k
     }
 
     /// Outgoing radiance of surfel `id` with BSDF `bsdf` at the centre of every texel of the
@@ -90,7 +115,6 @@ impl DirectLight<'_> {
             .into_iter()
             .map(|a| (frame.to_local(a.wi), a.value))
             .collect();
-        let k = self.samples.max(1) as f32;
         (0..n * n)
             .map(|t| {
                 let c = Vec2::new((t % n) as f32 + 0.5, (t / n) as f32 + 0.5) / n as f32;
@@ -99,7 +123,6 @@ impl DirectLight<'_> {
                     .iter()
                     .map(|(wi, value)| bsdf.eval(wo, *wi, TransportMode::Radiance) * *value)
                     .fold(Rgb::ZERO, |acc, x| acc + x)
-                    / k
             })
             .collect()
     }

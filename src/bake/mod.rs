@@ -2,10 +2,16 @@
 
 pub mod coding;
 pub mod direct;
+pub mod lightcuts;
+pub mod pipeline;
+pub mod plan;
+pub mod store;
 pub mod surfels;
 pub mod tree;
 
 pub use coding::{encode, CodedTree, NodeCoding};
 pub use direct::DirectLight;
+pub use pipeline::{bake, BakeSettings, Baked, Quality, SurfelRadiance};
+pub use plan::Plan;
 pub use surfels::{sample_surfels, Surfel};
 pub use tree::{Node, SurfelTree};

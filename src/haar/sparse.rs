@@ -126,6 +126,11 @@ impl<T: Coefficient> SparseHaar<T> {
         }
     }
 
+    /// The resolution (log2 of the map side).
+    pub fn levels(&self) -> u32 {
+        self.levels
+    }
+
     /// Stored detail triples (nodes), for memory accounting.
     pub fn node_count(&self) -> usize {
         self.nodes.len()
@@ -140,5 +145,65 @@ impl<T: Coefficient> SparseHaar<T> {
                 .flat_map(|n| n.details.iter())
                 .filter(|c| **c != T::default())
                 .count()
+    }
+}
+
+impl SparseHaar<glam::Vec3> {
+    /// Append the little-endian encoding: levels, node count, scale (3 × f32), then per node
+    /// its 9 detail floats and 4 child indices.
+    pub fn write_to(&self, out: &mut Vec<u8>) {
+        out.extend_from_slice(&self.levels.to_le_bytes());
+        out.extend_from_slice(&(self.nodes.len() as u32).to_le_bytes());
+        for x in self.scale.to_array() {
+            out.extend_from_slice(&x.to_le_bytes());
+        }
+        for n in &self.nodes {
+            for d in n.details {
+                for x in d.to_array() {
+                    out.extend_from_slice(&x.to_le_bytes());
+                }
+            }
+            for c in n.children {
+                out.extend_from_slice(&c.to_le_bytes());
+            }
+        }
+    }
+
+    /// Decode one tree from the front of `bytes`, returning it and the bytes it used; `None`
+    /// when the data is short or inconsistent (child indices must point forward, in range).
+    pub fn read_from(bytes: &[u8]) -> Option<(Self, usize)> {
+        let word = |i: usize| -> Option<[u8; 4]> { bytes.get(4 * i..4 * i + 4)?.try_into().ok() };
+        let levels = u32::from_le_bytes(word(0)?);
+        let count = u32::from_le_bytes(word(1)?) as usize;
+        if levels > 16 || count > ((1usize << (2 * levels)) - 1) / 3 {
+            return None;
+        }
+        let f = |i: usize| word(i).map(f32::from_le_bytes);
+        let v = |i: usize| Some(glam::Vec3::new(f(i)?, f(i + 1)?, f(i + 2)?));
+        let scale = v(2)?;
+        let mut nodes = Vec::with_capacity(count);
+        for k in 0..count {
+            let at = 5 + 13 * k;
+            let details = [v(at)?, v(at + 3)?, v(at + 6)?];
+            let mut children = [NONE; 4];
+            for (q, c) in children.iter_mut().enumerate() {
+                *c = u32::from_le_bytes(word(at + 9 + q)?);
+                if *c != NONE && (*c as usize >= count || *c as usize <= k) {
+                    return None;
+                }
+            }
+            if details.iter().any(|d| !d.is_finite()) {
+                return None;
+            }
+            nodes.push(Node { details, children });
+        }
+        scale.is_finite().then_some((
+            SparseHaar {
+                levels,
+                scale,
+                nodes,
+            },
+            4 * (5 + 13 * count),
+        ))
     }
 }

@@ -96,6 +96,19 @@ impl<T: Coefficient> Haar2d<T> {
         }
     }
 
+    /// The same function on a finer grid of `2^levels` texels per side: the coarse
+    /// coefficients are exactly the fine ones, the finer details being zero.
+    pub fn refined_to(&self, levels: u32) -> Self {
+        assert!(levels >= self.levels, "refining to a coarser grid");
+        let mut details = self.details.clone();
+        details.resize(((1usize << (2 * levels)) - 1) / 3, [T::default(); 3]);
+        Haar2d {
+            levels,
+            scale: self.scale,
+            details,
+        }
+    }
+
     /// `a·x + b·y` coefficient by coefficient (both of the same size).
     pub fn combine(x: &Self, a: f32, y: &Self, b: f32) -> Self {
         assert_eq!(

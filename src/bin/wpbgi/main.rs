@@ -1,6 +1,8 @@
 //! The `wpbgi` command line: a thin shell over the library that parses arguments, shows progress
 //! and turns every error into one sentence and a non-zero exit code.
 
+mod bake_cmd;
+
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand};
 use glam::Vec3;
@@ -12,7 +14,7 @@ use wpbgi::reference::{render, RenderOutput, RenderSettings};
 use wpbgi::scene::{Camera, Scene};
 
 /// The Cornell box compiled into the binary for `wpbgi demo`.
-const DEMO_SCENE: &[u8] = include_bytes!("../../scenes/cbox-rough.gltf");
+const DEMO_SCENE: &[u8] = include_bytes!("../../../scenes/cbox-rough.gltf");
 
 #[derive(Parser)]
 #[command(name = "wpbgi", version, about = "Noise-free global illumination for glTF scenes with Mitsuba's diffuse, roughconductor and roughdielectric materials.", long_about = None)]
@@ -31,6 +33,12 @@ enum Command {
     Reference(ReferenceArgs),
     /// Render the bundled Cornell box (rough gold box, glass sphere) to DIR/demo.exr and DIR/demo.png.
     Demo(DemoArgs),
+    /// Bake a scene's direct light into a cache: Poisson-disk surfels, their outgoing radiance
+    /// (RGB for diffuse surfaces, Haar wavelets over directions otherwise), and the surfel tree
+    /// with hierarchical wavelet coding. Prints the bake plan first.
+    Bake(bake_cmd::BakeArgs),
+    /// Check a cache and print its header, plan, sections and statistics.
+    Inspect(bake_cmd::InspectArgs),
 }
 
 #[derive(Args)]
@@ -124,7 +132,7 @@ fn parse_vec3(s: &str) -> Result<Vec3, String> {
     Ok(Vec3::from_slice(&v))
 }
 
-fn progress_bar(what: &str) -> ProgressBar {
+pub(crate) fn progress_bar(what: &str) -> ProgressBar {
     let bar = ProgressBar::new(1000);
     bar.set_style(
         ProgressStyle::with_template("{msg} [{bar:40}] {percent}% ({elapsed}, eta {eta})")
@@ -156,7 +164,7 @@ fn pick_camera(scene: &Scene, args: &CameraArgs) -> Result<Camera> {
     Ok(scene.camera(args.camera.as_deref(), w, h)?)
 }
 
-fn warn(scene: &Scene) {
+pub(crate) fn warn(scene: &Scene) {
     for w in &scene.warnings {
         eprintln!("warning: {}: {}", scene.path.display(), w.0);
     }
@@ -240,6 +248,8 @@ fn main() {
     let result = match cli.command {
         Command::Reference(a) => reference(a),
         Command::Demo(a) => demo(a),
+        Command::Bake(a) => bake_cmd::bake_command(a),
+        Command::Inspect(a) => bake_cmd::inspect_command(a),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");

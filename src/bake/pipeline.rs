@@ -1,0 +1,292 @@
+//! The bake, stage by stage (DESIGN.md §5): plan, surfels, direct light, tree, coding.
+//!
+//! Per surfel, the direct-lit outgoing radiance is kept compactly: RGB for diffuse surfels, a
+//! thresholded wavelet map (at the resolution its BSDF needs) for the others. The tree is then
+//! coded post-order, each leaf's radiant-intensity map A |n·ω| L(ω) being built on the fly
+//! from that compact form, so the uncompressed set never exists.
+
+use super::coding::{encode, CodedTree};
+use super::direct::DirectLight;
+use super::lightcuts::LightTree;
+use super::plan::{map_levels, Plan};
+use super::surfels::{sample_surfels, Surfel};
+use super::tree::SurfelTree;
+use crate::accel::Accel;
+use crate::bsdf::Bsdf;
+use crate::emitters::EmitterSampler;
+use crate::error::{Error, Result};
+use crate::haar::{square_to_direction, Haar2d, SparseHaar};
+use crate::scene::{LightKind, Scene};
+use crate::spectrum::Rgb;
+use glam::Vec2;
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// Scenes with more point and spot lights than this use a light tree (Lightcuts).
+pub const LIGHT_TREE_FROM: usize = 16;
+
+/// Quality presets: surfels and emitter samples per surfel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Quality {
+    Draft,
+    Preview,
+    Final,
+    Ultra,
+}
+
+impl Quality {
+    pub fn points(self) -> usize {
+        match self {
+            Quality::Draft => 20_000,
+            Quality::Preview => 100_000,
+            Quality::Final => 500_000,
+            Quality::Ultra => 2_000_000,
+        }
+    }
+
+    pub fn light_samples(self) -> u32 {
+        match self {
+            Quality::Draft => 64,
+            Quality::Preview => 128,
+            Quality::Final => 256,
+            Quality::Ultra => 512,
+        }
+    }
+}
+
+/// Everything that determines a bake's result (and so goes into the cache's content hash).
+#[derive(Clone, Debug, PartialEq)]
+pub struct BakeSettings {
+    pub points: usize,
+    pub light_samples: u32,
+    /// Relative wavelet threshold (dimensionless).
+    pub tau: f32,
+    /// Hierarchical coding split level; `None`: three levels above the deepest leaves, as the
+    /// thesis's 20 of about 23 levels.
+    pub split_level: Option<u32>,
+    pub seed: u64,
+}
+
+impl BakeSettings {
+    pub fn from_quality(q: Quality) -> Self {
+        BakeSettings {
+            points: q.points(),
+            light_samples: q.light_samples(),
+            tau: 2e-3,
+            split_level: None,
+            seed: 0,
+        }
+    }
+
+    /// A canonical text of the settings, for the content hash and the cache's plan.
+    pub fn to_json(&self) -> serde_json::Value {
+        serde_json::json!({
+            "points": self.points,
+            "light_samples": self.light_samples,
+            "tau": self.tau,
+            "split_level": self.split_level,
+            "seed": self.seed,
+        })
+    }
+}
+
+/// A surfel's direct-lit outgoing radiance.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SurfelRadiance {
+    /// Diffuse: the same radiance towards every direction of the front hemisphere.
+    Rgb(Rgb),
+    /// Directional: a thresholded map over the whole sphere.
+    Map(SparseHaar<Rgb>),
+}
+
+/// The result of a bake.
+pub struct Baked {
+    pub plan: Plan,
+    pub settings: BakeSettings,
+    pub surfels: Vec<Surfel>,
+    pub radiance: Vec<SurfelRadiance>,
+    pub tree: SurfelTree,
+    pub coded: CodedTree,
+    /// Seconds per stage, in order.
+    pub timings: Vec<(&'static str, f64)>,
+}
+
+/// Which stage is running and how far it is (from 0 to 1), for progress display.
+pub type Progress<'a> = &'a (dyn Fn(&str, f32) + Sync);
+
+/// Bake `scene` (direct light only).
+pub fn bake(scene: &Scene, settings: &BakeSettings, progress: Progress) -> Result<Baked> {
+    if settings.points == 0 || settings.light_samples == 0 {
+        return Err(Error::InvalidSetting(
+            "points and light samples must be at least 1".into(),
+        ));
+    }
+    if !(settings.tau >= 0.0 && settings.tau < 1.0) {
+        return Err(Error::InvalidSetting(format!(
+            "the wavelet threshold must be in [0, 1), got {}",
+            settings.tau
+        )));
+    }
+    scene.check_renderable()?;
+    let mut timings = Vec::new();
+    let mut stage =
+        |name: &'static str, start: Instant| timings.push((name, start.elapsed().as_secs_f64()));
+
+    let t = Instant::now();
+    let mut plan = Plan::new(scene);
+    let accel = Accel::build(scene);
+    // Many point and spot lights go through a light tree; a few are sampled with the rest.
+    let punctual = scene
+        .lights
+        .iter()
+        .filter(|l| !matches!(l.kind, LightKind::Directional))
+        .count();
+    let light_tree = (punctual > LIGHT_TREE_FROM).then(|| LightTree::new(&scene.lights));
+    let emitters = EmitterSampler::with_punctual(scene, light_tree.is_none());
+    plan.json["lightcuts"] = light_tree.is_some().into();
+    stage("plan", t);
+
+    let t = Instant::now();
+    progress("surfels", 0.0);
+    let surfels = sample_surfels(scene, settings.points, settings.seed);
+    progress("surfels", 1.0);
+    stage("surfels", t);
+
+    let t = Instant::now();
+    let direct = DirectLight {
+        scene,
+        accel: &accel,
+        emitters: &emitters,
+        samples: settings.light_samples,
+        seed: settings.seed,
+        light_tree: light_tree.as_ref(),
+    };
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    let radiance: Vec<SurfelRadiance> = surfels
+        .par_iter()
+        .enumerate()
+        .map(|(i, s)| {
+            let r = surfel_radiance(scene, &direct, s, i as u64, settings.tau);
+            let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            if n.is_multiple_of(4096) {
+                progress("direct light", n as f32 / surfels.len() as f32);
+            }
+            r
+        })
+        .collect();
+    progress("direct light", 1.0);
+    stage("direct light", t);
+
+    let t = Instant::now();
+    let tree = SurfelTree::build(&surfels);
+    stage("tree", t);
+
+    let t = Instant::now();
+    let eps = settings
+        .split_level
+        .unwrap_or(tree.depth().saturating_sub(3))
+        .min(tree.depth().saturating_sub(1));
+    // Textured roughness can ask for more than the plan saw at (0, 0): the tree takes the finest.
+    let levels = radiance
+        .iter()
+        .filter_map(|r| match r {
+            SurfelRadiance::Map(m) => Some(m.levels()),
+            SurfelRadiance::Rgb(_) => None,
+        })
+        .fold(plan.map_levels, u32::max);
+    plan.map_levels = levels;
+    plan.json["map_resolution"] = (1u32 << levels).into();
+    let leaf = |i: u32| intensity_map(&surfels[i as usize], &radiance[i as usize], levels);
+    progress("coding", 0.0);
+    let coded = encode(&tree, &leaf, eps, settings.tau);
+    progress("coding", 1.0);
+    stage("coding", t);
+
+    Ok(Baked {
+        plan,
+        settings: settings.clone(),
+        surfels,
+        radiance,
+        tree,
+        coded,
+        timings,
+    })
+}
+
+/// The texture coordinate of a surfel.
+fn surfel_uv(scene: &Scene, s: &Surfel) -> Vec2 {
+    let m = &scene.meshes[s.mesh as usize];
+    match &m.uvs {
+        Some(uv) => {
+            let t = m.triangles[s.triangle as usize];
+            uv[t[0] as usize] * (1.0 - s.b.x - s.b.y)
+                + uv[t[1] as usize] * s.b.x
+                + uv[t[2] as usize] * s.b.y
+        }
+        None => Vec2::ZERO,
+    }
+}
+
+/// Direct light (plus emission, for emitting surfels) leaving surfel `s`.
+fn surfel_radiance(
+    scene: &Scene,
+    direct: &DirectLight,
+    s: &Surfel,
+    id: u64,
+    tau: f32,
+) -> SurfelRadiance {
+    let material = &scene.materials[scene.meshes[s.mesh as usize].material];
+    let uv = surfel_uv(scene, s);
+    let bsdf = material.bsdf_at(&scene.textures, uv);
+    // Emission leaves the front face (both faces for two-sided emitters are not separate
+    // surfels: the front is what a surfel stands for).
+    let emitted = material.emission_at(&scene.textures, uv, true);
+    match (map_levels(&bsdf), &bsdf) {
+        (None, Bsdf::Diffuse(d)) => {
+            let e = direct.irradiance(s, id);
+            SurfelRadiance::Rgb(d.reflectance * e * std::f32::consts::FRAC_1_PI + emitted)
+        }
+        (levels, _) => {
+            let n = 1u32 << levels.unwrap_or(3);
+            let mut texels = direct.radiance_map(s, id, &bsdf, n);
+            if emitted != Rgb::ZERO {
+                for (t, v) in texels.iter_mut().enumerate() {
+                    let c = Vec2::new((t as u32 % n) as f32 + 0.5, (t as u32 / n) as f32 + 0.5)
+                        / n as f32;
+                    if square_to_direction(c).dot(s.n) > 0.0 {
+                        *v += emitted;
+                    }
+                }
+            }
+            SurfelRadiance::Map(SparseHaar::compress(
+                &Haar2d::forward(&texels, n as usize),
+                tau,
+            ))
+        }
+    }
+}
+
+/// A surfel's radiant intensity A |n·ω| L(ω) as a map at `levels`.
+pub fn intensity_map(s: &Surfel, r: &SurfelRadiance, levels: u32) -> Haar2d<Rgb> {
+    let (n, radiance): (u32, Vec<Rgb>) = match r {
+        // Diffuse radiance is constant, so its intensity is a cosine lobe: 8² resolves it as
+        // well as the tree's maps can.
+        SurfelRadiance::Rgb(c) => (8, vec![*c; 64]),
+        SurfelRadiance::Map(m) => (1 << m.levels(), m.to_dense().inverse()),
+    };
+    let texels: Vec<Rgb> = radiance
+        .iter()
+        .enumerate()
+        .map(|(t, l)| {
+            let c = Vec2::new((t as u32 % n) as f32 + 0.5, (t as u32 / n) as f32 + 0.5) / n as f32;
+            let cos = square_to_direction(c).dot(s.n);
+            // Diffuse surfels radiate from the front only; maps carry their own lower half.
+            let projected = match r {
+                SurfelRadiance::Rgb(_) => cos.max(0.0),
+                SurfelRadiance::Map(_) => cos.abs(),
+            };
+            *l * (s.area * projected)
+        })
+        .collect();
+    Haar2d::forward(&texels, n as usize).refined_to(levels.max(n.trailing_zeros()))
+}

@@ -1,0 +1,119 @@
+//! The bake plan (DESIGN.md §5.4): before any work, decide what the scene needs and say what
+//! is left out. The plan is printed, stored in the cache, and drives the bake.
+
+use crate::bsdf::Bsdf;
+use crate::scene::{LightKind, Scene};
+use glam::Vec2;
+use serde_json::{json, Value};
+
+/// Directional resolution (log2 of the octahedral map side) a BSDF needs, from its roughness:
+/// α ≥ 0.5 → 8², ≥ 0.1 → 16², ≥ 0.03 → 32², smaller → 64² (DESIGN.md §5.4). `None` for a
+/// diffuse BSDF, whose surfels store RGB only.
+pub fn map_levels(bsdf: &Bsdf) -> Option<u32> {
+    let alpha = match bsdf {
+        Bsdf::Diffuse(_) => return None,
+        Bsdf::Conductor(b) => b.distr.alpha_u.min(b.distr.alpha_v),
+        Bsdf::Dielectric(b) => b.distr.alpha_u.min(b.distr.alpha_v),
+        Bsdf::ThinDielectric(b) => b.distr.alpha_u.min(b.distr.alpha_v),
+    };
+    Some(if alpha >= 0.5 {
+        3
+    } else if alpha >= 0.1 {
+        4
+    } else if alpha >= 0.03 {
+        5
+    } else {
+        6
+    })
+}
+
+fn model(bsdf: &Bsdf) -> &'static str {
+    match bsdf {
+        Bsdf::Diffuse(_) => "diffuse",
+        Bsdf::Conductor(_) => "roughconductor",
+        Bsdf::Dielectric(_) => "roughdielectric",
+        Bsdf::ThinDielectric(_) => "thin dielectric",
+    }
+}
+
+/// What the bake of a scene will compute.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Plan {
+    /// Resolution of the tree's directional maps: the finest any material needs, and 3 (8²,
+    /// enough for the cosine lobes of diffuse surfels) at least.
+    pub map_levels: u32,
+    /// Whether any surface transmits (two-hemisphere functions needed).
+    pub transmission: bool,
+    pub json: Value,
+}
+
+impl Plan {
+    /// Analyse `scene` (the materials its meshes use). Materials are classified by their BSDF at texture coordinate (0, 0);
+    /// each surfel then takes the resolution of its own BSDF, so textured roughness is honoured.
+    pub fn new(scene: &Scene) -> Plan {
+        let mut finest = 3;
+        let mut transmission = false;
+        let mut materials = Vec::new();
+        let used = |i: usize| scene.meshes.iter().any(|m| m.material == i);
+        for m in (0..scene.materials.len())
+            .filter(|&i| used(i))
+            .map(|i| &scene.materials[i])
+        {
+            let bsdf = m.bsdf_at(&scene.textures, Vec2::ZERO);
+            let levels = map_levels(&bsdf);
+            if let Some(l) = levels {
+                finest = finest.max(l);
+            }
+            transmission |= bsdf.is_two_sided();
+            let storage = match levels {
+                None => "RGB".to_string(),
+                Some(l) => format!("directional {0}x{0}", 1u32 << l),
+            };
+            materials.push(json!({
+                "name": m.name,
+                "model": model(&bsdf),
+                "storage": storage,
+                "emissive": m.emission.is_some(),
+            }));
+        }
+        let count = |k: fn(&LightKind) -> bool| scene.lights.iter().filter(|l| k(&l.kind)).count();
+        let emissive_triangles: usize = scene
+            .meshes
+            .iter()
+            .filter(|m| scene.materials[m.material].emission.is_some())
+            .map(|m| m.triangles.len())
+            .sum();
+        let emitters = json!({
+            "emissive_triangles": emissive_triangles,
+            "point": count(|k| matches!(k, LightKind::Point)),
+            "spot": count(|k| matches!(k, LightKind::Spot { .. })),
+            "directional": count(|k| matches!(k, LightKind::Directional)),
+        });
+        let mut left_out = Vec::new();
+        if materials.iter().all(|m| m["storage"] == "RGB") {
+            left_out.push("wavelet radiance per surfel: every material is diffuse (RGB only)");
+        }
+        if !transmission {
+            left_out.push("two-hemisphere functions: nothing transmits");
+        }
+        if scene.lights.is_empty() {
+            left_out.push("punctual and directional lights: the scene has none");
+        }
+        if emissive_triangles == 0 {
+            left_out.push("emitting surfels: no surface emits");
+        }
+        left_out.push("indirect bounces: this bake computes direct light only");
+        let json = json!({
+            "map_resolution": 1u32 << finest,
+            "transmission": transmission,
+            "materials": materials,
+            "emitters": emitters,
+            "left_out": left_out,
+        });
+        Plan {
+            map_levels: finest,
+            transmission,
+            json,
+        }
+    }
+}

@@ -1,0 +1,216 @@
+//! A bake in a `.wpc` cache (DESIGN.md §6): which sections hold what, and the records' layout.
+//!
+//! Sections, coarse to fine: `plan` (JSON: format, crate version, settings, plan, statistics),
+//! `nodes` (the tree, breadth-first), `map_index` and `maps` (the coded tree's and the surfels'
+//! wavelet maps), `surfels`, `order`. Records are little-endian `#[repr(C)]` structs of 4-byte
+//! fields, readable in place from a memory map.
+
+use super::pipeline::{Baked, SurfelRadiance};
+use crate::cache::{self, Cache, CacheError};
+use crate::scene::Scene;
+use bytemuck::{Pod, Zeroable};
+use serde_json::{json, Value};
+use std::path::Path;
+
+/// No map.
+pub const NO_MAP: u32 = u32::MAX;
+
+/// One surfel in the `surfels` section.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct SurfelRecord {
+    pub p: [f32; 3],
+    pub n: [f32; 3],
+    pub area: f32,
+    /// The scene mesh it lies on.
+    pub mesh: u32,
+    /// Diffuse: the outgoing radiance. Directional: the radiance towards the normal (for
+    /// previews and point-cloud export).
+    pub rgb: [f32; 3],
+    /// Index into `map_index` of the surfel's directional map, or [`NO_MAP`].
+    pub map: u32,
+}
+
+/// One tree node in the `nodes` section.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct NodeRecord {
+    pub center: [f32; 3],
+    pub radius: f32,
+    pub axis: [f32; 3],
+    pub cone_angle: f32,
+    pub area: f32,
+    pub level: u32,
+    pub parent: u32,
+    pub children: [u32; 2],
+    pub first: u32,
+    pub count: u32,
+    /// Indices into `map_index` of the stored G and H, or [`NO_MAP`].
+    pub g: u32,
+    pub h: u32,
+}
+
+/// The content hash of a bake: everything the importer read from the scene (geometry,
+/// materials, textures, lights; so a changed external buffer or image counts, not only the main
+/// file), the settings and the crate version. Cameras do not change a bake and are left out.
+pub fn bake_hash(scene: &Scene, settings: &Value) -> [u8; 16] {
+    let mut geometry = Vec::new();
+    for m in &scene.meshes {
+        geometry.extend_from_slice(bytemuck::cast_slice(&m.positions));
+        geometry.extend_from_slice(bytemuck::cast_slice(&m.triangles));
+        if let Some(n) = &m.normals {
+            geometry.extend_from_slice(bytemuck::cast_slice(n));
+        }
+        if let Some(uv) = &m.uvs {
+            geometry.extend_from_slice(bytemuck::cast_slice(uv));
+        }
+        geometry.extend_from_slice(&(m.material as u64).to_le_bytes());
+    }
+    let mut textures = Vec::new();
+    for t in &scene.textures {
+        textures.extend_from_slice(&t.width.to_le_bytes());
+        textures.extend_from_slice(bytemuck::cast_slice(&t.texels));
+    }
+    // Debug formatting prints every float so that it parses back to the same value.
+    let materials = format!("{:?}", scene.materials);
+    let lights = format!("{:?}", scene.lights);
+    cache::content_hash(&[
+        &geometry,
+        &textures,
+        materials.as_bytes(),
+        lights.as_bytes(),
+        settings.to_string().as_bytes(),
+        env!("CARGO_PKG_VERSION").as_bytes(),
+    ])
+}
+
+/// Serialize `baked` to `path` atomically. `stats` is added to the plan section as is.
+pub fn write(path: &Path, hash: [u8; 16], baked: &Baked, stats: Value) -> Result<(), CacheError> {
+    let mut maps = Vec::new();
+    let mut index: Vec<u64> = Vec::new();
+    let mut push = |m: &crate::haar::SparseHaar<crate::spectrum::Rgb>| {
+        index.push(maps.len() as u64);
+        m.write_to(&mut maps);
+        (index.len() - 1) as u32
+    };
+    let mut nodes = Vec::with_capacity(baked.tree.nodes.len());
+    for (n, c) in baked.tree.nodes.iter().zip(&baked.coded.nodes) {
+        nodes.push(NodeRecord {
+            center: n.center.to_array(),
+            radius: n.radius,
+            axis: n.axis.to_array(),
+            cone_angle: n.cone_angle,
+            area: n.area,
+            level: n.level,
+            parent: n.parent,
+            children: n.children,
+            first: n.first,
+            count: n.count,
+            g: c.g.as_ref().map_or(NO_MAP, &mut push),
+            h: c.h.as_ref().map_or(NO_MAP, &mut push),
+        });
+    }
+    let mut surfels = Vec::with_capacity(baked.surfels.len());
+    for (s, r) in baked.surfels.iter().zip(&baked.radiance) {
+        let (rgb, map) = match r {
+            SurfelRadiance::Rgb(c) => (*c, NO_MAP),
+            SurfelRadiance::Map(m) => {
+                let at = crate::haar::direction_to_square(s.n);
+                (m.eval(at.x, at.y), push(m))
+            }
+        };
+        surfels.push(SurfelRecord {
+            p: s.p.to_array(),
+            n: s.n.to_array(),
+            area: s.area,
+            mesh: s.mesh,
+            rgb: rgb.to_array(),
+            map,
+        });
+    }
+    let plan = json!({
+        "format": "wpbgi bake",
+        "crate_version": env!("CARGO_PKG_VERSION"),
+        "settings": baked.settings.to_json(),
+        "split_level": baked.coded.split_level,
+        "plan": baked.plan.json,
+        "stats": stats,
+    });
+    let plan_bytes = serde_json::to_vec_pretty(&plan).map_err(|e| CacheError::Write {
+        path: path.to_path_buf(),
+        reason: e.to_string(),
+    })?;
+    let order: Vec<u8> = baked
+        .tree
+        .order
+        .iter()
+        .flat_map(|i| i.to_le_bytes())
+        .collect();
+    let index_bytes: Vec<u8> = index.iter().flat_map(|o| o.to_le_bytes()).collect();
+    cache::write(
+        path,
+        hash,
+        &[
+            ("plan", &plan_bytes),
+            ("nodes", bytemuck::cast_slice(&nodes)),
+            ("map_index", &index_bytes),
+            ("maps", &maps),
+            ("surfels", bytemuck::cast_slice(&surfels)),
+            ("order", &order),
+        ],
+    )
+}
+
+/// What `inspect` and the point-cloud export read back.
+pub struct BakedCache {
+    pub cache: Cache,
+    pub plan: Value,
+    pub surfels: Vec<SurfelRecord>,
+    pub nodes: Vec<NodeRecord>,
+}
+
+impl BakedCache {
+    pub fn read(path: &Path, expected_hash: Option<[u8; 16]>) -> Result<BakedCache, CacheError> {
+        let cache = Cache::read(path, expected_hash)?;
+        let bad = |what: &str| CacheError::Malformed {
+            path: path.to_path_buf(),
+            what: what.to_string(),
+        };
+        let plan: Value = serde_json::from_slice(cache.section("plan")?)
+            .map_err(|_| bad("the plan section is not JSON"))?;
+        let records = |name: &str, size: usize| -> Result<&[u8], CacheError> {
+            let b = cache.section(name)?;
+            if b.len() % size != 0 {
+                return Err(bad(&format!(
+                    "the {name} section is not a whole number of records"
+                )));
+            }
+            Ok(b)
+        };
+        let surfels: Vec<SurfelRecord> =
+            bytemuck::pod_collect_to_vec(records("surfels", std::mem::size_of::<SurfelRecord>())?);
+        let nodes: Vec<NodeRecord> =
+            bytemuck::pod_collect_to_vec(records("nodes", std::mem::size_of::<NodeRecord>())?);
+        let maps = (cache.section("map_index")?.len() / 8) as u32;
+        let in_range = |i: u32, n: usize| i == u32::MAX || (i as usize) < n;
+        for n in &nodes {
+            if !(in_range(n.children[0], nodes.len())
+                && in_range(n.children[1], nodes.len())
+                && in_range(n.g, maps as usize)
+                && in_range(n.h, maps as usize)
+                && (n.first as u64 + n.count as u64) <= surfels.len() as u64)
+            {
+                return Err(bad("a tree node points outside the file"));
+            }
+        }
+        if surfels.iter().any(|s| !in_range(s.map, maps as usize)) {
+            return Err(bad("a surfel points to a missing map"));
+        }
+        Ok(BakedCache {
+            cache,
+            plan,
+            surfels,
+            nodes,
+        })
+    }
+}

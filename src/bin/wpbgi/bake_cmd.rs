@@ -1,0 +1,280 @@
+//! `wpbgi bake` and `wpbgi inspect`.
+
+use anyhow::{Context, Result};
+use clap::{Args, ValueEnum};
+use indicatif::ProgressBar;
+use serde_json::{json, Value};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+use std::time::Instant;
+use wpbgi::bake::store::{bake_hash, BakedCache};
+use wpbgi::bake::{bake, BakeSettings, Quality};
+use wpbgi::scene::Scene;
+
+#[derive(Clone, Copy, Debug, ValueEnum)]
+pub enum QualityArg {
+    /// 20 000 surfels, 64 light samples each.
+    Draft,
+    /// 100 000 surfels, 128 light samples.
+    Preview,
+    /// 500 000 surfels, 256 light samples.
+    Final,
+    /// 2 000 000 surfels, 512 light samples.
+    Ultra,
+}
+
+#[derive(Args)]
+pub struct BakeArgs {
+    /// The scene (.gltf or .glb).
+    scene: PathBuf,
+    /// The cache to write (.wpc). Written atomically: an interrupted bake leaves the previous
+    /// file untouched.
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Quality preset: surfel count and light samples per surfel.
+    #[arg(long, value_enum, default_value = "preview")]
+    quality: QualityArg,
+    /// Number of surfels (overrides the preset).
+    #[arg(long)]
+    points: Option<usize>,
+    /// Emitter samples per surfel (overrides the preset).
+    #[arg(long)]
+    light_samples: Option<u32>,
+    /// Relative wavelet threshold: coefficients below this fraction of their function's norm
+    /// are dropped.
+    #[arg(long, default_value_t = 2e-3)]
+    threshold: f32,
+    /// Tree level where the hierarchical coding switches from stored averages to details
+    /// (default: three levels above the leaves).
+    #[arg(long)]
+    split_level: Option<u32>,
+    /// Seed of the random streams.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Report the plan, progress and summary as JSON lines on standard error.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Args)]
+pub struct InspectArgs {
+    /// The cache (.wpc).
+    cache: PathBuf,
+    /// Print the report as JSON.
+    #[arg(long)]
+    json: bool,
+    /// Also write the surfels as a PLY point cloud with normals and colours.
+    #[arg(long)]
+    ply: Option<PathBuf>,
+    /// Check the cache against this scene and refuse it if it is stale.
+    #[arg(long)]
+    scene: Option<PathBuf>,
+}
+
+/// Peak resident memory of this process in bytes (Linux), if known.
+fn peak_memory() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
+
+fn settings_of(a: &BakeArgs) -> BakeSettings {
+    let q = match a.quality {
+        QualityArg::Draft => Quality::Draft,
+        QualityArg::Preview => Quality::Preview,
+        QualityArg::Final => Quality::Final,
+        QualityArg::Ultra => Quality::Ultra,
+    };
+    let mut s = BakeSettings::from_quality(q);
+    s.points = a.points.unwrap_or(s.points);
+    s.light_samples = a.light_samples.unwrap_or(s.light_samples);
+    s.tau = a.threshold;
+    s.split_level = a.split_level;
+    s.seed = a.seed;
+    s
+}
+
+fn emit_json(v: Value) {
+    let mut err = std::io::stderr().lock();
+    let _ = writeln!(err, "{v}");
+}
+
+pub fn bake_command(a: BakeArgs) -> Result<()> {
+    let start = Instant::now();
+    let scene = Scene::load(&a.scene)?;
+    crate::warn(&scene);
+    let settings = settings_of(&a);
+    let plan = wpbgi::bake::Plan::new(&scene);
+    if a.json {
+        emit_json(json!({"event": "plan", "plan": plan.json, "settings": settings.to_json()}));
+    } else {
+        eprintln!("bake plan for {}:", a.scene.display());
+        eprintln!(
+            "  {} surfels, {} light samples each",
+            settings.points, settings.light_samples
+        );
+        for m in plan.json["materials"].as_array().into_iter().flatten() {
+            eprintln!("  material {}: {}, {}", m["name"], m["model"], m["storage"]);
+        }
+        for l in plan.json["left_out"].as_array().into_iter().flatten() {
+            eprintln!("  left out: {}", l.as_str().unwrap_or_default());
+        }
+    }
+    let bar = (!a.json).then(|| crate::progress_bar("baking"));
+    let last = Mutex::new(String::new());
+    let progress = |stage: &str, f: f32| {
+        if a.json {
+            emit_json(json!({"event": "progress", "stage": stage, "fraction": f}));
+        } else if let Some(b) = &bar {
+            let mut l = last.lock().unwrap_or_else(|e| e.into_inner());
+            if *l != stage {
+                b.set_message(stage.to_string());
+                *l = stage.to_string();
+            }
+            b.set_position((f * 1000.0) as u64);
+        }
+    };
+    let baked = bake(&scene, &settings, &progress)?;
+    bar.as_ref().map(ProgressBar::finish_and_clear);
+    let (maps, coefficients) = baked.coded.stored_counts();
+    // Only what the inputs determine goes into the cache, so that it is byte-identical from run
+    // to run; times and memory are reported here.
+    let mut stats = json!({
+        "surfels": baked.surfels.len(),
+        "nodes": baked.tree.nodes.len(),
+        "tree_depth": baked.tree.depth(),
+        "stored_maps": maps,
+        "coefficients": coefficients,
+    });
+    let hash = bake_hash(&scene, &settings.to_json());
+    let t = Instant::now();
+    wpbgi::bake::store::write(&a.output, hash, &baked, stats.clone())?;
+    let bytes = std::fs::metadata(&a.output).map(|m| m.len()).unwrap_or(0);
+    stats["seconds"] = baked
+        .timings
+        .iter()
+        .map(|(k, v)| (k.to_string(), json!(v)))
+        .collect::<serde_json::Map<_, _>>()
+        .into();
+    stats["seconds"]["write"] = json!(t.elapsed().as_secs_f64());
+    stats["peak_memory_bytes"] = json!(peak_memory());
+    stats["bytes"] = json!(bytes);
+    stats["bytes_per_surfel"] = json!(bytes as f64 / baked.surfels.len().max(1) as f64);
+    stats["total_seconds"] = json!(start.elapsed().as_secs_f64());
+    if a.json {
+        emit_json(json!({"event": "done", "output": a.output, "stats": stats}));
+    } else {
+        eprintln!(
+            "wrote {}: {} surfels, {} nodes, {} coefficients, {} bytes ({:.0} per surfel), {:.2} s{}",
+            a.output.display(),
+            baked.surfels.len(),
+            baked.tree.nodes.len(),
+            coefficients,
+            bytes,
+            bytes as f64 / baked.surfels.len().max(1) as f64,
+            start.elapsed().as_secs_f64(),
+            peak_memory().map_or(String::new(), |b| format!(", peak memory {} MB", b / 1_000_000)),
+        );
+        for (stage, secs) in &baked.timings {
+            eprintln!("  {stage}: {secs:.2} s");
+        }
+    }
+    Ok(())
+}
+
+pub fn inspect_command(a: InspectArgs) -> Result<()> {
+    let expected = match &a.scene {
+        Some(p) => {
+            // The settings live in the cache: read them unchecked first, then check the hash.
+            let unchecked = BakedCache::read(&a.cache, None)?;
+            let scene = Scene::load(p)?;
+            Some(bake_hash(&scene, &unchecked.plan["settings"]))
+        }
+        None => None,
+    };
+    let c = BakedCache::read(&a.cache, expected)?;
+    let sections: Vec<Value> = c
+        .cache
+        .sections
+        .iter()
+        .map(|s| json!({"name": s.name, "offset": s.offset, "bytes": s.length, "checksum": format!("{:016x}", s.checksum)}))
+        .collect();
+    let hash: String = c.cache.hash.iter().map(|b| format!("{b:02x}")).collect();
+    let report = json!({
+        "file": a.cache,
+        "format_version": c.cache.version,
+        "content_hash": hash,
+        "bytes": c.cache.len(),
+        "crate_version": c.plan["crate_version"],
+        "settings": c.plan["settings"],
+        "plan": c.plan["plan"],
+        "stats": c.plan["stats"],
+        "sections": sections,
+    });
+    if a.json {
+        println!("{}", serde_json::to_string_pretty(&report)?);
+    } else {
+        println!(
+            "{} (wpbgi cache format {}, written by wpbgi {})",
+            a.cache.display(),
+            c.cache.version,
+            c.plan["crate_version"]
+        );
+        println!("content hash {hash}, {} bytes", c.cache.len());
+        println!("settings: {}", c.plan["settings"]);
+        println!("plan: {}", c.plan["plan"]);
+        println!("stats: {}", c.plan["stats"]);
+        println!("sections:");
+        for s in &c.cache.sections {
+            println!(
+                "  {:<10} {:>12} bytes at {:>10}  xxh3 {:016x}",
+                s.name, s.length, s.offset, s.checksum
+            );
+        }
+    }
+    if let Some(p) = &a.ply {
+        write_ply(p, &c)?;
+        eprintln!("wrote {} ({} points)", p.display(), c.surfels.len());
+    }
+    Ok(())
+}
+
+/// An ASCII PLY point cloud: position, normal, and the surfel's radiance as 8-bit sRGB.
+fn write_ply(path: &Path, c: &BakedCache) -> Result<()> {
+    let mut out = String::new();
+    out.push_str("ply\nformat ascii 1.0\ncomment wpbgi surfels: radiance as sRGB colour\n");
+    out.push_str(&format!("element vertex {}\n", c.surfels.len()));
+    for p in ["x", "y", "z", "nx", "ny", "nz"] {
+        out.push_str(&format!("property float {p}\n"));
+    }
+    out.push_str("property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n");
+    let srgb = |x: f32| {
+        let x = x.clamp(0.0, 1.0);
+        let y = if x <= 0.003_130_8 {
+            12.92 * x
+        } else {
+            1.055 * x.powf(1.0 / 2.4) - 0.055
+        };
+        (y * 255.0).round() as u8
+    };
+    for s in &c.surfels {
+        out.push_str(&format!(
+            "{} {} {} {} {} {} {} {} {}\n",
+            s.p[0],
+            s.p[1],
+            s.p[2],
+            s.n[0],
+            s.n[1],
+            s.n[2],
+            srgb(s.rgb[0]),
+            srgb(s.rgb[1]),
+            srgb(s.rgb[2])
+        ));
+    }
+    wpbgi::atomic::write_atomically(path, |tmp| {
+        std::fs::write(tmp, &out).map_err(|e| e.to_string())
+    })
+    .with_context(|| format!("cannot write {}", path.display()))
+}

@@ -1,0 +1,185 @@
+//! `wpbgi bake` and `wpbgi inspect` from the outside: byte-identical caches for any thread
+//! count, a killed bake never damages the target, stale caches refused, inspect and PLY output.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::time::Duration;
+
+const WPBGI: &str = env!("CARGO_BIN_EXE_wpbgi");
+
+fn scene() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mitsuba/cbox-rough.gltf")
+}
+
+fn dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("wpbgi-cli-{name}-{}", std::process::id()));
+    std::fs::create_dir_all(&d).expect("temp dir");
+    d
+}
+
+fn wpbgi(args: &[&str]) -> Output {
+    Command::new(WPBGI).args(args).output().expect("runs")
+}
+
+fn bake(out: &Path, threads: &str, points: &str) -> Output {
+    wpbgi(&[
+        "--threads",
+        threads,
+        "bake",
+        scene().to_str().expect("utf-8 path"),
+        "-o",
+        out.to_str().expect("utf-8 path"),
+        "--points",
+        points,
+        "--light-samples",
+        "16",
+        "--json",
+    ])
+}
+
+#[test]
+fn same_cache_for_one_and_two_threads() {
+    let d = dir("threads");
+    let (a, b) = (d.join("one.wpc"), d.join("two.wpc"));
+    for (path, t) in [(&a, "1"), (&b, "2")] {
+        let out = bake(path, t, "4000");
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    assert!(std::fs::read(&a).expect("a") == std::fs::read(&b).expect("b"));
+}
+
+/// Kill a long bake at several moments: the cache already at the target path must come through
+/// byte for byte, and with no earlier cache there must be no file at the target at all.
+#[test]
+fn a_killed_bake_leaves_the_previous_cache_intact() {
+    let d = dir("kill");
+    let target = d.join("scene.wpc");
+    let out = bake(&target, "2", "2000");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let before = std::fs::read(&target).expect("first cache");
+    let fresh = d.join("fresh.wpc");
+    for delay_ms in [200u64, 700, 1500] {
+        for (path, previous) in [(&target, Some(&before)), (&fresh, None)] {
+            let mut child = Command::new(WPBGI)
+                .args([
+                    "bake",
+                    scene().to_str().expect("utf-8 path"),
+                    "-o",
+                    path.to_str().expect("utf-8 path"),
+                    "--points",
+                    "400000",
+                    "--json",
+                ])
+                .stderr(std::process::Stdio::null())
+                .spawn()
+                .expect("starts");
+            std::thread::sleep(Duration::from_millis(delay_ms));
+            child.kill().expect("kills");
+            let status = child.wait().expect("waits");
+            assert!(
+                !status.success(),
+                "the bake finished before {delay_ms} ms: make it longer"
+            );
+            match previous {
+                Some(bytes) => assert!(
+                    std::fs::read(path).expect("still there") == *bytes,
+                    "killed at {delay_ms} ms: the previous cache changed"
+                ),
+                None => assert!(
+                    !path.exists(),
+                    "killed at {delay_ms} ms: a partial cache appeared"
+                ),
+            }
+        }
+    }
+}
+
+#[test]
+fn inspect_reports_and_refuses_stale_caches() {
+    let d = dir("inspect");
+    let cache = d.join("scene.wpc");
+    let out = bake(&cache, "2", "2000");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    // JSON progress lines end with a summary.
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let last: serde_json::Value =
+        serde_json::from_str(stderr.lines().last().expect("a line")).expect("JSON lines");
+    assert_eq!(last["event"], "done");
+    assert_eq!(last["stats"]["surfels"], 2000);
+
+    let ply = d.join("points.ply");
+    let out = wpbgi(&[
+        "inspect",
+        cache.to_str().expect("utf-8"),
+        "--json",
+        "--ply",
+        ply.to_str().expect("utf-8"),
+        "--scene",
+        scene().to_str().expect("utf-8"),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON report");
+    assert_eq!(report["format_version"], 1);
+    let names: Vec<&str> = report["sections"]
+        .as_array()
+        .expect("sections")
+        .iter()
+        .map(|s| s["name"].as_str().expect("name"))
+        .collect();
+    assert_eq!(
+        names,
+        ["plan", "nodes", "map_index", "maps", "surfels", "order"]
+    );
+    assert!(report["plan"]["materials"]
+        .as_array()
+        .is_some_and(|m| !m.is_empty()));
+    // A valid PLY: the header's vertex count matches the lines that follow.
+    let text = std::fs::read_to_string(&ply).expect("ply");
+    let (header, body) = text.split_once("end_header\n").expect("header");
+    assert!(header.starts_with("ply\nformat ascii 1.0\n"));
+    assert!(header.contains("element vertex 2000\n"));
+    assert_eq!(body.lines().count(), 2000);
+    assert!(body.lines().all(|l| l.split(' ').count() == 9));
+
+    // The same scene with a brighter light (both its glTF strength and its explicit Mitsuba
+    // radiance, which wins): the cache is stale for it.
+    let changed = d.join("brighter.gltf");
+    let original = std::fs::read_to_string(scene()).expect("scene");
+    assert!(original.contains("18.387"));
+    std::fs::write(&changed, original.replace("18.387", "18.5")).expect("write");
+    let out = wpbgi(&[
+        "inspect",
+        cache.to_str().expect("utf-8"),
+        "--scene",
+        changed.to_str().expect("utf-8"),
+    ]);
+    assert!(!out.status.success());
+    let msg = String::from_utf8_lossy(&out.stderr);
+    assert!(msg.contains("stale") && msg.lines().count() == 1, "{msg}");
+
+    // Damage gives its own one-sentence error.
+    let mut bytes = std::fs::read(&cache).expect("cache");
+    let at = bytes.len() / 2;
+    bytes[at] ^= 0xff;
+    let broken = d.join("broken.wpc");
+    std::fs::write(&broken, &bytes).expect("write");
+    let out = wpbgi(&["inspect", broken.to_str().expect("utf-8")]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("corrupted"));
+}
