@@ -60,17 +60,20 @@ pub fn write_exr(path: &Path, img: &Image) -> Result<()> {
     })
 }
 
+/// A linear value as an 8-bit sRGB code (clamped to [0, 1], no tone mapping).
+pub fn srgb8(c: f32) -> u8 {
+    let c = c.clamp(0.0, 1.0);
+    let s = if c <= 0.003_130_8 {
+        12.92 * c
+    } else {
+        1.055 * c.powf(1.0 / 2.4) - 0.055
+    };
+    (s * 255.0 + 0.5) as u8
+}
+
 /// Write an 8-bit sRGB PNG (values clamped to [0, 1], no tone mapping).
 pub fn write_png(path: &Path, img: &Image) -> Result<()> {
-    let to8 = |c: f32| {
-        let c = c.clamp(0.0, 1.0);
-        let s = if c <= 0.003_130_8 {
-            12.92 * c
-        } else {
-            1.055 * c.powf(1.0 / 2.4) - 0.055
-        };
-        (s * 255.0 + 0.5) as u8
-    };
+    let to8 = srgb8;
     let mut buf = Vec::with_capacity(img.pixels.len() * 3);
     for p in &img.pixels {
         buf.extend_from_slice(&[to8(p.x), to8(p.y), to8(p.z)]);

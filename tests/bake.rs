@@ -180,9 +180,57 @@ fn cache_is_identical_for_any_thread_count_and_reads_back() {
             c.surfels.iter().filter(|s| s.map != NO_MAP).count(),
             directional
         );
+        // The root's maps decode to exactly what was coded.
+        let root = c.nodes[0];
+        assert_eq!(
+            Some(c.map::<Rgb>(root.g).expect("I map")),
+            baked.coded.nodes[0].g
+        );
+        assert_eq!(
+            Some(c.map::<f32>(root.area_g).expect("P map")),
+            baked.projected.nodes[0].g
+        );
     }
     assert!(
         files[0] == files[1],
         "1 and 2 threads wrote different caches"
+    );
+}
+
+/// The root's projected area P(ω) is Σ A |n·ω| over every surfel (at the 8 × 8 texel centres),
+/// up to its stored map's threshold: relative L2 error ≤ τ √(dropped coefficients).
+#[test]
+fn root_projected_area_is_the_sum_over_surfels() {
+    use wpbgi::haar::square_to_direction;
+    let b = run(&cbox());
+    let p = b.projected.reconstruct(&b.tree, 0).expect("root").inverse();
+    let n = 8;
+    let exact: Vec<f32> = (0..n * n)
+        .map(|t| {
+            let c = glam::Vec2::new((t % n) as f32 + 0.5, (t / n) as f32 + 0.5) / n as f32;
+            let w = square_to_direction(c);
+            b.surfels
+                .iter()
+                .map(|s| (s.area as f64 * s.n.dot(w).abs() as f64) as f32)
+                .sum()
+        })
+        .collect();
+    let norm = (exact.iter().map(|x| (*x as f64).powi(2)).sum::<f64>() / 64.0).sqrt();
+    let err = (p
+        .iter()
+        .zip(&exact)
+        .map(|(a, e)| ((a - e) as f64).powi(2))
+        .sum::<f64>()
+        / 64.0)
+        .sqrt();
+    let kept = b.projected.nodes[0]
+        .g
+        .as_ref()
+        .expect("root map")
+        .coefficient_count();
+    let bound = settings().tau as f64 * ((64 - kept) as f64).sqrt() * norm;
+    assert!(
+        err <= bound + 1e-5 * norm,
+        "error {err} > bound {bound} (norm {norm})"
     );
 }

@@ -32,10 +32,8 @@ fn lights(n: usize) -> Vec<PunctualLight> {
         .collect()
 }
 
-#[test]
-fn lightcuts_match_the_brute_force_sum() {
-    let all = lights(10_000);
-    // The receivers' plane, so that shadow rays have something to (not) hit.
+/// A ground plane under `lights`, so that shadow rays have something to (not) hit.
+fn scene_with(lights: Vec<PunctualLight>) -> Scene {
     let ground = Mesh {
         name: "ground".into(),
         positions: vec![
@@ -49,7 +47,7 @@ fn lightcuts_match_the_brute_force_sum() {
         triangles: vec![[0, 1, 2], [0, 2, 3]],
         material: 0,
     };
-    let scene = Scene {
+    Scene {
         meshes: vec![ground],
         materials: vec![Material {
             name: "grey".into(),
@@ -58,9 +56,15 @@ fn lightcuts_match_the_brute_force_sum() {
             })),
             emission: None,
         }],
-        lights: all.clone(),
+        lights,
         ..Default::default()
-    };
+    }
+}
+
+#[test]
+fn lightcuts_match_the_brute_force_sum() {
+    let all = lights(10_000);
+    let scene = scene_with(all.clone());
     let accel = Accel::build(&scene);
     let tree = LightTree::new(&scene.lights);
     assert_eq!(tree.len(), 10_000);
@@ -112,31 +116,7 @@ fn direct_light_uses_the_light_tree() {
     use wpbgi::bake::{DirectLight, Surfel};
     use wpbgi::emitters::EmitterSampler;
     let all = lights(300);
-    let ground = Mesh {
-        name: "ground".into(),
-        positions: vec![
-            Vec3::new(-20.0, -20.0, 0.0),
-            Vec3::new(20.0, -20.0, 0.0),
-            Vec3::new(20.0, 20.0, 0.0),
-            Vec3::new(-20.0, 20.0, 0.0),
-        ],
-        normals: None,
-        uvs: None,
-        triangles: vec![[0, 1, 2], [0, 2, 3]],
-        material: 0,
-    };
-    let scene = Scene {
-        meshes: vec![ground],
-        materials: vec![Material {
-            name: "grey".into(),
-            scattering: Scattering::Explicit(Bsdf::Diffuse(Diffuse {
-                reflectance: Rgb::splat(0.5),
-            })),
-            emission: None,
-        }],
-        lights: all.clone(),
-        ..Default::default()
-    };
+    let scene = scene_with(all.clone());
     let accel = Accel::build(&scene);
     let tree = LightTree::new(&scene.lights);
     let emitters = EmitterSampler::with_punctual(&scene, false);

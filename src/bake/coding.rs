@@ -20,32 +20,37 @@
 //! exist at once: O(depth) maps, never the whole set.
 
 use super::tree::{SurfelTree, NONE};
-use crate::haar::{Haar2d, SparseHaar};
-use crate::spectrum::Rgb;
+use crate::haar::{Coefficient, Haar2d, SparseHaar};
 
 /// What one node stores.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct NodeCoding {
-    pub g: Option<SparseHaar<Rgb>>,
-    pub h: Option<SparseHaar<Rgb>>,
+#[derive(Clone, Debug, PartialEq)]
+pub struct NodeCoding<T> {
+    pub g: Option<SparseHaar<T>>,
+    pub h: Option<SparseHaar<T>>,
+}
+
+impl<T> Default for NodeCoding<T> {
+    fn default() -> Self {
+        NodeCoding { g: None, h: None }
+    }
 }
 
 /// The coded tree: one [`NodeCoding`] per node of the [`SurfelTree`].
 #[derive(Clone, Debug, PartialEq)]
-pub struct CodedTree {
+pub struct CodedTree<T> {
     pub split_level: u32,
     pub tau: f32,
-    pub nodes: Vec<NodeCoding>,
+    pub nodes: Vec<NodeCoding<T>>,
 }
 
 /// Code `tree` with leaf functions `leaf(surfel index)` (the radiant-intensity map of one
 /// surfel, already transformed), split level `split_level` and relative threshold `tau`.
-pub fn encode(
+pub fn encode<T: Coefficient + Send + Sync>(
     tree: &SurfelTree,
-    leaf: &(dyn Fn(u32) -> Haar2d<Rgb> + Sync),
+    leaf: &(dyn Fn(u32) -> Haar2d<T> + Sync),
     split_level: u32,
     tau: f32,
-) -> CodedTree {
+) -> CodedTree<T> {
     let mut nodes = vec![NodeCoding::default(); tree.nodes.len()];
     if !tree.nodes.is_empty() {
         let mut out = Vec::new();
@@ -62,14 +67,14 @@ pub fn encode(
 }
 
 /// Returns the uncompressed G of node `j`, appending what the subtree stores to `out`.
-fn encode_node(
+fn encode_node<T: Coefficient + Send + Sync>(
     tree: &SurfelTree,
-    leaf: &(dyn Fn(u32) -> Haar2d<Rgb> + Sync),
+    leaf: &(dyn Fn(u32) -> Haar2d<T> + Sync),
     eps: u32,
     tau: f32,
     j: u32,
-    out: &mut Vec<(u32, NodeCoding)>,
-) -> Haar2d<Rgb> {
+    out: &mut Vec<(u32, NodeCoding<T>)>,
+) -> Haar2d<T> {
     let node = &tree.nodes[j as usize];
     let (g, h) = if node.is_leaf() {
         (leaf(tree.order[node.first as usize]), None)
@@ -98,9 +103,9 @@ fn encode_node(
     g
 }
 
-impl CodedTree {
+impl<T: Coefficient> CodedTree<T> {
     /// Node `j`'s function rebuilt from what is stored (see the module docs).
-    pub fn reconstruct(&self, tree: &SurfelTree, j: u32) -> Option<Haar2d<Rgb>> {
+    pub fn reconstruct(&self, tree: &SurfelTree, j: u32) -> Option<Haar2d<T>> {
         let (anchor, path) = self.path_to_anchor(tree, j)?;
         let mut g = self.nodes[anchor as usize].g.as_ref()?.to_dense();
         // Walk down: each step halves the parent and adds ± its detail.
@@ -112,7 +117,7 @@ impl CodedTree {
     }
 
     /// Node `j`'s function at the point `(x, y)` of the map, without rebuilding it.
-    pub fn eval(&self, tree: &SurfelTree, j: u32, x: f32, y: f32) -> Option<Rgb> {
+    pub fn eval(&self, tree: &SurfelTree, j: u32, x: f32, y: f32) -> Option<T> {
         let (anchor, path) = self.path_to_anchor(tree, j)?;
         let mut v = self.nodes[anchor as usize].g.as_ref()?.eval(x, y);
         for (k, sign) in path.into_iter().rev() {

@@ -106,7 +106,11 @@ pub struct Baked {
     pub surfels: Vec<Surfel>,
     pub radiance: Vec<SurfelRadiance>,
     pub tree: SurfelTree,
-    pub coded: CodedTree,
+    /// Radiant intensity I(ω) of every node (RGB).
+    pub coded: CodedTree<Rgb>,
+    /// Projected area P(ω) of every node, on an 8 × 8 map: a node seen from afar subtends
+    /// P/d² and has radiance I/P (DESIGN.md §5.5).
+    pub projected: CodedTree<f32>,
     /// Seconds per stage, in order.
     pub timings: Vec<(&'static str, f64)>,
 }
@@ -199,6 +203,8 @@ pub fn bake(scene: &Scene, settings: &BakeSettings, progress: Progress) -> Resul
     let leaf = |i: u32| intensity_map(&surfels[i as usize], &radiance[i as usize], levels);
     progress("coding", 0.0);
     let coded = encode(&tree, &leaf, eps, settings.tau);
+    let area_leaf = |i: u32| projected_area_map(&surfels[i as usize]);
+    let projected = encode(&tree, &area_leaf, eps, settings.tau);
     progress("coding", 1.0);
     stage("coding", t);
 
@@ -209,6 +215,7 @@ pub fn bake(scene: &Scene, settings: &BakeSettings, progress: Progress) -> Resul
         radiance,
         tree,
         coded,
+        projected,
         timings,
     })
 }
@@ -289,4 +296,21 @@ pub fn intensity_map(s: &Surfel, r: &SurfelRadiance, levels: u32) -> Haar2d<Rgb>
         })
         .collect();
     Haar2d::forward(&texels, n as usize).refined_to(levels.max(n.trailing_zeros()))
+}
+
+/// The resolution of projected-area maps: P(ω) is a sum of clamped cosines, smooth enough for
+/// 8 × 8.
+pub const PROJECTED_AREA_LEVELS: u32 = 3;
+
+/// A surfel's projected area A |n·ω| on the 8 × 8 map. Both sides count: a disc occludes from
+/// behind as from the front (its radiance there, I/P, is simply what it emits backwards).
+pub fn projected_area_map(s: &Surfel) -> Haar2d<f32> {
+    let n = 1u32 << PROJECTED_AREA_LEVELS;
+    let texels: Vec<f32> = (0..n * n)
+        .map(|t| {
+            let c = Vec2::new((t % n) as f32 + 0.5, (t / n) as f32 + 0.5) / n as f32;
+            s.area * square_to_direction(c).dot(s.n).abs()
+        })
+        .collect();
+    Haar2d::forward(&texels, n as usize)
 }

@@ -7,6 +7,7 @@
 
 use super::pipeline::{Baked, SurfelRadiance};
 use crate::cache::{self, Cache, CacheError};
+use crate::haar::{Coefficient, SparseHaar};
 use crate::scene::Scene;
 use bytemuck::{Pod, Zeroable};
 use serde_json::{json, Value};
@@ -45,9 +46,27 @@ pub struct NodeRecord {
     pub children: [u32; 2],
     pub first: u32,
     pub count: u32,
-    /// Indices into `map_index` of the stored G and H, or [`NO_MAP`].
+    /// Indices into `map_index` of the stored G and H of the radiant intensity, or [`NO_MAP`].
     pub g: u32,
     pub h: u32,
+    /// The same for the projected area (scalar maps).
+    pub area_g: u32,
+    pub area_h: u32,
+}
+
+/// The `maps` section under construction and its index.
+#[derive(Default)]
+struct MapPool {
+    bytes: Vec<u8>,
+    index: Vec<u64>,
+}
+
+impl MapPool {
+    fn push<T: Coefficient>(&mut self, m: &SparseHaar<T>) -> u32 {
+        self.index.push(self.bytes.len() as u64);
+        m.write_to(&mut self.bytes);
+        (self.index.len() - 1) as u32
+    }
 }
 
 /// The content hash of a bake: everything the importer read from the scene (geometry,
@@ -86,15 +105,15 @@ pub fn bake_hash(scene: &Scene, settings: &Value) -> [u8; 16] {
 
 /// Serialize `baked` to `path` atomically. `stats` is added to the plan section as is.
 pub fn write(path: &Path, hash: [u8; 16], baked: &Baked, stats: Value) -> Result<(), CacheError> {
-    let mut maps = Vec::new();
-    let mut index: Vec<u64> = Vec::new();
-    let mut push = |m: &crate::haar::SparseHaar<crate::spectrum::Rgb>| {
-        index.push(maps.len() as u64);
-        m.write_to(&mut maps);
-        (index.len() - 1) as u32
-    };
+    let mut pool = MapPool::default();
     let mut nodes = Vec::with_capacity(baked.tree.nodes.len());
-    for (n, c) in baked.tree.nodes.iter().zip(&baked.coded.nodes) {
+    for ((n, c), a) in baked
+        .tree
+        .nodes
+        .iter()
+        .zip(&baked.coded.nodes)
+        .zip(&baked.projected.nodes)
+    {
         nodes.push(NodeRecord {
             center: n.center.to_array(),
             radius: n.radius,
@@ -106,8 +125,10 @@ pub fn write(path: &Path, hash: [u8; 16], baked: &Baked, stats: Value) -> Result
             children: n.children,
             first: n.first,
             count: n.count,
-            g: c.g.as_ref().map_or(NO_MAP, &mut push),
-            h: c.h.as_ref().map_or(NO_MAP, &mut push),
+            g: c.g.as_ref().map_or(NO_MAP, |m| pool.push(m)),
+            h: c.h.as_ref().map_or(NO_MAP, |m| pool.push(m)),
+            area_g: a.g.as_ref().map_or(NO_MAP, |m| pool.push(m)),
+            area_h: a.h.as_ref().map_or(NO_MAP, |m| pool.push(m)),
         });
     }
     let mut surfels = Vec::with_capacity(baked.surfels.len());
@@ -116,7 +137,7 @@ pub fn write(path: &Path, hash: [u8; 16], baked: &Baked, stats: Value) -> Result
             SurfelRadiance::Rgb(c) => (*c, NO_MAP),
             SurfelRadiance::Map(m) => {
                 let at = crate::haar::direction_to_square(s.n);
-                (m.eval(at.x, at.y), push(m))
+                (m.eval(at.x, at.y), pool.push(m))
             }
         };
         surfels.push(SurfelRecord {
@@ -146,7 +167,8 @@ pub fn write(path: &Path, hash: [u8; 16], baked: &Baked, stats: Value) -> Result
         .iter()
         .flat_map(|i| i.to_le_bytes())
         .collect();
-    let index_bytes: Vec<u8> = index.iter().flat_map(|o| o.to_le_bytes()).collect();
+    let index_bytes: Vec<u8> = pool.index.iter().flat_map(|o| o.to_le_bytes()).collect();
+    let maps = pool.bytes;
     cache::write(
         path,
         hash,
@@ -198,6 +220,8 @@ impl BakedCache {
                 && in_range(n.children[1], nodes.len())
                 && in_range(n.g, maps as usize)
                 && in_range(n.h, maps as usize)
+                && in_range(n.area_g, maps as usize)
+                && in_range(n.area_h, maps as usize)
                 && (n.first as u64 + n.count as u64) <= surfels.len() as u64)
             {
                 return Err(bad("a tree node points outside the file"));
@@ -212,5 +236,24 @@ impl BakedCache {
             surfels,
             nodes,
         })
+    }
+
+    /// Decode map `index` of the pool (RGB for intensities and surfel radiance, f32 for
+    /// projected areas: the caller knows which from where the index came).
+    pub fn map<T: Coefficient>(&self, index: u32) -> Result<SparseHaar<T>, CacheError> {
+        let bad = || CacheError::Malformed {
+            path: self.cache.path.clone(),
+            what: format!("map {index} cannot be decoded"),
+        };
+        let table = self.cache.section("map_index")?;
+        let at = 8 * index as usize;
+        let offset = table
+            .get(at..at + 8)
+            .and_then(|b| b.try_into().ok())
+            .map(u64::from_le_bytes)
+            .ok_or_else(bad)?;
+        let maps = self.cache.section("maps")?;
+        let bytes = maps.get(offset as usize..).ok_or_else(bad)?;
+        SparseHaar::read_from(bytes).map(|(m, _)| m).ok_or_else(bad)
     }
 }

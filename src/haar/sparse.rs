@@ -148,20 +148,16 @@ impl<T: Coefficient> SparseHaar<T> {
     }
 }
 
-impl SparseHaar<glam::Vec3> {
-    /// Append the little-endian encoding: levels, node count, scale (3 × f32), then per node
-    /// its 9 detail floats and 4 child indices.
+impl<T: Coefficient> SparseHaar<T> {
+    /// Append the little-endian encoding: levels, node count, the scaling coefficient, then
+    /// per node its three details and four child indices.
     pub fn write_to(&self, out: &mut Vec<u8>) {
         out.extend_from_slice(&self.levels.to_le_bytes());
         out.extend_from_slice(&(self.nodes.len() as u32).to_le_bytes());
-        for x in self.scale.to_array() {
-            out.extend_from_slice(&x.to_le_bytes());
-        }
+        self.scale.write_le(out);
         for n in &self.nodes {
             for d in n.details {
-                for x in d.to_array() {
-                    out.extend_from_slice(&x.to_le_bytes());
-                }
+                d.write_le(out);
             }
             for c in n.children {
                 out.extend_from_slice(&c.to_le_bytes());
@@ -170,7 +166,8 @@ impl SparseHaar<glam::Vec3> {
     }
 
     /// Decode one tree from the front of `bytes`, returning it and the bytes it used; `None`
-    /// when the data is short or inconsistent (child indices must point forward, in range).
+    /// when the data is short or inconsistent (non-finite values, child indices that do not
+    /// point forward within the tree).
     pub fn read_from(bytes: &[u8]) -> Option<(Self, usize)> {
         let word = |i: usize| -> Option<[u8; 4]> { bytes.get(4 * i..4 * i + 4)?.try_into().ok() };
         let levels = u32::from_le_bytes(word(0)?);
@@ -178,32 +175,39 @@ impl SparseHaar<glam::Vec3> {
         if levels > 16 || count > ((1usize << (2 * levels)) - 1) / 3 {
             return None;
         }
-        let f = |i: usize| word(i).map(f32::from_le_bytes);
-        let v = |i: usize| Some(glam::Vec3::new(f(i)?, f(i + 1)?, f(i + 2)?));
-        let scale = v(2)?;
+        let value = |i: usize| -> Option<T> {
+            let f: Option<Vec<f32>> = (i..i + T::FLOATS)
+                .map(|k| word(k).map(f32::from_le_bytes).filter(|x| x.is_finite()))
+                .collect();
+            Some(T::from_floats(&f?))
+        };
+        let scale = value(2)?;
+        let per_node = 3 * T::FLOATS + 4;
+        let first = 2 + T::FLOATS;
         let mut nodes = Vec::with_capacity(count);
         for k in 0..count {
-            let at = 5 + 13 * k;
-            let details = [v(at)?, v(at + 3)?, v(at + 6)?];
+            let at = first + per_node * k;
+            let details = [
+                value(at)?,
+                value(at + T::FLOATS)?,
+                value(at + 2 * T::FLOATS)?,
+            ];
             let mut children = [NONE; 4];
             for (q, c) in children.iter_mut().enumerate() {
-                *c = u32::from_le_bytes(word(at + 9 + q)?);
+                *c = u32::from_le_bytes(word(at + 3 * T::FLOATS + q)?);
                 if *c != NONE && (*c as usize >= count || *c as usize <= k) {
                     return None;
                 }
             }
-            if details.iter().any(|d| !d.is_finite()) {
-                return None;
-            }
             nodes.push(Node { details, children });
         }
-        scale.is_finite().then_some((
+        Some((
             SparseHaar {
                 levels,
                 scale,
                 nodes,
             },
-            4 * (5 + 13 * count),
+            4 * (first + per_node * count),
         ))
     }
 }

@@ -17,21 +17,52 @@ use std::ops::{Add, Mul, Sub};
 pub trait Coefficient:
     Copy + Default + PartialEq + Add<Output = Self> + Sub<Output = Self> + Mul<f32, Output = Self>
 {
+    /// Floats per coefficient in the cache encoding.
+    const FLOATS: usize;
+
     /// The size that thresholding compares: |c| for a scalar, the largest |component| for RGB.
     fn magnitude(self) -> f32;
+
+    /// Append the little-endian floats.
+    fn write_le(self, out: &mut Vec<u8>);
+
+    /// Build from `FLOATS` floats.
+    fn from_floats(f: &[f32]) -> Self;
 }
 
 impl Coefficient for f32 {
+    const FLOATS: usize = 1;
+
     #[inline]
     fn magnitude(self) -> f32 {
         self.abs()
     }
+
+    fn write_le(self, out: &mut Vec<u8>) {
+        out.extend_from_slice(&self.to_le_bytes());
+    }
+
+    fn from_floats(f: &[f32]) -> Self {
+        f[0]
+    }
 }
 
 impl Coefficient for glam::Vec3 {
+    const FLOATS: usize = 3;
+
     #[inline]
     fn magnitude(self) -> f32 {
         self.abs().max_element()
+    }
+
+    fn write_le(self, out: &mut Vec<u8>) {
+        for x in self.to_array() {
+            out.extend_from_slice(&x.to_le_bytes());
+        }
+    }
+
+    fn from_floats(f: &[f32]) -> Self {
+        glam::Vec3::new(f[0], f[1], f[2])
     }
 }
 

@@ -250,15 +250,7 @@ fn write_ply(path: &Path, c: &BakedCache) -> Result<()> {
         out.push_str(&format!("property float {p}\n"));
     }
     out.push_str("property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n");
-    let srgb = |x: f32| {
-        let x = x.clamp(0.0, 1.0);
-        let y = if x <= 0.003_130_8 {
-            12.92 * x
-        } else {
-            1.055 * x.powf(1.0 / 2.4) - 0.055
-        };
-        (y * 255.0).round() as u8
-    };
+    let srgb = wpbgi::image::srgb8;
     for s in &c.surfels {
         out.push_str(&format!(
             "{} {} {} {} {} {} {} {} {}\n",
