@@ -20,6 +20,7 @@ fn settings() -> BakeSettings {
         tau: 2e-3,
         split_level: None,
         seed: 1,
+        max_cut: 1000,
     }
 }
 

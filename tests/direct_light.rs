@@ -111,6 +111,7 @@ fn irradiance(poly: &[Vec3], samples: u32) -> f32 {
         samples,
         seed: 7,
         light_tree: None,
+        max_cut: 1000,
     };
     d.irradiance(&surfel(), 0).x
 }
@@ -183,6 +184,7 @@ fn rough_conductor_surfel_under_a_small_light() {
         samples: 1024,
         seed: 3,
         light_tree: None,
+        max_cut: 1000,
     };
     let n = 64u32;
     let map = d.radiance_map(&surfel(), 0, &bsdf, n);

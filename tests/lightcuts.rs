@@ -127,6 +127,7 @@ fn direct_light_uses_the_light_tree() {
         samples: 16,
         seed: 0,
         light_tree: Some(&tree),
+        max_cut: 1000,
     };
     for (k, (x, y)) in [(0.0f32, 0.0f32), (3.0, -2.0), (-6.0, 5.5)]
         .into_iter()

@@ -35,12 +35,12 @@ pub struct DirectLight<'a> {
     /// Point and spot lights through Lightcuts (then `emitters` must leave them out, see
     /// [`EmitterSampler::with_punctual`]); `None` samples them with the other emitters.
     pub light_tree: Option<&'a LightTree>,
+    /// Largest lightcut, in clusters.
+    pub max_cut: usize,
 }
 
 /// Lightcuts' relative error target (DESIGN.md §5.2).
 pub const LIGHTCUT_ERROR: f32 = 0.02;
-/// Largest lightcut.
-pub const LIGHTCUT_MAX: usize = 1000;
 
 /// One unoccluded emitter sample as seen from a surfel.
 struct Arrival {
@@ -88,7 +88,7 @@ impl DirectLight<'_> {
                 origin,
                 s.n,
                 LIGHTCUT_ERROR,
-                LIGHTCUT_MAX,
+                self.max_cut,
             );
             out.extend(cut.into_iter().map(|c| Arrival {
                 wi: c.wi,

@@ -65,6 +65,8 @@ pub struct BakeSettings {
     /// thesis's 20 of about 23 levels.
     pub split_level: Option<u32>,
     pub seed: u64,
+    /// Largest lightcut (clusters) when a light tree is used.
+    pub max_cut: usize,
 }
 
 impl BakeSettings {
@@ -75,6 +77,7 @@ impl BakeSettings {
             tau: 2e-3,
             split_level: None,
             seed: 0,
+            max_cut: 1000,
         }
     }
 
@@ -86,6 +89,7 @@ impl BakeSettings {
             "tau": self.tau,
             "split_level": self.split_level,
             "seed": self.seed,
+            "max_cut": self.max_cut,
         })
     }
 }
@@ -164,6 +168,7 @@ pub fn bake(scene: &Scene, settings: &BakeSettings, progress: Progress) -> Resul
         samples: settings.light_samples,
         seed: settings.seed,
         light_tree: light_tree.as_ref(),
+        max_cut: settings.max_cut.max(1),
     };
     let done = std::sync::atomic::AtomicUsize::new(0);
     let radiance: Vec<SurfelRadiance> = surfels

@@ -52,6 +52,9 @@ pub struct BakeArgs {
     /// Seed of the random streams.
     #[arg(long, default_value_t = 0)]
     seed: u64,
+    /// With many point and spot lights (Lightcuts): the largest cut per surfel, in clusters.
+    #[arg(long, default_value_t = 1000)]
+    max_cut: usize,
     /// Report the plan, progress and summary as JSON lines on standard error.
     #[arg(long)]
     json: bool,
@@ -93,6 +96,7 @@ fn settings_of(a: &BakeArgs) -> BakeSettings {
     s.tau = a.threshold;
     s.split_level = a.split_level;
     s.seed = a.seed;
+    s.max_cut = a.max_cut;
     s
 }
 
