@@ -260,3 +260,36 @@ fn h_norm(h: &Haar2d<Vec3>) -> f64 {
         .sum::<f64>())
     .sqrt()
 }
+
+/// The cache encoding of sparse trees round-trips, scalar and RGB, and damaged or cut-off data
+/// is refused rather than misread.
+#[test]
+fn sparse_tree_encoding_round_trips_and_refuses_damage() {
+    let n = 16;
+    let rgb = SparseHaar::compress(&Haar2d::forward(&lobe_image(n), n), 1e-3);
+    let scalar_img: Vec<f32> = lobe_image(n).iter().map(|v| v.x).collect();
+    let scalar = SparseHaar::compress(&Haar2d::forward(&scalar_img, n), 1e-3);
+    let mut bytes = Vec::new();
+    rgb.write_to(&mut bytes);
+    let split = bytes.len();
+    scalar.write_to(&mut bytes);
+    let (a, used) = SparseHaar::<Vec3>::read_from(&bytes).expect("rgb tree");
+    assert_eq!((a, used), (rgb.clone(), split));
+    let (b, used) = SparseHaar::<f32>::read_from(&bytes[split..]).expect("scalar tree");
+    assert_eq!((b, used), (scalar, bytes.len() - split));
+    // Every truncation of the first tree is refused.
+    for len in 0..split {
+        assert!(
+            SparseHaar::<Vec3>::read_from(&bytes[..len]).is_none(),
+            "cut at {len}"
+        );
+    }
+    // A child mask with a bit beyond the four quadrants, or a NaN coefficient, is refused.
+    let first_mask = 8 + 12;
+    let mut bad = bytes[..split].to_vec();
+    bad[first_mask] |= 0x10;
+    assert!(SparseHaar::<Vec3>::read_from(&bad).is_none());
+    let mut nan = bytes[..split].to_vec();
+    nan[8..12].copy_from_slice(&f32::NAN.to_le_bytes());
+    assert!(SparseHaar::<Vec3>::read_from(&nan).is_none());
+}

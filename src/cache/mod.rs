@@ -23,6 +23,7 @@
 //! checks everything before handing out a byte and says exactly what is wrong.
 
 use crate::atomic::write_atomically;
+use std::io::Write;
 use std::path::{Path, PathBuf};
 use xxhash_rust::xxh3::{xxh3_128, xxh3_64};
 
@@ -82,48 +83,61 @@ pub fn content_hash(parts: &[&[u8]]) -> [u8; 16] {
     xxh3_128(&all).to_le_bytes()
 }
 
-/// Write `sections` (name, bytes), in order, to `path` atomically.
+/// Write `sections` (name, bytes), in order, to `path` atomically. The layout is computed
+/// first and the sections are streamed to the file, so the whole cache is never copied into
+/// one buffer.
 pub fn write(path: &Path, hash: [u8; 16], sections: &[(&str, &[u8])]) -> Result<(), CacheError> {
     let werr = |reason: String| CacheError::Write {
         path: path.to_path_buf(),
         reason,
     };
-    let mut out = vec![0u8; HEADER_LEN];
+    let aligned = |x: usize| x.div_ceil(ALIGNMENT) * ALIGNMENT;
     let mut table = Vec::with_capacity(sections.len() * ENTRY_LEN);
+    let mut offsets = Vec::with_capacity(sections.len());
+    let mut at = HEADER_LEN;
     for (name, bytes) in sections {
         if name.is_empty() || name.len() > NAME_LEN || name.contains('\0') {
             return Err(werr(format!("bad section name \"{name}\"")));
         }
-        pad_to_alignment(&mut out);
+        at = aligned(at);
+        offsets.push(at);
         let mut n = [0u8; NAME_LEN];
         n[..name.len()].copy_from_slice(name.as_bytes());
         table.extend_from_slice(&n);
-        table.extend_from_slice(&(out.len() as u64).to_le_bytes());
+        table.extend_from_slice(&(at as u64).to_le_bytes());
         table.extend_from_slice(&(bytes.len() as u64).to_le_bytes());
         table.extend_from_slice(&xxh3_64(bytes).to_le_bytes());
-        out.extend_from_slice(bytes);
+        at += bytes.len();
     }
-    pad_to_alignment(&mut out);
-    let table_offset = out.len() as u64;
-    out.extend_from_slice(&table);
-    let h = &mut out[..HEADER_LEN];
+    let table_offset = aligned(at);
+    let mut h = [0u8; HEADER_LEN];
     h[0..8].copy_from_slice(&MAGIC);
     h[8..12].copy_from_slice(&FORMAT_VERSION.to_le_bytes());
     h[12..16].copy_from_slice(&BYTE_ORDER_MARK.to_le_bytes());
     h[16..32].copy_from_slice(&hash);
-    h[32..40].copy_from_slice(&table_offset.to_le_bytes());
+    h[32..40].copy_from_slice(&(table_offset as u64).to_le_bytes());
     h[40..44].copy_from_slice(&(sections.len() as u32).to_le_bytes());
     h[48..56].copy_from_slice(&xxh3_64(&table).to_le_bytes());
     let header_sum = xxh3_64(&h[..56]);
     h[56..64].copy_from_slice(&header_sum.to_le_bytes());
     write_atomically(path, |tmp| {
-        std::fs::write(tmp, &out).map_err(|e| e.to_string())
+        let stream = || -> std::io::Result<()> {
+            let mut f = std::io::BufWriter::new(std::fs::File::create(tmp)?);
+            let zeros = [0u8; ALIGNMENT];
+            let mut written = HEADER_LEN;
+            f.write_all(&h)?;
+            for ((_, bytes), &offset) in sections.iter().zip(&offsets) {
+                f.write_all(&zeros[..offset - written])?;
+                f.write_all(bytes)?;
+                written = offset + bytes.len();
+            }
+            f.write_all(&zeros[..table_offset - written])?;
+            f.write_all(&table)?;
+            f.into_inner().map_err(|e| e.into_error())?.sync_all()
+        };
+        stream().map_err(|e| e.to_string())
     })
     .map_err(|e| werr(e.to_string()))
-}
-
-fn pad_to_alignment(v: &mut Vec<u8>) {
-    v.resize(v.len().div_ceil(ALIGNMENT) * ALIGNMENT, 0);
 }
 
 /// One section of a read cache.

@@ -149,65 +149,88 @@ impl<T: Coefficient> SparseHaar<T> {
 }
 
 impl<T: Coefficient> SparseHaar<T> {
-    /// Append the little-endian encoding: levels, node count, the scaling coefficient, then
-    /// per node its three details and four child indices.
+    /// Append the little-endian encoding: levels and node count (u32 each), the scaling
+    /// coefficient, then the nodes in pre-order, each as a byte whose low four bits say which
+    /// children follow, and its three details. Child positions are implicit in the order.
     pub fn write_to(&self, out: &mut Vec<u8>) {
         out.extend_from_slice(&self.levels.to_le_bytes());
         out.extend_from_slice(&(self.nodes.len() as u32).to_le_bytes());
         self.scale.write_le(out);
         for n in &self.nodes {
+            let mask =
+                n.children
+                    .iter()
+                    .enumerate()
+                    .fold(0u8, |m, (q, &c)| if c != NONE { m | 1 << q } else { m });
+            out.push(mask);
             for d in n.details {
                 d.write_le(out);
-            }
-            for c in n.children {
-                out.extend_from_slice(&c.to_le_bytes());
             }
         }
     }
 
     /// Decode one tree from the front of `bytes`, returning it and the bytes it used; `None`
-    /// when the data is short or inconsistent (non-finite values, child indices that do not
-    /// point forward within the tree).
+    /// when the data is short or inconsistent (non-finite values, a node count or a depth that
+    /// does not match the structure).
     pub fn read_from(bytes: &[u8]) -> Option<(Self, usize)> {
-        let word = |i: usize| -> Option<[u8; 4]> { bytes.get(4 * i..4 * i + 4)?.try_into().ok() };
-        let levels = u32::from_le_bytes(word(0)?);
-        let count = u32::from_le_bytes(word(1)?) as usize;
+        let u32_at = |o: usize| -> Option<u32> {
+            Some(u32::from_le_bytes(bytes.get(o..o + 4)?.try_into().ok()?))
+        };
+        let levels = u32_at(0)?;
+        let count = u32_at(4)? as usize;
         if levels > 16 || count > ((1usize << (2 * levels)) - 1) / 3 {
             return None;
         }
-        let value = |i: usize| -> Option<T> {
-            let f: Option<Vec<f32>> = (i..i + T::FLOATS)
-                .map(|k| word(k).map(f32::from_le_bytes).filter(|x| x.is_finite()))
-                .collect();
-            Some(T::from_floats(&f?))
+        let mut at = 8;
+        let scale = read_value::<T>(bytes, &mut at)?;
+        let mut out = SparseHaar {
+            levels,
+            scale,
+            nodes: Vec::with_capacity(count),
         };
-        let scale = value(2)?;
-        let per_node = 3 * T::FLOATS + 4;
-        let first = 2 + T::FLOATS;
-        let mut nodes = Vec::with_capacity(count);
-        for k in 0..count {
-            let at = first + per_node * k;
-            let details = [
-                value(at)?,
-                value(at + T::FLOATS)?,
-                value(at + 2 * T::FLOATS)?,
-            ];
-            let mut children = [NONE; 4];
-            for (q, c) in children.iter_mut().enumerate() {
-                *c = u32::from_le_bytes(word(at + 3 * T::FLOATS + q)?);
-                if *c != NONE && (*c as usize >= count || *c as usize <= k) {
-                    return None;
-                }
-            }
-            nodes.push(Node { details, children });
+        if count > 0 {
+            out.parse_node(bytes, &mut at, 0, count)?;
         }
-        Some((
-            SparseHaar {
-                levels,
-                scale,
-                nodes,
-            },
-            4 * (first + per_node * count),
-        ))
+        (out.nodes.len() == count).then_some((out, at))
     }
+
+    /// Parse the node at `at` and its subtree (depth `l`); returns its index.
+    fn parse_node(&mut self, bytes: &[u8], at: &mut usize, l: u32, count: usize) -> Option<u32> {
+        if l >= self.levels || self.nodes.len() >= count {
+            return None;
+        }
+        let mask = *bytes.get(*at)?;
+        *at += 1;
+        let details = [
+            read_value::<T>(bytes, at)?,
+            read_value::<T>(bytes, at)?,
+            read_value::<T>(bytes, at)?,
+        ];
+        let me = self.nodes.len();
+        self.nodes.push(Node {
+            details,
+            children: [NONE; 4],
+        });
+        for q in 0..4 {
+            if mask & (1 << q) != 0 {
+                let c = self.parse_node(bytes, at, l + 1, count)?;
+                self.nodes[me].children[q] = c;
+            }
+        }
+        (mask & 0xf0 == 0).then_some(me as u32)
+    }
+}
+
+/// One little-endian, finite coefficient at `*at`, advancing it.
+fn read_value<T: Coefficient>(bytes: &[u8], at: &mut usize) -> Option<T> {
+    let mut f = [0f32; 3];
+    for x in f.iter_mut().take(T::FLOATS) {
+        let v = f32::from_le_bytes(bytes.get(*at..*at + 4)?.try_into().ok()?);
+        if !v.is_finite() {
+            return None;
+        }
+        *x = v;
+        *at += 4;
+    }
+    Some(T::from_floats(&f[..T::FLOATS]))
 }
