@@ -30,6 +30,7 @@ pub mod bsdf;
 pub mod cache;
 pub mod emitters;
 pub mod error;
+pub mod gather;
 pub mod geometry;
 pub mod haar;
 pub mod image;

@@ -21,6 +21,47 @@ pub fn square_to_uniform_disk_concentric(u: Vec2) -> Vec2 {
     Vec2::new(r * c, r * s)
 }
 
+/// Inverse of [`square_to_uniform_disk_concentric`] (Shirley & Chiu, as Mitsuba's
+/// `uniform_disk_to_square_concentric`).
+#[inline]
+pub fn uniform_disk_to_square_concentric(p: Vec2) -> Vec2 {
+    use std::f32::consts::PI;
+    let r = p.length();
+    let mut phi = p.y.atan2(p.x);
+    if phi < -FRAC_PI_4 {
+        phi += 2.0 * PI;
+    }
+    let (a, b) = if phi < FRAC_PI_4 {
+        (r, phi * r / FRAC_PI_4)
+    } else if phi < 3.0 * FRAC_PI_4 {
+        (-(phi - FRAC_PI_2) * r / FRAC_PI_4, r)
+    } else if phi < 5.0 * FRAC_PI_4 {
+        (-r, -(phi - PI) * r / FRAC_PI_4)
+    } else {
+        ((phi - 3.0 * FRAC_PI_2) * r / FRAC_PI_4, -r)
+    };
+    Vec2::new(0.5 * (a + 1.0), 0.5 * (b + 1.0))
+}
+
+/// The equal-area map from the unit square to the hemisphere around +z: the concentric disk,
+/// then Lambert's azimuthal equal-area projection (z = 1 − r², (x, y) scaled by √(2 − r²)).
+/// Every cell of an n × n grid subtends 2π/n² steradians (DESIGN.md §5.3).
+#[inline]
+pub fn square_to_hemisphere_equal_area(u: Vec2) -> Vec3 {
+    let p = square_to_uniform_disk_concentric(u);
+    let r2 = p.length_squared().min(1.0);
+    let s = (2.0 - r2).sqrt();
+    Vec3::new(p.x * s, p.y * s, 1.0 - r2)
+}
+
+/// Inverse of [`square_to_hemisphere_equal_area`] for a unit `v` with `v.z ≥ 0`.
+#[inline]
+pub fn hemisphere_equal_area_to_square(v: Vec3) -> Vec2 {
+    // r² = 1 − z and (x, y) = p √(1 + z), so p = (x, y) / √(1 + z).
+    let p = Vec2::new(v.x, v.y) / (1.0 + v.z.max(0.0)).sqrt();
+    uniform_disk_to_square_concentric(p)
+}
+
 /// Cosine-weighted hemisphere around +z.
 #[inline]
 pub fn square_to_cosine_hemisphere(u: Vec2) -> Vec3 {
