@@ -191,14 +191,7 @@ impl EmitterSampler {
             }
             let wi = d / dist;
             let cos_light = -wi.dot(ng);
-            let uv = match &m.uvs {
-                Some(uvs) => {
-                    b[0] * uvs[t[0] as usize]
-                        + b[1] * uvs[t[1] as usize]
-                        + b[2] * uvs[t[2] as usize]
-                }
-                None => Vec2::ZERO,
-            };
+            let uv = m.uv_at(et.tri, b);
             let le = scene.materials[m.material].emission_at(&scene.textures, uv, cos_light > 0.0);
             if le == Rgb::ZERO || cos_light == 0.0 {
                 return None;

@@ -202,14 +202,11 @@ fn cache_is_identical_for_any_thread_count_and_reads_back() {
 /// up to its stored map's threshold: relative L2 error ≤ τ √(dropped coefficients).
 #[test]
 fn root_projected_area_is_the_sum_over_surfels() {
-    use wpbgi::haar::square_to_direction;
     let b = run(&cbox());
     let p = b.projected.reconstruct(&b.tree, 0).expect("root").inverse();
-    let n = 8;
-    let exact: Vec<f32> = (0..n * n)
-        .map(|t| {
-            let c = glam::Vec2::new((t % n) as f32 + 0.5, (t / n) as f32 + 0.5) / n as f32;
-            let w = square_to_direction(c);
+    let exact: Vec<f32> = wpbgi::haar::texel_directions(3)
+        .iter()
+        .map(|&w| {
             b.surfels
                 .iter()
                 .map(|s| (s.area as f64 * s.n.dot(w).abs() as f64) as f32)

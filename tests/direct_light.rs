@@ -8,7 +8,9 @@ use wpbgi::bake::{DirectLight, Surfel};
 use wpbgi::bsdf::{Bsdf, Diffuse, Distribution, Microfacet, RoughConductor, TransportMode};
 use wpbgi::emitters::EmitterSampler;
 use wpbgi::geometry::frame::Frame;
-use wpbgi::haar::{direction_to_square, square_to_direction, texel_of, Haar2d, SparseHaar};
+use wpbgi::haar::{
+    direction_to_square, square_to_direction, texel_centre, texel_of, Haar2d, SparseHaar,
+};
 use wpbgi::scene::{Emission, Material, Mesh, Scattering, Scene};
 use wpbgi::spectrum::Rgb;
 
@@ -95,6 +97,21 @@ fn facing_origin(mut poly: Vec<Vec3>) -> Vec<Vec3> {
     poly
 }
 
+/// Run `f` with direct lighting of `sc` (no light tree) at `samples` samples per surfel.
+fn with_direct<R>(sc: &Scene, samples: u32, seed: u64, f: impl FnOnce(&DirectLight) -> R) -> R {
+    let accel = Accel::build(sc);
+    let emitters = EmitterSampler::new(sc);
+    f(&DirectLight {
+        scene: sc,
+        accel: &accel,
+        emitters: &emitters,
+        samples,
+        seed,
+        light_tree: None,
+        max_cut: 1000,
+    })
+}
+
 fn irradiance(poly: &[Vec3], samples: u32) -> f32 {
     let sc = scene(
         poly,
@@ -102,18 +119,7 @@ fn irradiance(poly: &[Vec3], samples: u32) -> f32 {
             reflectance: Rgb::splat(0.5),
         }),
     );
-    let accel = Accel::build(&sc);
-    let emitters = EmitterSampler::new(&sc);
-    let d = DirectLight {
-        scene: &sc,
-        accel: &accel,
-        emitters: &emitters,
-        samples,
-        seed: 7,
-        light_tree: None,
-        max_cut: 1000,
-    };
-    d.irradiance(&surfel(), 0).x
+    with_direct(&sc, samples, 7, |d| d.irradiance(&surfel(), 0).x)
 }
 
 #[test]
@@ -175,22 +181,13 @@ fn rough_conductor_surfel_under_a_small_light() {
         .collect();
     let square = facing_origin(square);
     let sc = scene(&square, bsdf);
-    let accel = Accel::build(&sc);
-    let emitters = EmitterSampler::new(&sc);
-    let d = DirectLight {
-        scene: &sc,
-        accel: &accel,
-        emitters: &emitters,
-        samples: 1024,
-        seed: 3,
-        light_tree: None,
-        max_cut: 1000,
-    };
     let n = 64u32;
-    let map = d.radiance_map(&surfel(), 0, &bsdf, n);
+    let map = with_direct(&sc, 1024, 3, |d| {
+        d.radiance_map(&surfel(), 0, &bsdf, n.trailing_zeros())
+    });
     let mirror = Vec3::new(-dir.x, -dir.y, dir.z);
     let (tx, ty) = texel_of(mirror, n);
-    let centre = square_to_direction(Vec2::new(tx as f32 + 0.5, ty as f32 + 0.5) / n as f32);
+    let centre = square_to_direction(texel_centre(ty * n + tx, n));
     // The expected value: f(centre, ω) |cos| Lₑ integrated over the light's area.
     let m = 64;
     let mut expected = 0.0f64;

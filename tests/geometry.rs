@@ -255,7 +255,9 @@ fn furnace_is_exact_at_every_scene_scale() {
         images.push(out.mean);
     }
     // The same sample sequences meet the same (scaled) geometry, so the images agree up to the
-    // rounding of scaled coordinates, which moves a few paths: per pixel within 1 %.
+    // rounding of scaled coordinates. Measured: at most 1.8e-6 relative per pixel (scale 1 vs
+    // 1e-3) and 6.3e-7 (1e4 vs 1e-3); the 1 % bound is loose (it guards against lost paths,
+    // which cost a whole bounce, ≥ 6 %).
     for (img, scale) in images.iter().zip(SCALES).skip(1) {
         for (a, b) in img.pixels.iter().zip(&images[0].pixels) {
             assert!(

@@ -1,8 +1,11 @@
 //! The Haar transform and the equal-area octahedral map (spec §4.2, DESIGN.md §5.3).
 
 use glam::{DVec2, Vec2, Vec3};
+use wpbgi::geometry::warp::square_to_uniform_sphere;
 use wpbgi::haar::sphere_map::square_to_direction_f64;
-use wpbgi::haar::{direction_to_square, square_to_direction, texel_of, Haar2d, SparseHaar};
+use wpbgi::haar::{
+    direction_to_square, square_to_direction, texel_directions, texel_of, Haar2d, SparseHaar,
+};
 use wpbgi::sampler::Sampler;
 
 fn random_image(n: usize, seed: u64) -> Vec<Vec3> {
@@ -149,12 +152,8 @@ fn uniform_directions_fill_texels_uniformly() {
     let (n, draws) = (16u32, 1_000_000u64);
     let mut counts = vec![0u64; (n * n) as usize];
     for i in 0..draws {
-        let mut s = Sampler::new(14, i, 0);
-        let u = s.next_2d();
-        let z = 1.0 - 2.0 * u.y;
-        let r = (1.0 - z * z).max(0.0).sqrt();
-        let (sn, cs) = (std::f32::consts::TAU * u.x).sin_cos();
-        let (x, y) = texel_of(Vec3::new(r * cs, r * sn, z), n);
+        let w = square_to_uniform_sphere(Sampler::new(14, i, 0).next_2d());
+        let (x, y) = texel_of(w, n);
         counts[(y * n + x) as usize] += 1;
     }
     let e = draws as f64 / (n * n) as f64;
@@ -167,13 +166,9 @@ fn uniform_directions_fill_texels_uniformly() {
 /// with one sharp peak.
 fn lobe_image(n: usize) -> Vec<Vec3> {
     let axis = Vec3::new(0.3, -0.2, 0.93).normalize();
-    (0..n * n)
-        .map(|k| {
-            let c = Vec2::new(
-                ((k % n) as f32 + 0.5) / n as f32,
-                ((k / n) as f32 + 0.5) / n as f32,
-            );
-            let w = square_to_direction(c);
+    texel_directions(n.trailing_zeros())
+        .iter()
+        .map(|w| {
             let cos = w.dot(axis).max(0.0);
             Vec3::new(1.0, 0.8, 0.5) * (0.2 * cos + 5.0 * cos.powi(200))
         })

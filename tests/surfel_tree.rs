@@ -2,7 +2,7 @@
 
 use glam::{Vec2, Vec3};
 use wpbgi::bake::{encode, Surfel, SurfelTree};
-use wpbgi::haar::{square_to_direction, Haar2d, SparseHaar};
+use wpbgi::haar::{texel_directions, Haar2d, SparseHaar};
 use wpbgi::sampler::Sampler;
 use wpbgi::spectrum::Rgb;
 
@@ -33,10 +33,9 @@ const N: usize = 8;
 /// surfel.
 fn texels(s: &Surfel, i: u32) -> Vec<Rgb> {
     let lobe = Vec3::new((i as f32 * 0.37).sin(), (i as f32 * 0.91).cos(), 1.0).normalize();
-    (0..N * N)
-        .map(|t| {
-            let c = Vec2::new((t % N) as f32 + 0.5, (t / N) as f32 + 0.5) / N as f32;
-            let w = square_to_direction(c);
+    texel_directions(N.trailing_zeros())
+        .iter()
+        .map(|&w| {
             let l =
                 Rgb::new(0.5, 0.4, 0.3) + Rgb::new(2.0, 1.5, 1.0) * w.dot(lobe).max(0.0).powi(8);
             l * (s.area * s.n.dot(w).max(0.0))

@@ -9,6 +9,7 @@ use glam::{Vec2, Vec3};
 use std::path::Path;
 use wpbgi::bsdf::fresnel::fresnel_dielectric;
 use wpbgi::bsdf::{Bsdf, Distribution, Lobe, Microfacet, ThinDielectric, TransportMode};
+use wpbgi::geometry::warp::square_to_uniform_sphere;
 use wpbgi::sampler::Sampler;
 use wpbgi::scene::Scene;
 use wpbgi::spectrum::Rgb;
@@ -94,11 +95,7 @@ fn smooth_limit_reflects_like_a_slab() {
 }
 
 fn random_direction(s: &mut Sampler) -> Vec3 {
-    let u = s.next_2d();
-    let z = 1.0 - 2.0 * u.y;
-    let r = (1.0 - z * z).max(0.0).sqrt();
-    let (sn, cs) = (std::f32::consts::TAU * u.x).sin_cos();
-    Vec3::new(r * cs, r * sn, z)
+    square_to_uniform_sphere(s.next_2d())
 }
 
 #[test]

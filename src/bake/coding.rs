@@ -39,7 +39,6 @@ impl<T> Default for NodeCoding<T> {
 #[derive(Clone, Debug, PartialEq)]
 pub struct CodedTree<T> {
     pub split_level: u32,
-    pub tau: f32,
     pub nodes: Vec<NodeCoding<T>>,
 }
 
@@ -59,11 +58,7 @@ pub fn encode<T: Coefficient + Send + Sync>(
             nodes[i as usize] = c;
         }
     }
-    CodedTree {
-        split_level,
-        tau,
-        nodes,
-    }
+    CodedTree { split_level, nodes }
 }
 
 /// Returns the uncompressed G of node `j`, appending what the subtree stores to `out`.

@@ -18,11 +18,11 @@ use crate::bsdf::{Bsdf, TransportMode};
 use crate::emitters::{EmitterSample, EmitterSampler};
 use crate::geometry::frame::Frame;
 use crate::geometry::offset::{interpolate_with_error, offset_origin};
-use crate::haar::square_to_direction;
+use crate::haar::texel_directions;
 use crate::sampler::{sobol02, Sampler};
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
-use glam::{Vec2, Vec3, Vec3A};
+use glam::{Vec3, Vec3A};
 
 /// What direct lighting needs of a scene.
 pub struct DirectLight<'a> {
@@ -107,18 +107,18 @@ impl DirectLight<'_> {
     }
 
     /// Outgoing radiance of surfel `id` with BSDF `bsdf` at the centre of every texel of the
-    /// `n × n` octahedral map (row-major), over the whole sphere.
-    pub fn radiance_map(&self, s: &Surfel, id: u64, bsdf: &Bsdf, n: u32) -> Vec<Rgb> {
+    /// `2^levels × 2^levels` octahedral map (row-major), over the whole sphere.
+    pub fn radiance_map(&self, s: &Surfel, id: u64, bsdf: &Bsdf, levels: u32) -> Vec<Rgb> {
         let frame = Frame::from_normal(s.n);
         let arrivals: Vec<(Vec3, Rgb)> = self
             .arrivals(s, id)
             .into_iter()
             .map(|a| (frame.to_local(a.wi), a.value))
             .collect();
-        (0..n * n)
-            .map(|t| {
-                let c = Vec2::new((t % n) as f32 + 0.5, (t / n) as f32 + 0.5) / n as f32;
-                let wo = frame.to_local(square_to_direction(c));
+        texel_directions(levels)
+            .iter()
+            .map(|w| {
+                let wo = frame.to_local(*w);
                 arrivals
                     .iter()
                     .map(|(wi, value)| bsdf.eval(wo, *wi, TransportMode::Radiance) * *value)

@@ -268,20 +268,10 @@ fn cos_bound(frame: &Frame, p: Vec3, lo: Vec3, hi: Vec3) -> f32 {
     if lhi.z <= 0.0 {
         return 0.0;
     }
-    let dx = if llo.x > 0.0 {
-        llo.x
-    } else if lhi.x < 0.0 {
-        -lhi.x
-    } else {
-        0.0
-    };
-    let dy = if llo.y > 0.0 {
-        llo.y
-    } else if lhi.y < 0.0 {
-        -lhi.y
-    } else {
-        0.0
-    };
+    // Distance from 0 to the interval [lo, hi] on each tangent axis (0 when it contains 0):
+    // the same as the box's distance to the origin, which `dist2_bound` computes in 3D.
+    let gap = (llo.max(-lhi)).max(Vec3::ZERO);
+    let (dx, dy) = (gap.x, gap.y);
     let r2 = dx * dx + dy * dy;
     if r2 == 0.0 {
         1.0

@@ -15,10 +15,9 @@ use crate::accel::Accel;
 use crate::bsdf::Bsdf;
 use crate::emitters::EmitterSampler;
 use crate::error::{Error, Result};
-use crate::haar::{square_to_direction, Haar2d, SparseHaar};
+use crate::haar::{texel_directions, Haar2d, SparseHaar};
 use crate::scene::{LightKind, Scene};
 use crate::spectrum::Rgb;
-use glam::Vec2;
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -225,20 +224,6 @@ pub fn bake(scene: &Scene, settings: &BakeSettings, progress: Progress) -> Resul
     })
 }
 
-/// The texture coordinate of a surfel.
-fn surfel_uv(scene: &Scene, s: &Surfel) -> Vec2 {
-    let m = &scene.meshes[s.mesh as usize];
-    match &m.uvs {
-        Some(uv) => {
-            let t = m.triangles[s.triangle as usize];
-            uv[t[0] as usize] * (1.0 - s.b.x - s.b.y)
-                + uv[t[1] as usize] * s.b.x
-                + uv[t[2] as usize] * s.b.y
-        }
-        None => Vec2::ZERO,
-    }
-}
-
 /// Direct light (plus emission, for emitting surfels) leaving surfel `s`.
 fn surfel_radiance(
     scene: &Scene,
@@ -248,7 +233,7 @@ fn surfel_radiance(
     tau: f32,
 ) -> SurfelRadiance {
     let material = &scene.materials[scene.meshes[s.mesh as usize].material];
-    let uv = surfel_uv(scene, s);
+    let uv = scene.meshes[s.mesh as usize].uv_at(s.triangle, [1.0 - s.b.x - s.b.y, s.b.x, s.b.y]);
     let bsdf = material.bsdf_at(&scene.textures, uv);
     // Emission leaves the front face (both faces for two-sided emitters are not separate
     // surfels: the front is what a surfel stands for).
@@ -259,19 +244,17 @@ fn surfel_radiance(
             SurfelRadiance::Rgb(d.reflectance * e * std::f32::consts::FRAC_1_PI + emitted)
         }
         (levels, _) => {
-            let n = 1u32 << levels.unwrap_or(3);
-            let mut texels = direct.radiance_map(s, id, &bsdf, n);
+            let levels = levels.unwrap_or(3);
+            let mut texels = direct.radiance_map(s, id, &bsdf, levels);
             if emitted != Rgb::ZERO {
-                for (t, v) in texels.iter_mut().enumerate() {
-                    let c = Vec2::new((t as u32 % n) as f32 + 0.5, (t as u32 / n) as f32 + 0.5)
-                        / n as f32;
-                    if square_to_direction(c).dot(s.n) > 0.0 {
+                for (v, w) in texels.iter_mut().zip(texel_directions(levels)) {
+                    if w.dot(s.n) > 0.0 {
                         *v += emitted;
                     }
                 }
             }
             SurfelRadiance::Map(SparseHaar::compress(
-                &Haar2d::forward(&texels, n as usize),
+                &Haar2d::forward(&texels, 1 << levels),
                 tau,
             ))
         }
@@ -280,18 +263,17 @@ fn surfel_radiance(
 
 /// A surfel's radiant intensity A |n·ω| L(ω) as a map at `levels`.
 pub fn intensity_map(s: &Surfel, r: &SurfelRadiance, levels: u32) -> Haar2d<Rgb> {
-    let (n, radiance): (u32, Vec<Rgb>) = match r {
+    let (own, radiance): (u32, Vec<Rgb>) = match r {
         // Diffuse radiance is constant, so its intensity is a cosine lobe: 8² resolves it as
         // well as the tree's maps can.
-        SurfelRadiance::Rgb(c) => (8, vec![*c; 64]),
-        SurfelRadiance::Map(m) => (1 << m.levels(), m.to_dense().inverse()),
+        SurfelRadiance::Rgb(c) => (3, vec![*c; 64]),
+        SurfelRadiance::Map(m) => (m.levels(), m.to_dense().inverse()),
     };
     let texels: Vec<Rgb> = radiance
         .iter()
-        .enumerate()
-        .map(|(t, l)| {
-            let c = Vec2::new((t as u32 % n) as f32 + 0.5, (t as u32 / n) as f32 + 0.5) / n as f32;
-            let cos = square_to_direction(c).dot(s.n);
+        .zip(texel_directions(own))
+        .map(|(l, w)| {
+            let cos = w.dot(s.n);
             // Diffuse surfels radiate from the front only; maps carry their own lower half.
             let projected = match r {
                 SurfelRadiance::Rgb(_) => cos.max(0.0),
@@ -300,7 +282,7 @@ pub fn intensity_map(s: &Surfel, r: &SurfelRadiance, levels: u32) -> Haar2d<Rgb>
             *l * (s.area * projected)
         })
         .collect();
-    Haar2d::forward(&texels, n as usize).refined_to(levels.max(n.trailing_zeros()))
+    Haar2d::forward(&texels, 1 << own).refined_to(levels.max(own))
 }
 
 /// The resolution of projected-area maps: P(ω) is a sum of clamped cosines, smooth enough for
@@ -310,12 +292,9 @@ pub const PROJECTED_AREA_LEVELS: u32 = 3;
 /// A surfel's projected area A |n·ω| on the 8 × 8 map. Both sides count: a disc occludes from
 /// behind as from the front (its radiance there, I/P, is simply what it emits backwards).
 pub fn projected_area_map(s: &Surfel) -> Haar2d<f32> {
-    let n = 1u32 << PROJECTED_AREA_LEVELS;
-    let texels: Vec<f32> = (0..n * n)
-        .map(|t| {
-            let c = Vec2::new((t % n) as f32 + 0.5, (t / n) as f32 + 0.5) / n as f32;
-            s.area * square_to_direction(c).dot(s.n).abs()
-        })
+    let texels: Vec<f32> = texel_directions(PROJECTED_AREA_LEVELS)
+        .iter()
+        .map(|w| s.area * w.dot(s.n).abs())
         .collect();
-    Haar2d::forward(&texels, n as usize)
+    Haar2d::forward(&texels, 1 << PROJECTED_AREA_LEVELS)
 }

@@ -42,8 +42,6 @@ pub struct Plan {
     /// Resolution of the tree's directional maps: the finest any material needs, and 3 (8²,
     /// enough for the cosine lobes of diffuse surfels) at least.
     pub map_levels: u32,
-    /// Whether any surface transmits (two-hemisphere functions needed).
-    pub transmission: bool,
     pub json: Value,
 }
 
@@ -112,7 +110,6 @@ impl Plan {
         });
         Plan {
             map_levels: finest,
-            transmission,
             json,
         }
     }

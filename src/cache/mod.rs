@@ -297,16 +297,28 @@ impl Cache {
             }
             at = offset + length;
         }
-        if expected_hash.is_some_and(|h| h != hash) {
-            return Err(CacheError::Stale { path: p() });
-        }
-        Ok(Cache {
+        let cache = Cache {
             path: path.to_path_buf(),
             version,
             hash,
             sections,
             bytes,
-        })
+        };
+        if let Some(h) = expected_hash {
+            cache.check_fresh(h)?;
+        }
+        Ok(cache)
+    }
+
+    /// Refuse the cache as stale unless it was baked from content with hash `expected`.
+    pub fn check_fresh(&self, expected: [u8; 16]) -> Result<(), CacheError> {
+        if self.hash == expected {
+            Ok(())
+        } else {
+            Err(CacheError::Stale {
+                path: self.path.clone(),
+            })
+        }
     }
 
     /// The bytes of the section `name` (aligned to [`ALIGNMENT`] within the file).

@@ -12,6 +12,8 @@ use crate::geometry::frame::Frame;
 use crate::geometry::warp::{hemisphere_equal_area_to_square, square_to_hemisphere_equal_area};
 use crate::spectrum::Rgb;
 use glam::{Vec2, Vec3};
+use std::collections::HashMap;
+use std::sync::{Arc, Mutex, OnceLock};
 
 /// A receiver's microbuffer.
 #[derive(Clone, Debug)]
@@ -26,9 +28,37 @@ pub struct Microbuffer {
     pub depth: Vec<f32>,
     /// Splats waiting for [`Microbuffer::resolve`]: pixel, distance, coverage, radiance.
     pending: Vec<(u32, f32, f32, Rgb)>,
-    /// Per pixel of one hemisphere: its mean |cos θ| over its centre's |cos θ| (see
-    /// [`cosine_weights`]).
+    /// Directions and cosine weights of this size of grid, shared by every buffer of it.
+    grid: Arc<PixelGrid>,
+}
+
+/// What every microbuffer of one size shares: its upper-hemisphere pixel-centre directions
+/// (local frame) and each pixel's cosine weight (see [`cosine_weights`]). Built once per size,
+/// so a receiver costs no trigonometry beyond its own splats.
+#[derive(Debug)]
+struct PixelGrid {
+    directions: Vec<Vec3>,
     cos_weight: Vec<f32>,
+}
+
+fn pixel_grid(n: u32) -> Arc<PixelGrid> {
+    static GRIDS: OnceLock<Mutex<HashMap<u32, Arc<PixelGrid>>>> = OnceLock::new();
+    let grids = GRIDS.get_or_init(Default::default);
+    let mut grids = grids.lock().unwrap_or_else(|e| e.into_inner());
+    grids
+        .entry(n)
+        .or_insert_with(|| {
+            Arc::new(PixelGrid {
+                directions: (0..n * n)
+                    .map(|i| {
+                        let c = Vec2::new((i % n) as f32 + 0.5, (i / n) as f32 + 0.5) / n as f32;
+                        square_to_hemisphere_equal_area(c)
+                    })
+                    .collect(),
+                cos_weight: cosine_weights(n),
+            })
+        })
+        .clone()
 }
 
 /// For each pixel of the n × n equal-area grid (n even), the ratio of its exact mean cos θ to
@@ -78,7 +108,7 @@ impl Microbuffer {
             radiance: vec![Rgb::ZERO; count],
             depth: vec![f32::INFINITY; count],
             pending: Vec::new(),
-            cos_weight: cosine_weights(n),
+            grid: pixel_grid(n),
         }
     }
 
@@ -105,10 +135,8 @@ impl Microbuffer {
     /// The local direction at the centre of pixel `k`.
     pub fn local_direction(&self, k: usize) -> Vec3 {
         let nn = (self.n * self.n) as usize;
-        let (half, i) = (k / nn, (k % nn) as u32);
-        let c = Vec2::new((i % self.n) as f32 + 0.5, (i / self.n) as f32 + 0.5) / self.n as f32;
-        let v = square_to_hemisphere_equal_area(c);
-        if half == 1 {
+        let v = self.grid.directions[k % nn];
+        if k >= nn {
             Vec3::new(v.x, v.y, -v.z)
         } else {
             v
@@ -191,7 +219,7 @@ impl Microbuffer {
             .enumerate()
             .filter(|(_, l)| **l != Rgb::ZERO)
             .map(|(k, l)| {
-                let w = self.cos_weight[k % (self.n * self.n) as usize];
+                let w = self.grid.cos_weight[k % (self.n * self.n) as usize];
                 *l * bsdf.eval(wo, self.local_direction(k), TransportMode::Radiance) * w
             })
             .fold(Rgb::ZERO, |a, b| a + b)

@@ -62,6 +62,15 @@ pub fn hemisphere_equal_area_to_square(v: Vec3) -> Vec2 {
     uniform_disk_to_square_concentric(p)
 }
 
+/// Uniform direction on the sphere (Archimedes: z uniform in [−1, 1]).
+#[inline]
+pub fn square_to_uniform_sphere(u: Vec2) -> Vec3 {
+    let z = 1.0 - 2.0 * u.y;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    let (s, c) = (std::f32::consts::TAU * u.x).sin_cos();
+    Vec3::new(r * c, r * s, z)
+}
+
 /// Cosine-weighted hemisphere around +z.
 #[inline]
 pub fn square_to_cosine_hemisphere(u: Vec2) -> Vec3 {

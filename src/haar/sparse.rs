@@ -11,7 +11,7 @@
 //! factor scales the kept set's coefficients by the same factor and keeps the same set. The
 //! dropped energy bounds the error: ‖f − f̃‖₂ ≤ tau · ‖f‖₂ · √(dropped coefficients), per channel.
 
-use super::transform::{detail_index, Coefficient, Details, Haar2d};
+use super::transform::{detail_index, detail_value, locate, Coefficient, Details, Haar2d};
 
 const NONE: u32 = u32::MAX;
 
@@ -87,16 +87,10 @@ impl<T: Coefficient> SparseHaar<T> {
         let mut node = if self.nodes.is_empty() { NONE } else { 0 };
         let mut l = 0;
         while node != NONE {
-            let cells = 1u32 << l;
-            let hx = ((x * 2.0 * cells as f32) as u32).min(2 * cells - 1);
-            let hy = ((y * 2.0 * cells as f32) as u32).min(2 * cells - 1);
-            let sx = if hx & 1 == 0 { 1.0 } else { -1.0 };
-            let sy = if hy & 1 == 0 { 1.0 } else { -1.0 };
+            let (_, _, quadrant) = locate(x, y, l);
             let n = &self.nodes[node as usize];
-            let [dx, dy, dxy] = n.details;
-            value = value + (dx * sx + dy * sy + dxy * (sx * sy)) * cells as f32;
-            // The quadrant one level finer: the half-cell parities at this level.
-            node = n.children[((hx & 1) + 2 * (hy & 1)) as usize];
+            value = value + detail_value(n.details, quadrant, l);
+            node = n.children[quadrant];
             l += 1;
         }
         value

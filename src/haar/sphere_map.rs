@@ -9,6 +9,7 @@
 
 use glam::{DVec2, DVec3, Vec2, Vec3};
 use std::f64::consts::FRAC_PI_4;
+use std::sync::OnceLock;
 
 /// The point of [0, 1]² for the unit direction `w` (any length > 0 is accepted).
 pub fn direction_to_square(w: Vec3) -> Vec2 {
@@ -53,6 +54,32 @@ pub fn square_to_direction_f64(p: DVec2) -> DVec3 {
     let s = r * (2.0 - r * r).max(0.0).sqrt();
     let (sin, cos) = phi.sin_cos();
     DVec3::new((cos * s).copysign(q.x), (sin * s).copysign(q.y), z)
+}
+
+/// The centre of texel `t` (row-major) of an `n × n` grid over the unit square.
+#[inline]
+pub fn texel_centre(t: u32, n: u32) -> Vec2 {
+    Vec2::new((t % n) as f32 + 0.5, (t / n) as f32 + 0.5) / n as f32
+}
+
+/// Finest map resolution with a shared direction table.
+pub const MAX_TABLE_LEVELS: u32 = 10;
+
+/// The directions of the texel centres of the `2^levels × 2^levels` map (row-major), computed
+/// once per resolution and shared: every surfel of a bake needs the same ones.
+pub fn texel_directions(levels: u32) -> &'static [Vec3] {
+    static TABLES: [OnceLock<Vec<Vec3>>; MAX_TABLE_LEVELS as usize + 1] =
+        [const { OnceLock::new() }; MAX_TABLE_LEVELS as usize + 1];
+    assert!(
+        levels <= MAX_TABLE_LEVELS,
+        "map resolution 2^{levels} is beyond the tables"
+    );
+    TABLES[levels as usize].get_or_init(|| {
+        let n = 1u32 << levels;
+        (0..n * n)
+            .map(|t| square_to_direction(texel_centre(t, n)))
+            .collect()
+    })
 }
 
 /// The texel `(x, y)` of an `n × n` grid that holds direction `w`.

@@ -80,6 +80,27 @@ pub struct Haar2d<T> {
     pub details: Vec<Details<T>>,
 }
 
+/// Where the point `(x, y)` of the unit square falls at level `l`: its cell `(i, j)`, and the
+/// quadrant of that cell (0 to 3, x varying first), which is also the child cell one level finer.
+#[inline]
+pub(crate) fn locate(x: f32, y: f32, l: u32) -> (u32, u32, usize) {
+    let cells = 1u32 << l;
+    // Position in units of half-cells at this level: the cell, and the half within it.
+    let hx = ((x * 2.0 * cells as f32) as u32).min(2 * cells - 1);
+    let hy = ((y * 2.0 * cells as f32) as u32).min(2 * cells - 1);
+    (hx >> 1, hy >> 1, ((hx & 1) + 2 * (hy & 1)) as usize)
+}
+
+/// The value of a level-`l` cell's three wavelets at a point in `quadrant` of the cell: each is
+/// ±2^l, + on the lower half of the cell in its varying coordinate.
+#[inline]
+pub(crate) fn detail_value<T: Coefficient>(d: Details<T>, quadrant: usize, l: u32) -> T {
+    let sx = if quadrant & 1 == 0 { 1.0 } else { -1.0 };
+    let sy = if quadrant & 2 == 0 { 1.0 } else { -1.0 };
+    let [dx, dy, dxy] = d;
+    (dx * sx + dy * sy + dxy * (sx * sy)) * (1u32 << l) as f32
+}
+
 /// Where the details of cell `(i, j)` (x, y) of level `l` are stored.
 #[inline]
 pub fn detail_index(l: u32, i: u32, j: u32) -> usize {
@@ -202,14 +223,8 @@ impl<T: Coefficient> Haar2d<T> {
     pub fn eval(&self, x: f32, y: f32) -> T {
         let mut value = self.scale;
         for l in 0..self.levels {
-            let cells = 1u32 << l;
-            // Position in units of half-cells at this level: the cell, and the half within it.
-            let hx = ((x * 2.0 * cells as f32) as u32).min(2 * cells - 1);
-            let hy = ((y * 2.0 * cells as f32) as u32).min(2 * cells - 1);
-            let sx = if hx & 1 == 0 { 1.0 } else { -1.0 };
-            let sy = if hy & 1 == 0 { 1.0 } else { -1.0 };
-            let [dx, dy, dxy] = self.details[detail_index(l, hx >> 1, hy >> 1)];
-            value = value + (dx * sx + dy * sy + dxy * (sx * sy)) * cells as f32;
+            let (i, j, quadrant) = locate(x, y, l);
+            value = value + detail_value(self.details[detail_index(l, i, j)], quadrant, l);
         }
         value
     }

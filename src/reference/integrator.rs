@@ -51,14 +51,7 @@ pub fn intersect(ctx: &RenderContext, o: Vec3, d: Vec3) -> Option<SurfaceHit> {
             .unwrap_or(ng),
         None => ng,
     };
-    let uv = match &m.uvs {
-        Some(uv) => {
-            hit.b[0] * uv[t[0] as usize]
-                + hit.b[1] * uv[t[1] as usize]
-                + hit.b[2] * uv[t[2] as usize]
-        }
-        None => Vec2::ZERO,
-    };
+    let uv = m.uv_at(hit.triangle, hit.b);
     Some(SurfaceHit {
         p: Vec3::from(p),
         err: Vec3::from(err),

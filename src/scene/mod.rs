@@ -28,6 +28,19 @@ pub struct Mesh {
     pub material: usize,
 }
 
+impl Mesh {
+    /// The texture coordinate at barycentric weights `b` of triangle `tri` ((0, 0) without UVs).
+    pub fn uv_at(&self, tri: u32, b: [f32; 3]) -> Vec2 {
+        match &self.uvs {
+            Some(uv) => {
+                let t = self.triangles[tri as usize];
+                b[0] * uv[t[0] as usize] + b[1] * uv[t[1] as usize] + b[2] * uv[t[2] as usize]
+            }
+            None => Vec2::ZERO,
+        }
+    }
+}
+
 /// Something the importer noticed and worked around.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Warning(pub String);

@@ -163,10 +163,13 @@ pub fn bake_command(a: BakeArgs) -> Result<()> {
         .collect::<serde_json::Map<_, _>>()
         .into();
     stats["seconds"]["write"] = json!(t.elapsed().as_secs_f64());
-    stats["peak_memory_bytes"] = json!(peak_memory());
+    let peak = peak_memory();
+    let per_surfel = bytes as f64 / baked.surfels.len().max(1) as f64;
+    let total = start.elapsed().as_secs_f64();
+    stats["peak_memory_bytes"] = json!(peak);
     stats["bytes"] = json!(bytes);
-    stats["bytes_per_surfel"] = json!(bytes as f64 / baked.surfels.len().max(1) as f64);
-    stats["total_seconds"] = json!(start.elapsed().as_secs_f64());
+    stats["bytes_per_surfel"] = json!(per_surfel);
+    stats["total_seconds"] = json!(total);
     if a.json {
         emit_json(json!({"event": "done", "output": a.output, "stats": stats}));
     } else {
@@ -177,9 +180,9 @@ pub fn bake_command(a: BakeArgs) -> Result<()> {
             baked.tree.nodes.len(),
             coefficients,
             bytes,
-            bytes as f64 / baked.surfels.len().max(1) as f64,
-            start.elapsed().as_secs_f64(),
-            peak_memory().map_or(String::new(), |b| format!(", peak memory {} MB", b / 1_000_000)),
+            per_surfel,
+            total,
+            peak.map_or(String::new(), |b| format!(", peak memory {} MB", b / 1_000_000)),
         );
         for (stage, secs) in &baked.timings {
             eprintln!("  {stage}: {secs:.2} s");
@@ -189,16 +192,13 @@ pub fn bake_command(a: BakeArgs) -> Result<()> {
 }
 
 pub fn inspect_command(a: InspectArgs) -> Result<()> {
-    let expected = match &a.scene {
-        Some(p) => {
-            // The settings live in the cache: read them unchecked first, then check the hash.
-            let unchecked = BakedCache::read(&a.cache, None)?;
-            let scene = Scene::load(p)?;
-            Some(bake_hash(&scene, &unchecked.plan["settings"]))
-        }
-        None => None,
-    };
-    let c = BakedCache::read(&a.cache, expected)?;
+    let c = BakedCache::read(&a.cache, None)?;
+    if let Some(p) = &a.scene {
+        // The settings the cache was baked with are in it: hash the scene with those.
+        let scene = Scene::load(p)?;
+        c.cache
+            .check_fresh(bake_hash(&scene, &c.plan["settings"]))?;
+    }
     let sections: Vec<Value> = c
         .cache
         .sections
