@@ -64,6 +64,9 @@ pub enum Error {
 
     #[error("cannot write {path}: {reason}")]
     Output { path: PathBuf, reason: String },
+
+    #[error(transparent)]
+    Cache(#[from] crate::cache::CacheError),
 }
 
 pub type Result<T, E = Error> = std::result::Result<T, E>;

@@ -60,6 +60,66 @@ pub fn write_exr(path: &Path, img: &Image) -> Result<()> {
     })
 }
 
+/// Write a float32 OpenEXR file holding `beauty` as its R, G, B channels and each of `aovs` as
+/// `NAME.R`, `NAME.G`, `NAME.B` in the same part (the layered-channel convention compositing
+/// tools read as layers).
+pub fn write_exr_layers(path: &Path, beauty: &Image, aovs: &[(&str, &Image)]) -> Result<()> {
+    use exr::prelude::*;
+    let layers = std::iter::once(("", beauty)).chain(aovs.iter().copied());
+    let mut channels = SmallVec::<[AnyChannel<FlatSamples>; 4]>::new();
+    for (name, img) in layers {
+        if img.width != beauty.width || img.height != beauty.height {
+            return Err(output_error(path, format!("layer {name} has another size")));
+        }
+        if img.pixels.iter().any(|p| !p.is_finite()) {
+            return Err(output_error(
+                path,
+                format!("layer \"{name}\" holds NaN or infinite values (a bug: please report it)"),
+            ));
+        }
+        for (c, letter) in ["R", "G", "B"].iter().enumerate() {
+            let full = if name.is_empty() {
+                letter.to_string()
+            } else {
+                format!("{name}.{letter}")
+            };
+            let samples: Vec<f32> = img.pixels.iter().map(|p| p[c]).collect();
+            channels.push(AnyChannel::new(full.as_str(), FlatSamples::F32(samples)));
+        }
+    }
+    let size = (beauty.width as usize, beauty.height as usize);
+    let layer = Layer::new(
+        size,
+        LayerAttributes::default(),
+        Encoding::FAST_LOSSLESS,
+        AnyChannels::sort(channels),
+    );
+    write_atomically(path, |tmp| {
+        exr::prelude::Image::from_layer(layer)
+            .write()
+            .to_file(tmp)
+            .map_err(|e| e.to_string())
+    })
+}
+
+/// Mean squared error and relative MSE, the mean of (x − ref)² / (ref² + 0.01), over all
+/// pixels and channels; `None` when the sizes differ.
+pub fn error_against(img: &Image, reference: &Image) -> Option<(f64, f64)> {
+    if img.width != reference.width || img.height != reference.height {
+        return None;
+    }
+    let (mut mse, mut rel) = (0.0f64, 0.0f64);
+    for (a, b) in img.pixels.iter().zip(&reference.pixels) {
+        for c in 0..3 {
+            let (x, r) = (a[c] as f64, b[c] as f64);
+            mse += (x - r).powi(2);
+            rel += (x - r).powi(2) / (r * r + 0.01);
+        }
+    }
+    let n = 3.0 * img.pixels.len().max(1) as f64;
+    Some((mse / n, rel / n))
+}
+
 /// A linear value as an 8-bit sRGB code (clamped to [0, 1], no tone mapping).
 pub fn srgb8(c: f32) -> u8 {
     let c = c.clamp(0.0, 1.0);

@@ -35,6 +35,7 @@ pub mod geometry;
 pub mod haar;
 pub mod image;
 pub mod reference;
+pub mod render;
 pub mod sampler;
 pub mod scene;
 pub mod spectrum;

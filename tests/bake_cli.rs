@@ -1,4 +1,4 @@
-//! `wpbgi bake` and `wpbgi inspect` from the outside: byte-identical caches for any thread
+//! `wpbgi bake`, `inspect` and `render` from the outside: byte-identical caches for any thread
 //! count, a killed bake never damages the target, stale caches refused, inspect and PLY output.
 
 use std::path::{Path, PathBuf};
@@ -182,4 +182,56 @@ fn inspect_reports_and_refuses_stale_caches() {
     let out = wpbgi(&["inspect", broken.to_str().expect("utf-8")]);
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("corrupted"));
+}
+
+/// `wpbgi render` writes the beauty and the AOV layers, and refuses a cache baked from
+/// another version of the scene with one sentence.
+#[test]
+fn render_writes_layers_and_refuses_stale_caches() {
+    let d = dir("render");
+    let cache = d.join("scene.wpc");
+    let out = bake(&cache, "2", "2000");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let image = d.join("out.exr");
+    let render = |scene: &Path| {
+        wpbgi(&[
+            "render",
+            scene.to_str().expect("utf-8"),
+            "--cache",
+            cache.to_str().expect("utf-8"),
+            "-o",
+            image.to_str().expect("utf-8"),
+            "--size",
+            "24x24",
+            "--aov",
+            "all",
+        ])
+    };
+    let out = render(&scene());
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let beauty = wpbgi::image::read_exr(&image).expect("an EXR");
+    assert_eq!((beauty.width, beauty.height), (24, 24));
+    assert!(beauty.mean().max_element() > 0.0);
+    let bytes = std::fs::read(&image).expect("exr");
+    for layer in ["direct.R", "indirect.G", "albedo.B", "normal.R", "depth.R"] {
+        assert!(
+            bytes.windows(layer.len()).any(|w| w == layer.as_bytes()),
+            "no channel {layer}"
+        );
+    }
+    let changed = d.join("brighter.gltf");
+    let original = std::fs::read_to_string(scene()).expect("scene");
+    std::fs::write(&changed, original.replace("18.387", "18.5")).expect("write");
+    let out = render(&changed);
+    assert!(!out.status.success());
+    let msg = String::from_utf8_lossy(&out.stderr);
+    assert!(msg.contains("stale") && msg.lines().count() == 1, "{msg}");
 }

@@ -108,6 +108,10 @@ pub struct Baked {
     pub settings: BakeSettings,
     pub surfels: Vec<Surfel>,
     pub radiance: Vec<SurfelRadiance>,
+    /// The emitted radiance (front face) included in each surfel's `radiance`.
+    pub emitted: Vec<Rgb>,
+    /// Per mesh: whether it bounds a solid (see [`solid_meshes`]).
+    pub solid: Vec<bool>,
     pub tree: SurfelTree,
     /// Radiant intensity I(ω) of every node (RGB).
     pub coded: CodedTree<Rgb>,
@@ -170,7 +174,7 @@ pub fn bake(scene: &Scene, settings: &BakeSettings, progress: Progress) -> Resul
         max_cut: settings.max_cut.max(1),
     };
     let done = std::sync::atomic::AtomicUsize::new(0);
-    let radiance: Vec<SurfelRadiance> = surfels
+    let (radiance, emitted): (Vec<SurfelRadiance>, Vec<Rgb>) = surfels
         .par_iter()
         .enumerate()
         .map(|(i, s)| {
@@ -204,7 +208,11 @@ pub fn bake(scene: &Scene, settings: &BakeSettings, progress: Progress) -> Resul
         .fold(plan.map_levels, u32::max);
     plan.map_levels = levels;
     plan.json["map_resolution"] = (1u32 << levels).into();
-    let leaf = |i: u32| intensity_map(&surfels[i as usize], &radiance[i as usize], levels);
+    let solid = solid_meshes(scene);
+    let leaf = |i: u32| {
+        let s = &surfels[i as usize];
+        intensity_map(s, &radiance[i as usize], levels, !solid[s.mesh as usize])
+    };
     progress("coding", 0.0);
     let coded = encode(&tree, &leaf, eps, settings.tau);
     let area_leaf = |i: u32| projected_area_map(&surfels[i as usize]);
@@ -217,6 +225,8 @@ pub fn bake(scene: &Scene, settings: &BakeSettings, progress: Progress) -> Resul
         settings: settings.clone(),
         surfels,
         radiance,
+        emitted,
+        solid,
         tree,
         coded,
         projected,
@@ -224,21 +234,21 @@ pub fn bake(scene: &Scene, settings: &BakeSettings, progress: Progress) -> Resul
     })
 }
 
-/// Direct light (plus emission, for emitting surfels) leaving surfel `s`.
+/// Direct light plus emission leaving surfel `s`, and the emission alone.
 fn surfel_radiance(
     scene: &Scene,
     direct: &DirectLight,
     s: &Surfel,
     id: u64,
     tau: f32,
-) -> SurfelRadiance {
+) -> (SurfelRadiance, Rgb) {
     let material = &scene.materials[scene.meshes[s.mesh as usize].material];
     let uv = scene.meshes[s.mesh as usize].uv_at(s.triangle, [1.0 - s.b.x - s.b.y, s.b.x, s.b.y]);
     let bsdf = material.bsdf_at(&scene.textures, uv);
     // Emission leaves the front face (both faces for two-sided emitters are not separate
     // surfels: the front is what a surfel stands for).
     let emitted = material.emission_at(&scene.textures, uv, true);
-    match (map_levels(&bsdf), &bsdf) {
+    let radiance = match (map_levels(&bsdf), &bsdf) {
         (None, Bsdf::Diffuse(d)) => {
             let e = direct.irradiance(s, id);
             SurfelRadiance::Rgb(d.reflectance * e * std::f32::consts::FRAC_1_PI + emitted)
@@ -258,11 +268,30 @@ fn surfel_radiance(
                 tau,
             ))
         }
-    }
+    };
+    (radiance, emitted)
 }
 
-/// A surfel's radiant intensity A |n·ω| L(ω) as a map at `levels`.
-pub fn intensity_map(s: &Surfel, r: &SurfelRadiance, levels: u32) -> Haar2d<Rgb> {
+/// Per mesh: whether it bounds a solid (a `roughdielectric`: Mitsuba's dielectric is the
+/// interface of a solid). Light a surfel of a solid sends into it can reach only the solid's
+/// own surface before it crosses the surface again, so the tree, which everyone sees, holds
+/// only what such surfels send outwards (their maps keep both sides for their own solid).
+pub fn solid_meshes(scene: &Scene) -> Vec<bool> {
+    scene
+        .meshes
+        .iter()
+        .map(|m| {
+            matches!(
+                scene.materials[m.material].bsdf_at(&scene.textures, glam::Vec2::ZERO),
+                Bsdf::Dielectric(_)
+            )
+        })
+        .collect()
+}
+
+/// A surfel's radiant intensity A |n·ω| L(ω) as a map at `levels`; with `back` false, only
+/// towards the front hemisphere (see [`solid_meshes`]).
+pub fn intensity_map(s: &Surfel, r: &SurfelRadiance, levels: u32, back: bool) -> Haar2d<Rgb> {
     let (own, radiance): (u32, Vec<Rgb>) = match r {
         // Diffuse radiance is constant, so its intensity is a cosine lobe: 8² resolves it as
         // well as the tree's maps can.
@@ -276,8 +305,8 @@ pub fn intensity_map(s: &Surfel, r: &SurfelRadiance, levels: u32) -> Haar2d<Rgb>
             let cos = w.dot(s.n);
             // Diffuse surfels radiate from the front only; maps carry their own lower half.
             let projected = match r {
-                SurfelRadiance::Rgb(_) => cos.max(0.0),
-                SurfelRadiance::Map(_) => cos.abs(),
+                SurfelRadiance::Map(_) if back => cos.abs(),
+                _ => cos.max(0.0),
             };
             *l * (s.area * projected)
         })

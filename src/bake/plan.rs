@@ -10,12 +10,7 @@ use serde_json::{json, Value};
 /// α ≥ 0.5 → 8², ≥ 0.1 → 16², ≥ 0.03 → 32², smaller → 64² (DESIGN.md §5.4). `None` for a
 /// diffuse BSDF, whose surfels store RGB only.
 pub fn map_levels(bsdf: &Bsdf) -> Option<u32> {
-    let alpha = match bsdf {
-        Bsdf::Diffuse(_) => return None,
-        Bsdf::Conductor(b) => b.distr.alpha_u.min(b.distr.alpha_v),
-        Bsdf::Dielectric(b) => b.distr.alpha_u.min(b.distr.alpha_v),
-        Bsdf::ThinDielectric(b) => b.distr.alpha_u.min(b.distr.alpha_v),
-    };
+    let alpha = bsdf.alpha()?;
     Some(if alpha >= 0.5 {
         3
     } else if alpha >= 0.1 {

@@ -30,7 +30,19 @@ pub struct SurfelRecord {
     pub rgb: [f32; 3],
     /// Index into `map_index` of the surfel's directional map, or [`NO_MAP`].
     pub map: u32,
+    /// The emitted part of `rgb` and of the map (front face), so that a gather can tell
+    /// reflected light from emission, which the final render lights directly.
+    pub emitted: [f32; 3],
+    /// Bit 0 ([`SOLID`]): the surfel bounds a solid, whose inward light only the solid's own
+    /// surface sees (see [`crate::bake::pipeline::solid_meshes`]).
+    pub flags: u32,
 }
+
+/// [`SurfelRecord::flags`]: the surfel bounds a solid.
+pub const SOLID: u32 = 1;
+
+/// The layout of the bake's sections; caches of another layout are refused (bake again).
+pub const BAKE_FORMAT: u32 = 2;
 
 /// One tree node in the `nodes` section.
 #[repr(C)]
@@ -132,7 +144,12 @@ pub fn write(path: &Path, hash: [u8; 16], baked: &Baked, stats: Value) -> Result
         });
     }
     let mut surfels = Vec::with_capacity(baked.surfels.len());
-    for (s, r) in baked.surfels.iter().zip(&baked.radiance) {
+    for ((s, r), e) in baked
+        .surfels
+        .iter()
+        .zip(&baked.radiance)
+        .zip(&baked.emitted)
+    {
         let (rgb, map) = match r {
             SurfelRadiance::Rgb(c) => (*c, NO_MAP),
             SurfelRadiance::Map(m) => {
@@ -147,10 +164,17 @@ pub fn write(path: &Path, hash: [u8; 16], baked: &Baked, stats: Value) -> Result
             mesh: s.mesh,
             rgb: rgb.to_array(),
             map,
+            emitted: e.to_array(),
+            flags: if baked.solid[s.mesh as usize] {
+                SOLID
+            } else {
+                0
+            },
         });
     }
     let plan = json!({
         "format": "wpbgi bake",
+        "bake_format": BAKE_FORMAT,
         "crate_version": env!("CARGO_PKG_VERSION"),
         "settings": baked.settings.to_json(),
         "split_level": baked.coded.split_level,
@@ -189,6 +213,8 @@ pub struct BakedCache {
     pub plan: Value,
     pub surfels: Vec<SurfelRecord>,
     pub nodes: Vec<NodeRecord>,
+    /// Surfel indices in leaf order: node `j`'s surfels are `order[first .. first + count]`.
+    pub order: Vec<u32>,
 }
 
 impl BakedCache {
@@ -200,6 +226,12 @@ impl BakedCache {
         };
         let plan: Value = serde_json::from_slice(cache.section("plan")?)
             .map_err(|_| bad("the plan section is not JSON"))?;
+        if plan["bake_format"].as_u64() != Some(BAKE_FORMAT as u64) {
+            return Err(bad(&format!(
+                "it holds bake layout {} where this wpbgi reads {BAKE_FORMAT} (bake the scene again)",
+                plan["bake_format"]
+            )));
+        }
         let records = |name: &str, size: usize| -> Result<&[u8], CacheError> {
             let b = cache.section(name)?;
             if b.len() % size != 0 {
@@ -227,6 +259,13 @@ impl BakedCache {
                 return Err(bad("a tree node points outside the file"));
             }
         }
+        let order: Vec<u32> = records("order", 4)?
+            .chunks_exact(4)
+            .map(|b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+            .collect();
+        if order.len() != surfels.len() || order.iter().any(|&i| i as usize >= surfels.len()) {
+            return Err(bad("the leaf order does not list the surfels"));
+        }
         if surfels.iter().any(|s| !in_range(s.map, maps as usize)) {
             return Err(bad("a surfel points to a missing map"));
         }
@@ -235,6 +274,7 @@ impl BakedCache {
             plan,
             surfels,
             nodes,
+            order,
         })
     }
 

@@ -110,4 +110,36 @@ impl Bsdf {
     pub fn is_two_sided(&self) -> bool {
         matches!(self, Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_))
     }
+
+    /// The smaller microfacet roughness, or `None` for the diffuse BSDF.
+    pub fn alpha(&self) -> Option<f32> {
+        let d = match self {
+            Bsdf::Diffuse(_) => return None,
+            Bsdf::Conductor(b) => b.distr,
+            Bsdf::Dielectric(b) => b.distr,
+            Bsdf::ThinDielectric(b) => b.distr,
+        };
+        Some(d.alpha_u.min(d.alpha_v))
+    }
+
+    /// The directions a glossy lobe is centred on for light leaving along `wo` (local frame):
+    /// the mirror direction, and for transmitting BSDFs the straight or refracted one (`None`
+    /// under total internal reflection).
+    pub fn lobe_centres(&self, wo: Vec3) -> [Option<Vec3>; 2] {
+        let mirror = Some(Vec3::new(-wo.x, -wo.y, wo.z));
+        let through = match self {
+            Bsdf::Diffuse(_) | Bsdf::Conductor(_) => None,
+            Bsdf::ThinDielectric(_) => Some(-wo),
+            Bsdf::Dielectric(b) => {
+                // Snell through the macro normal, from wo's side.
+                let eta = if wo.z > 0.0 { b.eta } else { 1.0 / b.eta };
+                let sin2_t = (1.0 - wo.z * wo.z).max(0.0) / (eta * eta);
+                (sin2_t < 1.0).then(|| {
+                    let cos_t = (1.0 - sin2_t).sqrt().copysign(-wo.z);
+                    Vec3::new(-wo.x / eta, -wo.y / eta, cos_t).normalize()
+                })
+            }
+        };
+        [mirror, through]
+    }
 }

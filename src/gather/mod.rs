@@ -1,5 +1,10 @@
 //! The final gather from the cache (DESIGN.md §7, spec §2.3, §3, §7).
 
+pub mod cut;
+pub mod fpbgi;
 pub mod microbuffer;
+pub mod senders;
 
+pub use cut::{splat_cut, CutStats};
 pub use microbuffer::Microbuffer;
+pub use senders::Senders;

@@ -13,7 +13,7 @@
 
 mod integrator;
 
-pub use integrator::radiance;
+pub use integrator::{intersect, radiance, SurfaceHit};
 
 use crate::accel::Accel;
 use crate::emitters::EmitterSampler;

@@ -2,6 +2,7 @@
 //! and turns every error into one sentence and a non-zero exit code.
 
 mod bake_cmd;
+mod render_cmd;
 
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand};
@@ -15,6 +16,9 @@ use wpbgi::scene::{Camera, Scene};
 
 /// The Cornell box compiled into the binary for `wpbgi demo`.
 const DEMO_SCENE: &[u8] = include_bytes!("../../../scenes/cbox-rough.gltf");
+
+/// Mitsuba 3's render of it at 256², max_depth 3 (see scenes/README.md).
+const DEMO_REFERENCE: &[u8] = include_bytes!("../../../scenes/cbox-rough_d3_ref.exr");
 
 #[derive(Parser)]
 #[command(name = "wpbgi", version, about = "Noise-free global illumination for glTF scenes with Mitsuba's diffuse, roughconductor and roughdielectric materials.", long_about = None)]
@@ -31,7 +35,9 @@ enum Command {
     /// Path-trace the ground truth of a scene (unidirectional, next-event estimation with MIS,
     /// Russian roulette; Mitsuba `path` semantics) and write a float EXR.
     Reference(ReferenceArgs),
-    /// Render the bundled Cornell box (rough gold box, glass sphere) to DIR/demo.exr and DIR/demo.png.
+    /// The main job on the bundled Cornell box (rough gold box, glass sphere): bake it, render
+    /// it from the cache to DIR/demo.exr and DIR/demo.png, and print the times and the error
+    /// against Mitsuba 3's render of it.
     Demo(DemoArgs),
     /// Bake a scene's direct light into a cache: Poisson-disk surfels, their outgoing radiance
     /// (RGB for diffuse surfaces, Haar wavelets over directions otherwise), and the surfel tree
@@ -39,13 +45,18 @@ enum Command {
     Bake(bake_cmd::BakeArgs),
     /// Check a cache and print its header, plan, sections and statistics.
     Inspect(bake_cmd::InspectArgs),
+    /// Render the final image from a cache: primary hits and direct light by ray tracing,
+    /// indirect light gathered from the cache through microbuffers (FPBGI clusters by
+    /// default), glossy receivers through BSDF-refined buffers, mirrors and clear glass by
+    /// following their chains. Writes an EXR with optional AOV layers.
+    Render(render_cmd::RenderArgs),
 }
 
 #[derive(Args)]
-struct CameraArgs {
+pub(crate) struct CameraArgs {
     /// Image size as WIDTHxHEIGHT.
     #[arg(long, default_value = "512x512", value_parser = parse_size)]
-    size: (u32, u32),
+    pub(crate) size: (u32, u32),
     /// Use the scene camera with this name (default: the first camera, or an automatic framing).
     #[arg(long)]
     camera: Option<String>,
@@ -97,12 +108,6 @@ struct DemoArgs {
     /// Output folder.
     #[arg(short, long, default_value = "wpbgi-demo")]
     output: PathBuf,
-    /// Samples per pixel.
-    #[arg(long, default_value_t = 64)]
-    spp: u32,
-    /// Image size as WIDTHxHEIGHT.
-    #[arg(long, default_value = "256x256", value_parser = parse_size)]
-    size: (u32, u32),
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
@@ -152,7 +157,7 @@ fn run_render(scene: &Scene, camera: &Camera, settings: &RenderSettings) -> Resu
     Ok(out)
 }
 
-fn pick_camera(scene: &Scene, args: &CameraArgs) -> Result<Camera> {
+pub(crate) fn pick_camera(scene: &Scene, args: &CameraArgs) -> Result<Camera> {
     let (w, h) = args.size;
     if let (Some(eye), Some(target)) = (args.eye, args.target) {
         if !(args.fov > 0.0 && args.fov < 180.0) {
@@ -207,28 +212,52 @@ fn reference(a: ReferenceArgs) -> Result<()> {
 }
 
 fn demo(a: DemoArgs) -> Result<()> {
+    let start = std::time::Instant::now();
     std::fs::create_dir_all(&a.output)
         .with_context(|| format!("cannot create the folder {}", a.output.display()))?;
     let scene = Scene::from_gltf_bytes(Path::new("cbox-rough.gltf (bundled)"), DEMO_SCENE)?;
     warn(&scene);
-    let camera = scene.default_camera(a.size.0, a.size.1)?;
-    let settings = RenderSettings {
-        spp: a.spp,
-        max_depth: 8,
-        ..Default::default()
-    };
-    let out = run_render(&scene, &camera, &settings)?;
+    // Bake.
+    let settings = wpbgi::bake::BakeSettings::from_quality(wpbgi::bake::Quality::Draft);
+    let bar = progress_bar("baking");
+    let baked = wpbgi::bake::bake(&scene, &settings, &|_, f| {
+        bar.set_position((f * 1000.0) as u64)
+    })?;
+    bar.finish_and_clear();
+    let cache_path = a.output.join("demo.wpc");
+    let hash = wpbgi::bake::store::bake_hash(&scene, &settings.to_json());
+    wpbgi::bake::store::write(&cache_path, hash, &baked, serde_json::json!({}))?;
+    let bake_seconds = start.elapsed().as_secs_f64();
+    // Render from the cache.
+    let cache = render_cmd::open_fresh_cache(&scene, &cache_path)?;
+    let camera = scene.default_camera(256, 256)?;
+    let t = std::time::Instant::now();
+    let out = render_cmd::run_final(&scene, &cache, &camera, &Default::default())?;
+    let render_seconds = t.elapsed().as_secs_f64();
     let exr = a.output.join("demo.exr");
     let png = a.output.join("demo.png");
-    write_exr(&exr, &out.mean)?;
-    write_png(&png, &out.mean)?;
+    wpbgi::image::write_exr_layers(&exr, &out.beauty, &[])?;
+    write_png(&png, &out.beauty)?;
+    // Against Mitsuba 3's render of the same scene and light transport (max_depth 3: direct
+    // light and one bounce, which a direct-only cache holds).
+    let reference_path = a.output.join("mitsuba_reference.exr");
+    std::fs::write(&reference_path, DEMO_REFERENCE)
+        .with_context(|| format!("cannot write {}", reference_path.display()))?;
+    let reference = wpbgi::image::read_exr(&reference_path)?;
     eprintln!(
-        "wrote {} and {} ({} spp, max depth 8, {:.2} s)",
+        "wrote {} and {}: bake {:.2} s ({} surfels), render {:.2} s, total {:.2} s",
         exr.display(),
         png.display(),
-        out.spp,
-        out.seconds
+        bake_seconds,
+        baked.surfels.len(),
+        render_seconds,
+        start.elapsed().as_secs_f64()
     );
+    if let Some((mse, rel)) = wpbgi::image::error_against(&out.beauty, &reference) {
+        eprintln!(
+            "error against Mitsuba 3 (path tracing, max_depth 3, 8192 spp): MSE {mse:.3e}, relMSE {rel:.3e}"
+        );
+    }
     Ok(())
 }
 
@@ -250,6 +279,7 @@ fn main() {
         Command::Demo(a) => demo(a),
         Command::Bake(a) => bake_cmd::bake_command(a),
         Command::Inspect(a) => bake_cmd::inspect_command(a),
+        Command::Render(a) => render_cmd::render_command(a),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");

@@ -1,0 +1,150 @@
+//! The final render's figures against Mitsuba 3's references (256², max_depth 3):
+//!
+//! 1. Equal time: bake + render (FPBGI, the defaults), then our path tracer for the same wall
+//!    time; the relMSE and MSE of both.
+//! 2. FPBGI against plain PBGI on the same cache: gather time, nodes visited (the cut) and
+//!    splats (the rasterisation), and the relMSE between the two images.
+//! 3. Adaptive against uniform microbuffers for the glossy scene: error and gather time of
+//!    the adaptive 16² buffer and of uniform buffers of 16², 32², 64².
+//!
+//! `cargo run --release --example bench_render [-- SCENE_NAME]` (cbox-diffuse, cbox-rough or
+//! cbox-glossy from tests/data/mitsuba; default: all three for 1 and 2, glossy for 3).
+
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+use wpbgi::bake::store::{bake_hash, write, BakedCache};
+use wpbgi::bake::{bake, BakeSettings, Quality};
+use wpbgi::image::{error_against, read_exr};
+use wpbgi::reference::{render, RenderSettings};
+use wpbgi::render::{render_final, FinalOutput, FinalSettings, GatherMode};
+use wpbgi::scene::Scene;
+
+fn data(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/mitsuba")
+        .join(name)
+}
+
+fn gather_seconds(o: &FinalOutput) -> f64 {
+    o.timings
+        .iter()
+        .find(|(k, _)| *k == "gather")
+        .map_or(0.0, |(_, s)| *s)
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let only = std::env::args().nth(1);
+    let names: Vec<String> = match &only {
+        Some(n) => vec![n.clone()],
+        None => ["cbox-diffuse", "cbox-rough", "cbox-glossy"]
+            .map(String::from)
+            .to_vec(),
+    };
+    println!("threads: {}", rayon::current_num_threads());
+    for name in &names {
+        let scene = Scene::load(&data(&format!("{name}.gltf")))?;
+        let reference = read_exr(&data(&format!("{name}_d3_ref.exr")))?;
+        let camera = scene.default_camera(256, 256)?;
+        // 1. Bake + render against the path tracer at equal time.
+        let start = Instant::now();
+        let settings = BakeSettings::from_quality(Quality::Draft);
+        let baked = bake(&scene, &settings, &|_, _| {})?;
+        let path = std::env::temp_dir().join(format!("wpbgi-bench-{name}.wpc"));
+        write(
+            &path,
+            bake_hash(&scene, &settings.to_json()),
+            &baked,
+            serde_json::json!({}),
+        )?;
+        let bake_s = start.elapsed().as_secs_f64();
+        let cache = BakedCache::read(&path, None)?;
+        let depth3 = FinalSettings {
+            max_depth: 3,
+            ..Default::default()
+        };
+        let t = Instant::now();
+        let fast = render_final(&scene, &cache, &camera, &depth3, &|_, _| {})?;
+        let render_s = t.elapsed().as_secs_f64();
+        let total = start.elapsed().as_secs_f64();
+        let (mse, rel) = error_against(&fast.beauty, &reference).ok_or("size")?;
+        let pt = render(
+            &scene,
+            &camera,
+            &RenderSettings {
+                spp: 1,
+                max_depth: 3,
+                time_limit: Some(Duration::from_secs_f64(total)),
+                ..Default::default()
+            },
+            &|_| {},
+        )?;
+        let (pt_mse, pt_rel) = error_against(&pt.mean, &reference).ok_or("size")?;
+        println!(
+            "{name}: bake {bake_s:.2} s + render {render_s:.2} s = {total:.2} s: relMSE {rel:.3e}, MSE {mse:.3e}; \
+             path tracer in {:.2} s ({} spp): relMSE {pt_rel:.3e}, MSE {pt_mse:.3e} ({:.1}× our relMSE)",
+            pt.seconds,
+            pt.spp,
+            pt_rel / rel
+        );
+        // 2. FPBGI against PBGI.
+        let plain = render_final(
+            &scene,
+            &cache,
+            &camera,
+            &FinalSettings {
+                gather: GatherMode::Pbgi,
+                ..depth3.clone()
+            },
+            &|_, _| {},
+        )?;
+        let (_, between) = error_against(&fast.beauty, &plain.beauty).ok_or("size")?;
+        let (p, f) = (&plain.stats, &fast.stats);
+        let visited =
+            |s: &wpbgi::render::GatherStats| s.receiver_cut.visited + s.cluster_cut.visited;
+        let splats = |s: &wpbgi::render::GatherStats| s.receiver_cut.splats + s.cluster_cut.splats;
+        println!(
+            "  FPBGI vs PBGI: gather {:.2} s vs {:.2} s ({:.2}×); cut: {} vs {} nodes visited ({:.2}×); \
+             rasterisation: {} vs {} splats ({:.2}×); relMSE between {between:.2e}; {} of {} receivers in {} clusters",
+            gather_seconds(&fast),
+            gather_seconds(&plain),
+            gather_seconds(&plain) / gather_seconds(&fast),
+            visited(f),
+            visited(p),
+            visited(p) as f64 / visited(f) as f64,
+            splats(f),
+            splats(p),
+            splats(p) as f64 / splats(f) as f64,
+            f.clustered,
+            f.receivers,
+            f.clusters
+        );
+        // 3. Adaptive against uniform buffers.
+        if name == "cbox-glossy" {
+            println!(
+                "  adaptive 16²: gather {:.2} s, relMSE {rel:.3e}, {} buffer pixels",
+                gather_seconds(&fast),
+                f.pixels
+            );
+            for n in [16, 32, 64] {
+                let u = render_final(
+                    &scene,
+                    &cache,
+                    &camera,
+                    &FinalSettings {
+                        adaptive: false,
+                        mb_size: n,
+                        ..depth3.clone()
+                    },
+                    &|_, _| {},
+                )?;
+                let (_, urel) = error_against(&u.beauty, &reference).ok_or("size")?;
+                println!(
+                    "  uniform {n}²: gather {:.2} s, relMSE {urel:.3e}, {} buffer pixels",
+                    gather_seconds(&u),
+                    u.stats.pixels
+                );
+            }
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,69 @@
+//! Compare two EXR images: prints MSE, relative MSE and the means, and writes a PNG with the
+//! two side by side and their absolute difference (×4) for looking at.
+//!
+//! `cargo run --release --example image_diff -- ours.exr reference.exr side_by_side.png [x,y,w,h]`
+
+use wpbgi::image::{error_against, read_exr, write_png, Image};
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let args: Vec<String> = std::env::args().collect();
+    if args.len() < 3 {
+        eprintln!("usage: image_diff OURS.exr REFERENCE.exr [OUT.png]");
+        std::process::exit(2);
+    }
+    let mut a = read_exr(args[1].as_ref())?;
+    let mut b = read_exr(args[2].as_ref())?;
+    // Optional fifth argument x,y,w,h: compare that window, enlarged 4×.
+    if let Some(win) = args.get(4) {
+        let v: Vec<u32> = win.split(',').filter_map(|x| x.parse().ok()).collect();
+        if v.len() == 4 {
+            a = crop4(&a, v[0], v[1], v[2], v[3]);
+            b = crop4(&b, v[0], v[1], v[2], v[3]);
+        }
+    }
+    let (mse, rel) = error_against(&a, &b).ok_or("the images differ in size")?;
+    println!("MSE {mse:.4e}  relMSE {rel:.4e}");
+    println!("mean ours {:?}  reference {:?}", a.mean(), b.mean());
+    let worst = (0..a.pixels.len())
+        .max_by(|&i, &j| {
+            let e = |k: usize| (a.pixels[k] - b.pixels[k]).abs().max_element();
+            e(i).total_cmp(&e(j))
+        })
+        .unwrap_or(0);
+    println!(
+        "worst pixel ({}, {}): ours {:?} reference {:?}",
+        worst as u32 % a.width,
+        worst as u32 / a.width,
+        a.pixels[worst],
+        b.pixels[worst]
+    );
+    if let Some(out) = args.get(3) {
+        let mut s = Image::new(3 * a.width, a.height);
+        for y in 0..a.height {
+            for x in 0..a.width {
+                let (p, q) = (a.get(x, y), b.get(x, y));
+                let row = (y * 3 * a.width) as usize;
+                s.pixels[row + x as usize] = p;
+                s.pixels[row + (a.width + x) as usize] = q;
+                s.pixels[row + (2 * a.width + x) as usize] = (p - q).abs() * 4.0;
+            }
+        }
+        write_png(out.as_ref(), &s)?;
+    }
+    Ok(())
+}
+
+/// The window (x, y, w, h) of `img`, each pixel repeated 4 × 4.
+fn crop4(img: &Image, x: u32, y: u32, w: u32, h: u32) -> Image {
+    let mut out = Image::new(4 * w, 4 * h);
+    for j in 0..4 * h {
+        for i in 0..4 * w {
+            let (sx, sy) = (
+                (x + i / 4).min(img.width - 1),
+                (y + j / 4).min(img.height - 1),
+            );
+            out.pixels[(j * 4 * w + i) as usize] = img.get(sx, sy);
+        }
+    }
+    out
+}

@@ -1,0 +1,209 @@
+//! `wpbgi render`: the final image from a cache.
+
+use crate::bake_cmd::peak_memory;
+use crate::CameraArgs;
+use anyhow::{bail, Result};
+use clap::{Args, ValueEnum};
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+use std::time::Instant;
+use wpbgi::bake::store::{bake_hash, BakedCache};
+use wpbgi::image::{error_against, read_exr, write_exr_layers, write_png, Image};
+use wpbgi::render::{render_final, FinalOutput, FinalSettings, GatherMode};
+use wpbgi::scene::{Camera, Scene};
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum GatherArg {
+    /// One tree cut and microbuffer per receiver.
+    Pbgi,
+    /// Receivers clustered per 32×32 tile share the far field (faster, the same image).
+    Fpbgi,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum Aov {
+    /// Emission and direct light.
+    Direct,
+    /// Light from the cache.
+    Indirect,
+    /// Surface colour of the first hit.
+    Albedo,
+    /// World-space shading normal of the first hit.
+    Normal,
+    /// Distance to the first hit.
+    Depth,
+    /// All of the above.
+    All,
+}
+
+#[derive(Args)]
+pub struct RenderArgs {
+    /// The scene the cache was baked from (.gltf or .glb).
+    pub scene: PathBuf,
+    /// The cache (.wpc); refused if the scene or its bake settings changed since.
+    #[arg(long)]
+    pub cache: PathBuf,
+    /// Output image (OpenEXR, float32; the beauty as R, G, B and each AOV as NAME.R/G/B).
+    #[arg(short, long)]
+    pub output: PathBuf,
+    /// How receivers gather the cache's light.
+    #[arg(long, value_enum, default_value = "fpbgi")]
+    pub gather: GatherArg,
+    /// Extra layers in the EXR (comma-separated, or all).
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub aov: Vec<Aov>,
+    /// Microbuffer pixels per side (even).
+    #[arg(long, default_value_t = 16)]
+    pub mb_size: u32,
+    /// Uniform microbuffers for glossy receivers too (no BSDF-importance refinement).
+    #[arg(long)]
+    pub uniform: bool,
+    /// Emitter samples per shading point for direct light.
+    #[arg(long, default_value_t = 16)]
+    pub light_samples: u32,
+    /// Longest path in segments, as Mitsuba's max_depth (-1: everything the cache holds).
+    #[arg(long, default_value_t = -1, allow_hyphen_values = true)]
+    pub max_depth: i32,
+    /// FPBGI: clusters per 32×32 tile.
+    #[arg(long, default_value_t = 100)]
+    pub clusters: usize,
+    /// FPBGI: a node is far (shared by a cluster) when cluster radius / distance is at most
+    /// this (the thesis used 0.01 at 1024² in large scenes; see docs/render.md).
+    #[arg(long, default_value_t = 0.1)]
+    pub far: f32,
+    /// Seed of the random streams.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Also write an sRGB PNG preview.
+    #[arg(long)]
+    pub png: Option<PathBuf>,
+    /// Print the error (MSE, relative MSE) against this reference image.
+    #[arg(long)]
+    pub reference: Option<PathBuf>,
+    #[command(flatten)]
+    pub camera: CameraArgs,
+}
+
+/// Load the cache and refuse it if it was baked from another scene or other settings.
+pub fn open_fresh_cache(scene: &Scene, path: &Path) -> Result<BakedCache> {
+    let cache = BakedCache::read(path, None)?;
+    cache
+        .cache
+        .check_fresh(bake_hash(scene, &cache.plan["settings"]))?;
+    Ok(cache)
+}
+
+/// Render with a progress bar.
+pub fn run_final(
+    scene: &Scene,
+    cache: &BakedCache,
+    camera: &Camera,
+    settings: &FinalSettings,
+) -> Result<FinalOutput> {
+    let bar = crate::progress_bar("rendering");
+    let last = Mutex::new(String::new());
+    let out = render_final(scene, cache, camera, settings, &|stage, f| {
+        let mut l = last.lock().unwrap_or_else(|e| e.into_inner());
+        if *l != stage {
+            bar.set_message(stage.to_string());
+            *l = stage.to_string();
+        }
+        bar.set_position((f * 1000.0) as u64);
+    })?;
+    bar.finish_and_clear();
+    Ok(out)
+}
+
+pub fn print_summary(out: &FinalOutput) {
+    let s = &out.stats;
+    eprintln!(
+        "  {} camera samples, {} receivers ({} in {} clusters)",
+        out.samples, s.receivers, s.clustered, s.clusters
+    );
+    eprintln!(
+        "  cut: {} nodes visited and {} splatted by receivers, {} and {} by clusters; {} near surfels split",
+        s.receiver_cut.visited,
+        s.receiver_cut.splats,
+        s.cluster_cut.visited,
+        s.cluster_cut.splats,
+        s.receiver_cut.split_leaves
+    );
+    for (stage, secs) in &out.timings {
+        eprintln!("  {stage}: {secs:.2} s");
+    }
+    if let Some(b) = peak_memory() {
+        eprintln!("  peak memory {} MB", b / 1_000_000);
+    }
+}
+
+pub fn render_command(a: RenderArgs) -> Result<()> {
+    let start = Instant::now();
+    let scene = Scene::load(&a.scene)?;
+    crate::warn(&scene);
+    let camera = crate::pick_camera(&scene, &a.camera)?;
+    let cache = open_fresh_cache(&scene, &a.cache)?;
+    if a.light_samples == 0 {
+        bail!("--light-samples must be at least 1");
+    }
+    let settings = FinalSettings {
+        gather: match a.gather {
+            GatherArg::Pbgi => GatherMode::Pbgi,
+            GatherArg::Fpbgi => GatherMode::Fpbgi,
+        },
+        mb_size: a.mb_size,
+        adaptive: !a.uniform,
+        light_samples: a.light_samples,
+        max_depth: a.max_depth,
+        clusters: a.clusters,
+        far_eps: a.far,
+        seed: a.seed,
+        ..Default::default()
+    };
+    let reference = a.reference.as_deref().map(read_exr).transpose()?;
+    let out = run_final(&scene, &cache, &camera, &settings)?;
+    let all = a.aov.contains(&Aov::All);
+    let wanted = |x: Aov| all || a.aov.contains(&x);
+    let mut layers: Vec<(&str, &Image)> = Vec::new();
+    for (aov, name, img) in [
+        (Aov::Direct, "direct", &out.direct),
+        (Aov::Indirect, "indirect", &out.indirect),
+        (Aov::Albedo, "albedo", &out.albedo),
+        (Aov::Normal, "normal", &out.normal),
+        (Aov::Depth, "depth", &out.depth),
+    ] {
+        if wanted(aov) {
+            layers.push((name, img));
+        }
+    }
+    write_exr_layers(&a.output, &out.beauty, &layers)?;
+    if let Some(p) = &a.png {
+        write_png(p, &out.beauty)?;
+    }
+    eprintln!(
+        "wrote {} ({}x{}, {} gather, {:.2} s)",
+        a.output.display(),
+        camera.width,
+        camera.height,
+        match a.gather {
+            GatherArg::Pbgi => "pbgi",
+            GatherArg::Fpbgi => "fpbgi",
+        },
+        start.elapsed().as_secs_f64()
+    );
+    print_summary(&out);
+    if let Some(r) = &reference {
+        match error_against(&out.beauty, r) {
+            Some((mse, rel)) => {
+                eprintln!("  error against the reference: MSE {mse:.3e}, relMSE {rel:.3e}")
+            }
+            None => bail!(
+                "the reference image is {}x{} but the render is {}x{}",
+                r.width,
+                r.height,
+                camera.width,
+                camera.height
+            ),
+        }
+    }
+    Ok(())
+}

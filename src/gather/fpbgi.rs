@@ -1,0 +1,235 @@
+//! Factorized PBGI (spec §3): receivers of one image tile are clustered, each cluster shares
+//! one cut of the far nodes and one microbuffer of them, and each receiver refines only the
+//! near nodes into its own buffer.
+//!
+//! - Clustering (spec §3.2): k-means over positions and normals with the metric
+//!   D(x, c) = ‖p_c − p_x‖² + α‖n_c − n_x‖², α = the diagonal of the bounding box of the tile's
+//!   receivers. The spec leaves the start and the iteration count open: the k starting centres
+//!   are receivers evenly spaced in image order (deterministic, spread over the tile) and the
+//!   iterations stop when no receiver changes cluster, or after [`KMEANS_ITERATIONS`].
+//! - The active receiver is the one nearest its cluster's final centre; the cluster radius r
+//!   is its largest distance to a member (spec §13 item 4).
+//! - Cluster cut (spec §3.3, with the far/near rule read as §13 item 1 recommends): a node with
+//!   r/d > ε is near and stops the cluster's traversal; a far node that passes the solid-angle
+//!   test from the active receiver joins the cluster buffer. The cluster buffer is spherical
+//!   and not culled by any horizon, so it serves members whose normals differ from the active receiver's.
+//! - Each member traverses from the near nodes into its own buffer; the two are composited by
+//!   depth per pixel, the cluster buffer looked up along each member pixel's direction
+//!   (spec §3.4 step 3).
+
+use super::cut::{splat_cut, CutStats};
+use super::microbuffer::Microbuffer;
+use super::senders::Senders;
+use crate::bake::tree::NONE;
+use crate::geometry::frame::Frame;
+use glam::Vec3;
+
+/// The most k-means iterations.
+pub const KMEANS_ITERATIONS: u32 = 16;
+
+/// One cluster of receivers.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Cluster {
+    /// Indices into the clustered points.
+    pub members: Vec<u32>,
+    /// The member nearest the centre.
+    pub active: u32,
+    /// The largest distance from the active receiver to a member.
+    pub radius: f32,
+}
+
+/// Cluster `points` (position, unit normal) into at most `k` clusters.
+pub fn cluster(points: &[(Vec3, Vec3)], k: usize) -> Vec<Cluster> {
+    if points.is_empty() {
+        return Vec::new();
+    }
+    let k = k.clamp(1, points.len());
+    let (lo, hi) = points.iter().fold(
+        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+        |(lo, hi), (p, _)| (lo.min(*p), hi.max(*p)),
+    );
+    let alpha = (hi - lo).length();
+    let metric = |a: &(Vec3, Vec3), b: &(Vec3, Vec3)| {
+        (a.0 - b.0).length_squared() + alpha * (a.1 - b.1).length_squared()
+    };
+    let mut centres: Vec<(Vec3, Vec3)> = (0..k).map(|i| points[i * points.len() / k]).collect();
+    let mut assign = vec![u32::MAX; points.len()];
+    for _ in 0..KMEANS_ITERATIONS {
+        let mut changed = false;
+        for (i, x) in points.iter().enumerate() {
+            let best = (0..k)
+                .min_by(|&a, &b| metric(x, &centres[a]).total_cmp(&metric(x, &centres[b])))
+                .unwrap_or(0) as u32;
+            if assign[i] != best {
+                assign[i] = best;
+                changed = true;
+            }
+        }
+        if !changed {
+            break;
+        }
+        let mut sums = vec![(Vec3::ZERO, Vec3::ZERO, 0u32); k];
+        for (x, &a) in points.iter().zip(&assign) {
+            let s = &mut sums[a as usize];
+            s.0 += x.0;
+            s.1 += x.1;
+            s.2 += 1;
+        }
+        for (c, s) in centres.iter_mut().zip(&sums) {
+            if s.2 > 0 {
+                c.0 = s.0 / s.2 as f32;
+                c.1 = s.1.try_normalize().unwrap_or(c.1);
+            }
+        }
+    }
+    let mut clusters: Vec<Cluster> = (0..k)
+        .map(|_| Cluster {
+            members: Vec::new(),
+            active: 0,
+            radius: 0.0,
+        })
+        .collect();
+    for (i, &a) in assign.iter().enumerate() {
+        clusters[a as usize].members.push(i as u32);
+    }
+    clusters.retain(|c| !c.members.is_empty());
+    for c in clusters.iter_mut() {
+        let mean = c
+            .members
+            .iter()
+            .fold(Vec3::ZERO, |s, &m| s + points[m as usize].0)
+            / c.members.len() as f32;
+        c.active = *c
+            .members
+            .iter()
+            .min_by(|&&a, &&b| {
+                (points[a as usize].0 - mean)
+                    .length_squared()
+                    .total_cmp(&(points[b as usize].0 - mean).length_squared())
+            })
+            .unwrap_or(&c.members[0]);
+        let pa = points[c.active as usize].0;
+        c.radius = c
+            .members
+            .iter()
+            .map(|&m| (points[m as usize].0 - pa).length())
+            .fold(0.0, f32::max);
+    }
+    clusters
+}
+
+/// A cluster's shared part: its far nodes splatted into a spherical buffer around the active
+/// receiver, and the near nodes its members refine.
+pub struct ClusterCut {
+    pub buffer: Microbuffer,
+    pub near: Vec<u32>,
+    pub stats: CutStats,
+}
+
+/// The cluster cut from the active receiver at `p` on mesh `mesh` with frame `frame`, for a cluster of
+/// radius `radius`, with far threshold `far_eps` (spec §3.3).
+pub fn cluster_cut(
+    senders: &Senders,
+    p: Vec3,
+    mesh: u32,
+    frame: Frame,
+    radius: f32,
+    far_eps: f32,
+    n: u32,
+) -> ClusterCut {
+    let mut buffer = Microbuffer::new(n, true, frame);
+    let mut near = Vec::new();
+    let mut stats = CutStats::default();
+    let mut stack = vec![0u32];
+    if senders.nodes.is_empty() {
+        stack.clear();
+    }
+    while let Some(j) = stack.pop() {
+        stats.visited += 1;
+        let node = &senders.nodes[j as usize];
+        let v = node.center - p;
+        let d2 = v.length_squared();
+        let d = d2.sqrt();
+        // Near: the cluster is not small as seen from the node.
+        if !(d > 0.0) || radius > far_eps * d {
+            near.push(j);
+            continue;
+        }
+        let dir = v / d;
+        let pixel = buffer.pixels[buffer.pixel_of(dir).unwrap_or(0)].solid_angle;
+        let small = node.is_leaf() || {
+            let bound = std::f32::consts::PI * node.radius * node.radius / d2;
+            bound <= 4.0 * pixel && senders.projected_area(j, -dir) / d2 <= pixel
+        };
+        if small {
+            let seen = senders.seen(j, -dir, mesh);
+            let omega = seen.projected / d2;
+            if node.is_leaf() && omega > pixel {
+                near.push(j);
+                continue;
+            }
+            stats.splats += u64::from(buffer.splat(&senders.sender(j, v, seen), omega));
+        } else {
+            for c in node.children {
+                if c != NONE {
+                    stack.push(c);
+                }
+            }
+        }
+    }
+    buffer.resolve();
+    ClusterCut {
+        buffer,
+        near,
+        stats,
+    }
+}
+
+/// Fill a member's buffer: its refinement of the near nodes, composited by depth with the
+/// cluster buffer looked up along each of its pixels' directions.
+pub fn member_buffer(
+    senders: &Senders,
+    cut: &ClusterCut,
+    p: Vec3,
+    mesh: u32,
+    mb: &mut Microbuffer,
+    stack: &mut Vec<u32>,
+) -> CutStats {
+    let stats = splat_cut(senders, p, mesh, mb, &cut.near, stack);
+    mb.resolve();
+    let shared = &cut.buffer;
+    for k in 0..mb.pixels.len() {
+        let w = mb.frame.to_world(mb.pixels[k].dir);
+        let Some(c) = shared.pixel_of(w) else {
+            continue;
+        };
+        let (lc, ac, dc) = (shared.radiance[c], shared.alpha[c], shared.depth[c]);
+        if ac <= 0.0 {
+            continue;
+        }
+        let (lr, ar, dr) = (mb.radiance[k], mb.alpha[k], mb.depth[k]);
+        // The shared buffer's light in this pixel, weighted by the member's mean cosine.
+        let px = &mb.pixels[k];
+        let cos = px.dir.z.abs() * px.cos_weight;
+        let (l, cl, a) = if dr <= dc {
+            let open = 1.0 - ar;
+            (
+                lr + lc * open,
+                mb.cos_radiance[k] + lc * (cos * open),
+                ar + ac * open,
+            )
+        } else {
+            let open = 1.0 - ac;
+            (
+                lc + lr * open,
+                lc * cos + mb.cos_radiance[k] * open,
+                ac + ar * open,
+            )
+        };
+        mb.radiance[k] = l;
+        mb.cos_radiance[k] = cl;
+        mb.alpha[k] = a;
+        mb.depth[k] = dr.min(dc);
+    }
+    stats
+}

@@ -1,0 +1,366 @@
+//! The cache as a gather sees it: the surfel tree with, for every node, the radiance it sends
+//! towards a receiver and the solid angle it covers there (spec §2.3, §6.5; DESIGN.md §5.5).
+//!
+//! A node seen from afar along ω (from the node towards the receiver) has radiant intensity
+//! I(ω) and projected area P(ω), so it covers P(ω)/d² and has radiance I(ω)/P(ω). Nodes below
+//! the split level store only details; their G is rebuilt once here, top-down
+//! (G(child) = G(parent)/2 ± H(parent), spec §6.5), so that a lookup is one sparse evaluation.
+//! A leaf is its surfel: its radiance and its exact projected area A|n·ω|.
+//!
+//! The final render lights emitters directly, so the gather must see only reflected light:
+//! every node's emitted intensity E(ω) is rebuilt exactly as the bake built it into I, and
+//! subtracted (emitting surfels still occlude).
+
+use super::microbuffer::Sender;
+use crate::bake::pipeline::{intensity_map, SurfelRadiance};
+use crate::bake::store::{BakedCache, NodeRecord, SurfelRecord, NO_MAP, SOLID};
+use crate::bake::surfels::Surfel;
+use crate::bake::tree::NONE;
+use crate::cache::CacheError;
+use crate::haar::{direction_to_square, Coefficient, Haar2d, SparseHaar};
+use crate::spectrum::Rgb;
+use glam::{Vec2, Vec3};
+use rayon::prelude::*;
+
+/// Nodes whose normals lie within this angle (radians) of their axis are flat enough to
+/// have a plane, which tells the surface they lie on from occluders (30°).
+pub const FLAT_CONE: f32 = std::f32::consts::FRAC_PI_6;
+
+/// One node of the tree, as traversal needs it.
+#[derive(Clone, Copy, Debug)]
+pub struct SenderNode {
+    pub center: Vec3,
+    pub radius: f32,
+    /// `[left, right]`, or `[NONE, NONE]` for a leaf.
+    pub children: [u32; 2],
+    /// The surfel of a leaf ([`NONE`] for inner nodes).
+    pub surfel: u32,
+    /// Normal cone: every surfel normal below is within `cone_angle` of `axis`.
+    pub axis: Vec3,
+    pub cone_angle: f32,
+    /// Σ A n over the surfels below: for directions where every normal below faces the same
+    /// way, the projected area is exactly |N·ω|.
+    pub area_normal: Vec3,
+}
+
+impl SenderNode {
+    pub fn is_leaf(&self) -> bool {
+        self.children[0] == NONE
+    }
+}
+
+/// The tree of senders.
+pub struct Senders {
+    pub nodes: Vec<SenderNode>,
+    pub surfels: Vec<SurfelRecord>,
+    /// Per inner node: G of the radiant intensity and of the projected area (leaves: empty).
+    intensity: Vec<SparseHaar<Rgb>>,
+    projected: Vec<SparseHaar<f32>>,
+    /// Per node with emitting surfels below: their emitted intensity.
+    emitted: Vec<Option<SparseHaar<Rgb>>>,
+    /// Per surfel with a directional map: the map (outgoing radiance over the sphere).
+    maps: Vec<Option<SparseHaar<Rgb>>>,
+}
+
+/// What a receiver sees of one node.
+#[derive(Clone, Copy, Debug)]
+pub struct Seen {
+    /// Radiance towards the receiver (reflected light only).
+    pub radiance: Rgb,
+    /// Projected area towards the receiver (the node covers `projected / d²` steradians).
+    pub projected: f32,
+}
+
+impl Senders {
+    /// Load the tree of `cache`, rebuilding every inner node's G.
+    pub fn from_cache(cache: &BakedCache) -> Result<Senders, CacheError> {
+        let records = &cache.nodes;
+        let levels = cache.plan["plan"]["map_resolution"]
+            .as_u64()
+            .map_or(3, |r| r.max(1).ilog2());
+        let nodes: Vec<SenderNode> = records
+            .iter()
+            .map(|r| SenderNode {
+                center: Vec3::from(r.center),
+                radius: r.radius,
+                children: r.children,
+                surfel: if r.children[0] == NONE {
+                    cache.order.get(r.first as usize).copied().unwrap_or(NONE)
+                } else {
+                    NONE
+                },
+                axis: Vec3::from(r.axis),
+                cone_angle: r.cone_angle,
+                area_normal: Vec3::ZERO,
+            })
+            .collect();
+        if nodes
+            .iter()
+            .any(|n| n.is_leaf() && n.surfel as usize >= cache.surfels.len())
+        {
+            return Err(CacheError::Malformed {
+                path: cache.cache.path.clone(),
+                what: "a leaf has no surfel".into(),
+            });
+        }
+        let mut nodes = nodes;
+        // Children come after their parents: sum Σ A n bottom-up.
+        for j in (0..nodes.len()).rev() {
+            let n = nodes[j];
+            nodes[j].area_normal = if n.is_leaf() {
+                let s = &cache.surfels[n.surfel as usize];
+                Vec3::from(s.n) * s.area
+            } else {
+                n.children
+                    .iter()
+                    .filter(|&&c| (c as usize) < nodes.len() && c as usize > j)
+                    .map(|&c| nodes[c as usize].area_normal)
+                    .sum()
+            };
+        }
+        let intensity = rebuild(cache, records, |r| (r.g, r.h))?;
+        let projected = rebuild(cache, records, |r| (r.area_g, r.area_h))?;
+        let maps: Vec<Option<SparseHaar<Rgb>>> = cache
+            .surfels
+            .par_iter()
+            .map(|s| {
+                (s.map != NO_MAP)
+                    .then(|| cache.map::<Rgb>(s.map))
+                    .transpose()
+            })
+            .collect::<Result<_, _>>()?;
+        let emitted = emitted_intensities(records, &nodes, &cache.surfels, &maps, levels);
+        Ok(Senders {
+            nodes,
+            surfels: cache.surfels.clone(),
+            intensity,
+            projected,
+            emitted,
+            maps,
+        })
+    }
+
+    /// What a receiver on mesh `receiver_mesh` sees of node `j` along the unit direction `w`
+    /// from the node towards it.
+    pub fn seen(&self, j: u32, w: Vec3, receiver_mesh: u32) -> Seen {
+        let node = &self.nodes[j as usize];
+        if node.is_leaf() {
+            let s = &self.surfels[node.surfel as usize];
+            let cos = Vec3::from(s.n).dot(w);
+            return Seen {
+                radiance: self.surfel_radiance(node.surfel, w, cos, receiver_mesh),
+                projected: s.area * cos.abs(),
+            };
+        }
+        let p = direction_to_square(w);
+        let mapped = self.projected[j as usize].eval(p.x, p.y).max(0.0);
+        let mut i = self.intensity[j as usize].eval(p.x, p.y);
+        if let Some(e) = &self.emitted[j as usize] {
+            i -= e.eval(p.x, p.y);
+        }
+        // Radiance from the two maps at the same texel (their quantisation cancels), unless
+        // the texel straddles the node's edge-on band and its P is far below the exact one;
+        // the solid angle from the exact projected area where it is known.
+        let projected = self.exact_projected(node, w).unwrap_or(mapped);
+        let denominator = if mapped >= 0.5 * projected {
+            mapped
+        } else {
+            projected
+        };
+        let radiance = if denominator > 0.0 {
+            (i / denominator).max(Rgb::ZERO)
+        } else {
+            Rgb::ZERO
+        };
+        Seen {
+            radiance,
+            projected,
+        }
+    }
+
+    /// Node `j` as a microbuffer records it, at `offset` from the receiver, seen as `seen`.
+    pub fn sender(&self, j: u32, offset: Vec3, seen: Seen) -> Sender {
+        let node = &self.nodes[j as usize];
+        let (radius, normal) = if node.is_leaf() {
+            let s = &self.surfels[node.surfel as usize];
+            ((s.area / std::f32::consts::PI).sqrt(), Vec3::from(s.n))
+        } else if node.cone_angle < FLAT_CONE {
+            (node.radius, node.axis)
+        } else {
+            (node.radius, Vec3::ZERO)
+        };
+        Sender {
+            offset,
+            radius,
+            normal,
+            radiance: seen.radiance,
+        }
+    }
+
+    /// The projected area of inner node `j` along `w` (cheaper than [`Senders::seen`]: the
+    /// traversal tests it before it needs the radiance).
+    pub fn projected_area(&self, j: u32, w: Vec3) -> f32 {
+        let node = &self.nodes[j as usize];
+        self.exact_projected(node, w).unwrap_or_else(|| {
+            let p = direction_to_square(w);
+            self.projected[j as usize].eval(p.x, p.y).max(0.0)
+        })
+    }
+
+    /// Σ A |n·ω| = |N·ω| when every normal below lies on one side of the plane ⊥ ω, i.e.
+    /// when ω is more than the cone's angle away from the plane ⊥ the axis. The 8 × 8 map's
+    /// texels (25° wide) would otherwise bias the coverage by a few percent.
+    fn exact_projected(&self, node: &SenderNode, w: Vec3) -> Option<f32> {
+        let elevation = node.axis.dot(w).clamp(-1.0, 1.0).abs().asin();
+        (elevation > node.cone_angle).then(|| node.area_normal.dot(w).abs())
+    }
+
+    /// Reflected radiance leaving surfel `i` along `w` (`cos` = n·w) towards a receiver on
+    /// mesh `receiver_mesh` (a solid's inward light reaches only its own surface).
+    pub fn surfel_radiance(&self, i: u32, w: Vec3, cos: f32, receiver_mesh: u32) -> Rgb {
+        let s = &self.surfels[i as usize];
+        if cos < 0.0 && s.flags & SOLID != 0 && s.mesh != receiver_mesh {
+            return Rgb::ZERO;
+        }
+        let emitted = if cos > 0.0 {
+            Vec3::from(s.emitted)
+        } else {
+            Rgb::ZERO
+        };
+        let total = match &self.maps[i as usize] {
+            Some(m) => {
+                let p = direction_to_square(w);
+                m.eval(p.x, p.y)
+            }
+            None if cos > 0.0 => Vec3::from(s.rgb),
+            None => Rgb::ZERO,
+        };
+        (total - emitted).max(Rgb::ZERO)
+    }
+}
+
+/// Every inner node's G, from the stored G (at and above the split level) or from the
+/// parent's G and H (below it). Nodes are breadth-first, so a level depends on the one above.
+fn rebuild<T: Coefficient + Send + Sync>(
+    cache: &BakedCache,
+    records: &[NodeRecord],
+    maps: impl Fn(&NodeRecord) -> (u32, u32) + Sync,
+) -> Result<Vec<SparseHaar<T>>, CacheError> {
+    let bad = |what: &str| CacheError::Malformed {
+        path: cache.cache.path.clone(),
+        what: what.into(),
+    };
+    let empty = || SparseHaar::compress(&Haar2d::forward(&[T::default()], 1), 0.0);
+    let mut out: Vec<SparseHaar<T>> = Vec::with_capacity(records.len());
+    let mut start = 0;
+    while start < records.len() {
+        let level = records[start].level;
+        let end = start
+            + records[start..]
+                .iter()
+                .take_while(|r| r.level == level)
+                .count();
+        let level_maps: Vec<SparseHaar<T>> = records[start..end]
+            .par_iter()
+            .enumerate()
+            .map(|(i, r)| {
+                let j = (start + i) as u32;
+                if r.children[0] == NONE {
+                    return Ok(empty());
+                }
+                let (g, _) = maps(r);
+                if g != NO_MAP {
+                    return cache.map::<T>(g);
+                }
+                let parent = r.parent as usize;
+                if parent >= start {
+                    return Err(bad("a node's parent does not come before it"));
+                }
+                let (_, h) = maps(&records[parent]);
+                if h == NO_MAP {
+                    return Err(bad(
+                        "a node below the split level has no detail to rebuild it",
+                    ));
+                }
+                let sign = if records[parent].children[0] == j {
+                    1.0
+                } else {
+                    -1.0
+                };
+                let g = Haar2d::combine(
+                    &out[parent].to_dense(),
+                    0.5,
+                    &cache.map::<T>(h)?.to_dense(),
+                    sign,
+                );
+                Ok(SparseHaar::compress_below(&g, 0.0))
+            })
+            .collect::<Result<_, CacheError>>()?;
+        out.extend(level_maps);
+        start = end;
+    }
+    Ok(out)
+}
+
+/// The emitted intensity of every node with emitting surfels below, built as the bake built
+/// the emission into I: each emitting surfel's intensity map of its emission alone, at its own
+/// resolution, refined to the tree's, summed up the tree.
+fn emitted_intensities(
+    records: &[NodeRecord],
+    nodes: &[SenderNode],
+    surfels: &[SurfelRecord],
+    maps: &[Option<SparseHaar<Rgb>>],
+    levels: u32,
+) -> Vec<Option<SparseHaar<Rgb>>> {
+    let mut dense: Vec<Option<Haar2d<Rgb>>> = vec![None; nodes.len()];
+    // Children come after their parents: sum in reverse order.
+    for j in (0..nodes.len()).rev() {
+        let node = &nodes[j];
+        if node.is_leaf() {
+            let s = &surfels[node.surfel as usize];
+            let le = Vec3::from(s.emitted);
+            if le == Rgb::ZERO {
+                continue;
+            }
+            let surfel = Surfel {
+                p: Vec3::from(s.p),
+                n: Vec3::from(s.n),
+                area: s.area,
+                mesh: s.mesh,
+                triangle: 0,
+                b: Vec2::ZERO,
+            };
+            let emission = match &maps[node.surfel as usize] {
+                None => SurfelRadiance::Rgb(le),
+                Some(m) => {
+                    let own = m.levels();
+                    let texels: Vec<Rgb> = crate::haar::texel_directions(own)
+                        .iter()
+                        .map(|w| if w.dot(surfel.n) > 0.0 { le } else { Rgb::ZERO })
+                        .collect();
+                    SurfelRadiance::Map(SparseHaar::compress(
+                        &Haar2d::forward(&texels, 1 << own),
+                        0.0,
+                    ))
+                }
+            };
+            dense[j] = Some(intensity_map(&surfel, &emission, levels, true));
+        } else {
+            let [l, r] = records[j].children.map(|c| dense[c as usize].as_ref());
+            dense[j] = match (l, r) {
+                (Some(a), Some(b)) => Some(Haar2d::combine(a, 1.0, b, 1.0)),
+                (Some(a), None) | (None, Some(a)) => Some(a.clone()),
+                (None, None) => None,
+            };
+        }
+    }
+    // Only inner nodes need it (leaves subtract their surfel's emission exactly).
+    dense
+        .into_iter()
+        .zip(nodes)
+        .map(|(d, n)| {
+            d.filter(|_| !n.is_leaf())
+                .map(|d| SparseHaar::compress_below(&d, 0.0))
+        })
+        .collect()
+}

@@ -1,0 +1,444 @@
+//! The final render from a cache (DESIGN.md §7, spec §2.3, §3, §7).
+//!
+//! 1. Centre rays find the primary hits; pixels on an edge (another mesh, a normal turning by
+//!    more than 25°, or a depth step of 5 %) get 8 × 8 stratified samples, of which one per
+//!    quarter gathers; the others one sample (adaptive anti-aliasing).
+//! 2. Each camera sample is traced to its rough hits ([`primary`]): emission, direct light by
+//!    ray tracing, specular chains; every rough hit becomes a receiver.
+//! 3. The gather, per 32 × 32 tile: receivers get their indirect light from the cache through
+//!    a microbuffer ([`crate::gather`]), one by one (`pbgi`) or by clusters (`fpbgi`, the
+//!    default). Glossy receivers (roughness below `glossy_below`) always gather alone, through
+//!    a buffer refined by their BSDF (spec §7), since a shared uniform cluster buffer would
+//!    blur their lobe.
+//!
+//! Every random number is keyed by (pixel, sample), and every tile is processed in a fixed
+//! order, so the image is the same for any thread count.
+
+pub mod primary;
+
+use crate::bake::store::BakedCache;
+use crate::error::{Error, Result};
+use crate::gather::fpbgi::{cluster, cluster_cut, member_buffer};
+use crate::gather::{splat_cut, CutStats, Microbuffer, Senders};
+use crate::image::Image;
+use crate::reference::{intersect, RenderContext, RenderSettings};
+use crate::sampler::Sampler;
+use crate::scene::{Camera, Scene};
+use crate::spectrum::Rgb;
+use glam::{Vec2, Vec3};
+use primary::{trace_primary, CameraSample, PrimarySample, PrimarySettings, Receiver};
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Instant;
+
+/// How receivers gather.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GatherMode {
+    /// One cut and one microbuffer per receiver (spec §2.3).
+    Pbgi,
+    /// Clustered receivers sharing the far field (spec §3).
+    Fpbgi,
+}
+
+/// Settings of a final render.
+#[derive(Clone, Debug)]
+pub struct FinalSettings {
+    pub gather: GatherMode,
+    /// Base microbuffer pixels per side (per hemisphere).
+    pub mb_size: u32,
+    /// Refine glossy receivers' buffers by BSDF importance (spec §7); off: uniform buffers.
+    pub adaptive: bool,
+    /// Receivers rougher than this are not glossy.
+    pub glossy_below: f32,
+    /// BSDF importance: split a pixel holding more than this share of the reflected light.
+    pub adaptive_share: f32,
+    /// BSDF importance: most splits of a base pixel.
+    pub adaptive_levels: u32,
+    /// Emitter samples per rough hit.
+    pub light_samples: u32,
+    /// Receivers smoother than this follow their specular chain.
+    pub specular_below: f32,
+    /// Longest specular chain, in vertices.
+    pub chain_depth: u32,
+    /// Mitsuba's `max_depth` (−1: everything the cache holds).
+    pub max_depth: i32,
+    /// FPBGI: clusters per tile and the far threshold r/d (spec §3.7).
+    pub clusters: usize,
+    pub far_eps: f32,
+    pub seed: u64,
+}
+
+impl Default for FinalSettings {
+    fn default() -> Self {
+        FinalSettings {
+            gather: GatherMode::Fpbgi,
+            mb_size: 16,
+            adaptive: true,
+            glossy_below: 0.4,
+            adaptive_share: 1.0 / 64.0,
+            adaptive_levels: 5,
+            light_samples: 16,
+            specular_below: 0.03,
+            chain_depth: 8,
+            max_depth: -1,
+            clusters: 100,
+            far_eps: 0.1,
+            seed: 0,
+        }
+    }
+}
+
+/// The image side of a tile.
+pub const TILE: u32 = 32;
+
+/// Edge pixels take EDGE_SIDE × EDGE_SIDE stratified samples for primary hits and direct
+/// light (an emitter's edge needs them); one in each quarter of them gathers.
+pub const EDGE_SIDE: u32 = 8;
+
+/// What the gather did, summed over the image.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct GatherStats {
+    pub receivers: u64,
+    pub clustered: u64,
+    pub clusters: u64,
+    /// Nodes visited and splatted by receivers, and by clusters (shared).
+    pub receiver_cut: CutStats,
+    pub cluster_cut: CutStats,
+    /// Microbuffer pixels (after refinement) over all receivers.
+    pub pixels: u64,
+}
+
+impl GatherStats {
+    fn add(&mut self, o: &GatherStats) {
+        self.receivers += o.receivers;
+        self.clustered += o.clustered;
+        self.clusters += o.clusters;
+        self.receiver_cut += o.receiver_cut;
+        self.cluster_cut += o.cluster_cut;
+        self.pixels += o.pixels;
+    }
+}
+
+/// The render: the beauty image, its AOVs, and what it cost.
+pub struct FinalOutput {
+    pub beauty: Image,
+    /// Emission and direct light.
+    pub direct: Image,
+    /// Light from the cache.
+    pub indirect: Image,
+    pub albedo: Image,
+    /// World-space shading normal of the first hit (as RGB = xyz).
+    pub normal: Image,
+    /// Distance to the first hit (0 where none), in all three channels.
+    pub depth: Image,
+    /// Seconds per stage, in order.
+    pub timings: Vec<(&'static str, f64)>,
+    pub stats: GatherStats,
+    /// Camera samples taken (adaptive anti-aliasing).
+    pub samples: u64,
+}
+
+/// Render `camera`'s view of `scene` from `cache` (already checked to belong to the scene).
+/// `progress` receives the stage and its fraction done.
+pub fn render_final(
+    scene: &Scene,
+    cache: &BakedCache,
+    camera: &Camera,
+    settings: &FinalSettings,
+    progress: &(dyn Fn(&str, f32) + Sync),
+) -> Result<FinalOutput> {
+    if camera.width == 0 || camera.height == 0 || camera.width > 16384 || camera.height > 16384 {
+        return Err(Error::InvalidSetting(format!(
+            "image size {}x{} must be between 1 and 16384 on each side",
+            camera.width, camera.height
+        )));
+    }
+    if settings.mb_size < 2 || !settings.mb_size.is_multiple_of(2) || settings.mb_size > 256 {
+        return Err(Error::InvalidSetting(format!(
+            "the microbuffer size must be even and between 2 and 256, got {}",
+            settings.mb_size
+        )));
+    }
+    if settings.max_depth == 0 || settings.max_depth < -1 {
+        return Err(Error::InvalidSetting(
+            "max depth must be -1 (unlimited) or at least 1".into(),
+        ));
+    }
+    if !(settings.far_eps >= 0.0 && settings.far_eps.is_finite()) || settings.clusters == 0 {
+        return Err(Error::InvalidSetting(
+            "the far threshold must be a non-negative number and clusters at least 1".into(),
+        ));
+    }
+    scene.check_renderable()?;
+    let mut timings = Vec::new();
+    let t = Instant::now();
+    let ctx = RenderContext::new(
+        scene,
+        &RenderSettings {
+            max_depth: settings.max_depth,
+            ..Default::default()
+        },
+    );
+    let senders = Senders::from_cache(cache).map_err(Error::Cache)?;
+    timings.push(("load", t.elapsed().as_secs_f64()));
+
+    let (w, h) = (camera.width, camera.height);
+    let t = Instant::now();
+    let centre = centre_hits(&ctx, camera);
+    let tiles: Vec<(u32, u32)> = (0..h.div_ceil(TILE))
+        .flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx, ty)))
+        .collect();
+    let primary_settings = PrimarySettings {
+        max_depth: settings.max_depth,
+        light_samples: settings.light_samples,
+        specular_below: settings.specular_below,
+        chain_depth: settings.chain_depth,
+        seed: settings.seed,
+    };
+    let done = AtomicUsize::new(0);
+    let primary: Vec<TilePrimary> = tiles
+        .par_iter()
+        .map(|&(tx, ty)| {
+            let r = primary_tile(&ctx, camera, &centre, &primary_settings, tx, ty);
+            let n = done.fetch_add(1, Ordering::Relaxed) + 1;
+            progress("primary", n as f32 / tiles.len() as f32);
+            r
+        })
+        .collect();
+    timings.push(("primary and direct", t.elapsed().as_secs_f64()));
+
+    let t = Instant::now();
+    done.store(0, Ordering::Relaxed);
+    let gathered: Vec<(Vec<(u32, Rgb)>, GatherStats)> = primary
+        .par_iter()
+        .map(|tile| {
+            let r = gather_tile(&senders, &tile.receivers, settings);
+            let n = done.fetch_add(1, Ordering::Relaxed) + 1;
+            progress("gather", n as f32 / tiles.len() as f32);
+            r
+        })
+        .collect();
+    timings.push(("gather", t.elapsed().as_secs_f64()));
+
+    let mut out = FinalOutput {
+        beauty: Image::new(w, h),
+        direct: Image::new(w, h),
+        indirect: Image::new(w, h),
+        albedo: Image::new(w, h),
+        normal: Image::new(w, h),
+        depth: Image::new(w, h),
+        timings,
+        stats: GatherStats::default(),
+        samples: 0,
+    };
+    for tile in &primary {
+        out.samples += tile.samples;
+        for (pixel, s) in &tile.pixels {
+            let i = *pixel as usize;
+            out.direct.pixels[i] = s.direct;
+            out.albedo.pixels[i] = s.albedo;
+            out.normal.pixels[i] = s.normal;
+            out.depth.pixels[i] = Vec3::splat(if s.depth.is_finite() { s.depth } else { 0.0 });
+        }
+    }
+    for (values, stats) in &gathered {
+        out.stats.add(stats);
+        for (pixel, l) in values {
+            out.indirect.pixels[*pixel as usize] += *l;
+        }
+    }
+    for i in 0..out.beauty.pixels.len() {
+        for img in [&mut out.direct, &mut out.indirect] {
+            if !img.pixels[i].is_finite() {
+                img.pixels[i] = Rgb::ZERO;
+            }
+        }
+        out.beauty.pixels[i] = out.direct.pixels[i] + out.indirect.pixels[i];
+    }
+    Ok(out)
+}
+
+/// The primary hit through each pixel centre: mesh, shading normal, distance.
+type CentreHit = Option<(u32, Vec3, f32)>;
+
+fn centre_hits(ctx: &RenderContext, camera: &Camera) -> Vec<CentreHit> {
+    let (w, h) = (camera.width, camera.height);
+    (0..w * h)
+        .into_par_iter()
+        .map(|i| {
+            let film = Vec2::new((i % w) as f32 + 0.5, (i / w) as f32 + 0.5);
+            let (o, d) = camera.generate_ray(film);
+            intersect(ctx, o, d).map(|hit| (hit.mesh, hit.frame.n, hit.t))
+        })
+        .collect()
+}
+
+/// Whether pixel `(x, y)` lies on an edge of what its centre rays see.
+fn is_edge(centre: &[CentreHit], w: u32, h: u32, x: u32, y: u32) -> bool {
+    let here = centre[(y * w + x) as usize];
+    let neighbours = [(-1i64, 0i64), (1, 0), (0, -1), (0, 1)];
+    neighbours.iter().any(|(dx, dy)| {
+        let (nx, ny) = (x as i64 + dx, y as i64 + dy);
+        if nx < 0 || ny < 0 || nx >= w as i64 || ny >= h as i64 {
+            return false;
+        }
+        let there = centre[(ny as u32 * w + nx as u32) as usize];
+        match (here, there) {
+            (None, None) => false,
+            (Some(a), Some(b)) => {
+                a.0 != b.0 || a.1.dot(b.1) < 0.9 || (a.2 - b.2).abs() > 0.05 * a.2.min(b.2)
+            }
+            _ => true,
+        }
+    })
+}
+
+/// A tile after the primary pass.
+struct TilePrimary {
+    pixels: Vec<(u32, PrimarySample)>,
+    receivers: Vec<Receiver>,
+    samples: u64,
+}
+
+fn primary_tile(
+    ctx: &RenderContext,
+    camera: &Camera,
+    centre: &[CentreHit],
+    settings: &PrimarySettings,
+    tx: u32,
+    ty: u32,
+) -> TilePrimary {
+    let (w, h) = (camera.width, camera.height);
+    let mut out = TilePrimary {
+        pixels: Vec::new(),
+        receivers: Vec::new(),
+        samples: 0,
+    };
+    for y in ty * TILE..((ty + 1) * TILE).min(h) {
+        for x in tx * TILE..((tx + 1) * TILE).min(w) {
+            let pixel = y * w + x;
+            let side = if is_edge(centre, w, h, x, y) {
+                EDGE_SIDE
+            } else {
+                1
+            };
+            let count = side * side;
+            let weight = Rgb::splat(1.0 / count as f32);
+            let mut sum = PrimarySample::default();
+            let mut depth = f32::INFINITY;
+            for s in 0..count {
+                let mut sampler = Sampler::new(settings.seed, pixel as u64, s as u64);
+                let jitter = if side == 1 {
+                    Vec2::splat(0.5)
+                } else {
+                    (Vec2::new((s % side) as f32, (s / side) as f32) + sampler.next_2d())
+                        / side as f32
+                };
+                let (o, d) = camera.generate_ray(Vec2::new(x as f32, y as f32) + jitter);
+                // The first sample of each quarter of the strata gathers, for the quarter.
+                let (sx, sy, half) = (s % side, s / side, side.div_ceil(2));
+                let gathers = side == 1 || (sx % half == 0 && sy % half == 0);
+                let block = if side == 1 { 1 } else { half * half };
+                let cs = CameraSample {
+                    o,
+                    d,
+                    pixel,
+                    weight,
+                    gather_weight: gathers.then(|| weight * block as f32),
+                };
+                let r = trace_primary(ctx, settings, cs, &mut sampler, &mut out.receivers);
+                sum.direct += r.direct;
+                sum.albedo += r.albedo * weight;
+                sum.normal += r.normal * weight;
+                depth = depth.min(r.depth);
+            }
+            sum.normal = sum.normal.normalize_or_zero();
+            sum.depth = depth;
+            out.samples += count as u64;
+            out.pixels.push((pixel, sum));
+        }
+    }
+    out
+}
+
+/// A receiver's buffer: spherical when it transmits, refined by its BSDF when glossy.
+fn receiver_buffer(r: &Receiver, settings: &FinalSettings) -> Microbuffer {
+    let mut mb = Microbuffer::new(settings.mb_size, r.bsdf.is_two_sided(), r.frame);
+    if settings.adaptive && is_glossy(r, settings) {
+        mb.refine_for_bsdf(
+            &r.bsdf,
+            r.view,
+            settings.adaptive_share,
+            settings.adaptive_levels,
+        );
+    }
+    mb
+}
+
+fn is_glossy(r: &Receiver, settings: &FinalSettings) -> bool {
+    r.bsdf.alpha().is_some_and(|a| a < settings.glossy_below)
+}
+
+/// Gather every receiver of a tile; returns (pixel, weighted indirect radiance) pairs.
+fn gather_tile(
+    senders: &Senders,
+    receivers: &[Receiver],
+    settings: &FinalSettings,
+) -> (Vec<(u32, Rgb)>, GatherStats) {
+    let mut stats = GatherStats {
+        receivers: receivers.len() as u64,
+        ..Default::default()
+    };
+    let mut out = Vec::with_capacity(receivers.len());
+    let mut stack = Vec::new();
+    let root = [0u32];
+    let start: &[u32] = if senders.nodes.is_empty() { &[] } else { &root };
+    let clustered: Vec<usize> = match settings.gather {
+        GatherMode::Pbgi => Vec::new(),
+        GatherMode::Fpbgi => (0..receivers.len())
+            .filter(|&i| !is_glossy(&receivers[i], settings))
+            .collect(),
+    };
+    let mut alone = vec![true; receivers.len()];
+    for &i in &clustered {
+        alone[i] = false;
+    }
+    for (r, _) in receivers.iter().zip(&alone).filter(|(_, a)| **a) {
+        let mut mb = receiver_buffer(r, settings);
+        stats.receiver_cut += splat_cut(senders, r.p, r.mesh, &mut mb, start, &mut stack);
+        mb.resolve();
+        stats.pixels += mb.pixels.len() as u64;
+        out.push((r.pixel, r.weight * mb.convolve(&r.bsdf, r.view)));
+    }
+    if !clustered.is_empty() && !start.is_empty() {
+        let points: Vec<(Vec3, Vec3)> = clustered
+            .iter()
+            .map(|&i| (receivers[i].p, receivers[i].frame.n))
+            .collect();
+        let clusters = cluster(&points, settings.clusters);
+        stats.clustered = clustered.len() as u64;
+        stats.clusters = clusters.len() as u64;
+        for c in &clusters {
+            let active = &receivers[clustered[c.active as usize]];
+            let cut = cluster_cut(
+                senders,
+                active.p,
+                active.mesh,
+                active.frame,
+                c.radius,
+                settings.far_eps,
+                settings.mb_size,
+            );
+            stats.cluster_cut += cut.stats;
+            for &m in &c.members {
+                let r = &receivers[clustered[m as usize]];
+                let mut mb = receiver_buffer(r, settings);
+                stats.receiver_cut +=
+                    member_buffer(senders, &cut, r.p, r.mesh, &mut mb, &mut stack);
+                stats.pixels += mb.pixels.len() as u64;
+                out.push((r.pixel, r.weight * mb.convolve(&r.bsdf, r.view)));
+            }
+        }
+    }
+    (out, stats)
+}

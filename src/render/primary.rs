@@ -1,0 +1,272 @@
+//! What the camera sees before the gather (DESIGN.md §7, spec §2.3 step 0): the primary hit,
+//! emission, direct light by ray tracing, and for receivers smoother than the specular cut-off
+//! their reflection / refraction chain, followed by ray tracing to the first rough hit.
+//!
+//! Every rough hit becomes a [`Receiver`] of indirect light, weighted by the throughput that
+//! led to it; the gather fills in its indirect light later.
+//!
+//! Path depth follows Mitsuba's `max_depth` (segments): a rough hit reached over `c` chain
+//! vertices shows emission if `c + 1 ≤ max_depth`, direct light if `c + 2 ≤ max_depth`, and
+//! the cache's light (one bounce of a direct-only bake) if `c + 3 ≤ max_depth`.
+
+use crate::bsdf::fresnel::fresnel_dielectric;
+use crate::bsdf::{Bsdf, TransportMode};
+use crate::geometry::frame::Frame;
+use crate::reference::{intersect, RenderContext, SurfaceHit};
+use crate::sampler::{sobol02, Sampler};
+use crate::spectrum::{max_component, Rgb};
+use glam::Vec3;
+
+/// A rough surface point that gathers indirect light from the cache.
+#[derive(Clone, Debug)]
+pub struct Receiver {
+    /// Where its light goes: the image pixel (row-major).
+    pub pixel: u32,
+    /// Throughput from the camera sample to this point, over the pixel's sample count.
+    pub weight: Rgb,
+    pub p: Vec3,
+    /// The mesh it lies on.
+    pub mesh: u32,
+    pub frame: Frame,
+    pub bsdf: Bsdf,
+    /// Direction towards the viewer, in `frame`.
+    pub view: Vec3,
+}
+
+/// What one camera sample contributes directly, and the first hit's AOVs.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PrimarySample {
+    /// Emission and direct light.
+    pub direct: Rgb,
+    pub albedo: Rgb,
+    pub normal: Vec3,
+    /// Distance to the first hit (∞ for none).
+    pub depth: f32,
+}
+
+/// The settings the primary pass reads.
+#[derive(Clone, Copy, Debug)]
+pub struct PrimarySettings {
+    pub max_depth: i32,
+    /// Emitter samples per rough hit (and as many BSDF samples for glossy ones).
+    pub light_samples: u32,
+    /// Receivers with roughness below this follow their chain instead of gathering.
+    pub specular_below: f32,
+    /// Longest specular chain, in vertices.
+    pub chain_depth: u32,
+    pub seed: u64,
+}
+
+/// Whether a path of `segments` segments is within `max_depth` (−1: unlimited).
+fn within(max_depth: i32, segments: u32) -> bool {
+    max_depth < 0 || segments as i64 <= max_depth as i64
+}
+
+/// Power heuristic with exponent 2.
+fn mis(a: f32, b: f32) -> f32 {
+    let (a2, b2) = (a * a, b * b);
+    if a2 + b2 > 0.0 && a2.is_finite() {
+        a2 / (a2 + b2)
+    } else {
+        0.0
+    }
+}
+
+/// An estimate of the surface's colour for the albedo AOV.
+fn albedo(bsdf: &Bsdf) -> Rgb {
+    match bsdf {
+        Bsdf::Diffuse(d) => d.reflectance,
+        Bsdf::Conductor(c) => {
+            crate::bsdf::fresnel::fresnel_conductor(1.0, c.eta, c.k) * c.specular_reflectance
+        }
+        Bsdf::Dielectric(d) => d.specular_transmittance,
+        Bsdf::ThinDielectric(d) => d.specular_transmittance,
+    }
+}
+
+/// A camera sample: its ray, pixel, weight in the pixel, and the weight of its receivers
+/// (`None`: it gathers nothing, another sample of the pixel gathers for it).
+#[derive(Clone, Copy, Debug)]
+pub struct CameraSample {
+    pub o: Vec3,
+    pub d: Vec3,
+    pub pixel: u32,
+    pub weight: Rgb,
+    pub gather_weight: Option<Rgb>,
+}
+
+/// Trace camera sample `cs`, pushing its receivers.
+pub fn trace_primary(
+    ctx: &RenderContext,
+    settings: &PrimarySettings,
+    cs: CameraSample,
+    sampler: &mut Sampler,
+    receivers: &mut Vec<Receiver>,
+) -> PrimarySample {
+    let CameraSample {
+        o,
+        d,
+        pixel,
+        weight,
+        gather_weight,
+    } = cs;
+    let gather_scale = gather_weight.map(|g| g / weight);
+    let mut out = PrimarySample {
+        depth: f32::INFINITY,
+        ..Default::default()
+    };
+    let mut stack = vec![(o, d, weight, 0u32)];
+    let mut first = true;
+    while let Some((o, d, throughput, chain)) = stack.pop() {
+        let Some(hit) = intersect(ctx, o, d) else {
+            continue;
+        };
+        let material = &ctx.scene.materials[ctx.scene.meshes[hit.mesh as usize].material];
+        let bsdf = material.bsdf_at(&ctx.scene.textures, hit.uv);
+        let view = hit.frame.to_local(-d);
+        if first {
+            out.albedo = albedo(&bsdf);
+            out.normal = hit.frame.n;
+            out.depth = hit.t;
+            first = false;
+        }
+        if within(settings.max_depth, chain + 1) {
+            let le = material.emission_at(&ctx.scene.textures, hit.uv, view.z > 0.0);
+            out.direct += throughput * le;
+        }
+        let smooth = bsdf.alpha().is_some_and(|a| a < settings.specular_below);
+        if smooth {
+            if chain < settings.chain_depth && within(settings.max_depth, chain + 2) {
+                for (wo, w) in specular_branches(&bsdf, view, sampler) {
+                    let t = throughput * w;
+                    if max_component(t) > 1e-4 * max_component(weight) && t.is_finite() {
+                        let world = hit.frame.to_world(wo).normalize();
+                        stack.push((hit.spawn(world), world, t, chain + 1));
+                    }
+                }
+            }
+            continue;
+        }
+        if !bsdf.is_two_sided() && view.z <= 0.0 {
+            continue;
+        }
+        if within(settings.max_depth, chain + 2) {
+            out.direct += throughput * direct_light(ctx, settings, &hit, &bsdf, view, sampler);
+        }
+        if let Some(scale) = gather_scale.filter(|_| within(settings.max_depth, chain + 3)) {
+            receivers.push(Receiver {
+                pixel,
+                weight: throughput * scale,
+                p: hit.p,
+                mesh: hit.mesh,
+                frame: hit.frame,
+                bsdf,
+                view,
+            });
+        }
+    }
+    if !out.direct.is_finite() {
+        out.direct = Rgb::ZERO;
+    }
+    out
+}
+
+/// The branches of a smooth surface: its mirror reflection and (for dielectrics) its
+/// refraction, each with its weight, so that the chain is deterministic instead of picking a
+/// branch at random. The BSDF is still sampled (its roughness, however small, is Mitsuba's).
+fn specular_branches(bsdf: &Bsdf, view: Vec3, sampler: &mut Sampler) -> Vec<(Vec3, Rgb)> {
+    let u = sampler.next_2d();
+    let sample = |u0: f32| bsdf.sample(view, u0, u, TransportMode::Radiance);
+    match bsdf {
+        Bsdf::Dielectric(b) => {
+            // Lobe selection by Fresnel: u0 below F reflects. Each branch's weight is its
+            // sample weight times its selection probability.
+            let f = fresnel_dielectric(view.z, b.eta).r;
+            let mut out = Vec::new();
+            if f > 0.0 {
+                if let Some(s) = sample(0.0) {
+                    out.push((s.wo, s.weight * f));
+                }
+            }
+            if f < 1.0 {
+                if let Some(s) = sample(1.0 - f32::EPSILON) {
+                    out.push((s.wo, s.weight * (1.0 - f)));
+                }
+            }
+            out
+        }
+        _ => sample(sampler.next_1d())
+            .map(|s| (s.wo, s.weight))
+            .into_iter()
+            .collect(),
+    }
+}
+
+/// Direct light at a rough hit: `light_samples` emitter samples, stratified over the emitters
+/// and over each emitter's surface; for glossy BSDFs as many BSDF samples, combined by the
+/// power heuristic. Returns the outgoing radiance towards `view`.
+fn direct_light(
+    ctx: &RenderContext,
+    settings: &PrimarySettings,
+    hit: &SurfaceHit,
+    bsdf: &Bsdf,
+    view: Vec3,
+    sampler: &mut Sampler,
+) -> Rgb {
+    let k = settings.light_samples.max(1);
+    let glossy = !matches!(bsdf, Bsdf::Diffuse(_));
+    let scramble = [
+        (sampler.next_1d() * 16_777_216.0) as u32 * 256,
+        (sampler.next_1d() * 16_777_216.0) as u32 * 256,
+    ];
+    let shift = sampler.next_1d();
+    let mut sum = Rgb::ZERO;
+    for i in 0..k {
+        let u_sel = ((i as f32 + shift) / k as f32).min(1.0 - f32::EPSILON);
+        let Some(es) = ctx
+            .emitters
+            .sample(ctx.scene, hit.p, u_sel, sobol02(i, scramble))
+        else {
+            continue;
+        };
+        let wo = hit.frame.to_local(es.wi);
+        let f = bsdf.eval(view, wo, TransportMode::Radiance);
+        if f == Rgb::ZERO || !es.visible_from(&ctx.accel, hit.spawn(es.wi)) {
+            continue;
+        }
+        let w = if es.delta || !glossy {
+            1.0
+        } else {
+            mis(es.pdf, bsdf.pdf(view, wo))
+        };
+        sum += f * es.value * w;
+    }
+    if glossy {
+        let scramble = [scramble[1] ^ 0x5bd1_e995, scramble[0] ^ 0x1b87_3593];
+        for i in 0..k {
+            let u0 = ((i as f32 + shift) / k as f32).min(1.0 - f32::EPSILON);
+            let Some(bs) = bsdf.sample(view, u0, sobol02(i, scramble), TransportMode::Radiance)
+            else {
+                continue;
+            };
+            let dir = hit.frame.to_world(bs.wo).normalize();
+            let Some(h) = intersect(ctx, hit.spawn(dir), dir) else {
+                continue;
+            };
+            let m = &ctx.scene.materials[ctx.scene.meshes[h.mesh as usize].material];
+            if m.emission.is_none() {
+                continue;
+            }
+            let le = m.emission_at(&ctx.scene.textures, h.uv, h.frame.to_local(-dir).z > 0.0);
+            if le == Rgb::ZERO {
+                continue;
+            }
+            let w = mis(
+                bs.pdf,
+                ctx.emitters.pdf_hit(h.mesh, h.triangle, h.t, dir, h.ng),
+            );
+            sum += bs.weight * le * w;
+        }
+    }
+    sum / k as f32
+}
