@@ -29,6 +29,9 @@ pub const NEAR_RADII: f32 = 4.0;
 /// The most pieces per side of a split leaf.
 pub const MAX_PIECES: u32 = 64;
 
+/// Pieces per pixel width of a split leaf.
+pub const PIECES_PER_PIXEL: f32 = 1.0;
+
 /// What one traversal did (for the render statistics).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct CutStats {
@@ -120,7 +123,7 @@ pub fn splat_cut(
 }
 
 /// Splat surfel `i`, at distance `d` from the receiver (position, mesh), as m × m equal-area
-/// pieces of its disc, each no wider than half of `pixel` (the bound uses the whole disc's
+/// pieces of its disc, each no wider than `pixel` (the bound uses the whole disc's
 /// solid angle seen face-on from its nearest point). Returns the pieces splatted.
 fn split_leaf(
     senders: &Senders,
@@ -150,10 +153,10 @@ fn split_leaf(
     }
     let nearest = (d - radius).max(0.25 * radius);
     let bound = s.area / (nearest * nearest);
-    // Two pieces per pixel width, so that their footprints overlap and cover each pixel of
-    // the disc evenly (one per pixel leaves 30 % holes in some pixels, through which a bright
-    // surface behind leaks).
-    let m = ((2.0 * (bound / pixel).sqrt()).ceil() as u32).clamp(2, MAX_PIECES);
+    // At least one piece per pixel width; the cap matters only within a fraction of a
+    // radius of the disc (a cap of 16 left 30 % holes under a sphere resting on a floor, through
+    // which the light behind leaked).
+    let m = ((PIECES_PER_PIXEL * (bound / pixel).sqrt()).ceil() as u32).clamp(2, MAX_PIECES);
     let frame = Frame::from_normal(ns);
     let piece_area = s.area / (m * m) as f32;
     let piece_radius = radius / m as f32;

@@ -127,6 +127,8 @@ pub struct Microbuffer {
     pub depth: Vec<f32>,
     pub alpha: Vec<f32>,
     pending: Vec<Splat>,
+    /// Cells still to visit while splatting (kept to save allocations).
+    scratch: Vec<u32>,
 }
 
 /// The base grid of one size, built once and copied into every buffer of that size.
@@ -235,6 +237,7 @@ impl Microbuffer {
             depth: vec![f32::INFINITY; count],
             alpha: vec![0.0; count],
             pending: Vec::new(),
+            scratch: Vec::new(),
         }
     }
 
@@ -405,35 +408,37 @@ impl Microbuffer {
         let base = u32::from(lower) * self.n * self.n;
         let (bx0, bx1) = ((x0 * n) as u32, ((x1 * n) as u32).min(self.n - 1));
         let (by0, by1) = ((y0 * n) as u32, ((y1 * n) as u32).min(self.n - 1));
-        let mut stack: Vec<u32> = Vec::new();
+        let mut stack = std::mem::take(&mut self.scratch);
         for by in by0..=by1 {
             for bx in bx0..=bx1 {
                 stack.push(base + by * self.n + bx);
+                while let Some(c) = stack.pop() {
+                    let cell = self.cells[c as usize];
+                    let (cx0, cy0) = (cell.corner.x, cell.corner.y);
+                    let o = overlap(x0, x1, cx0, cx0 + cell.side)
+                        * overlap(y0, y1, cy0, cy0 + cell.side);
+                    if o <= 0.0 {
+                        continue;
+                    }
+                    if cell.children != NO_CELL {
+                        stack.extend(cell.children..cell.children + 4);
+                        continue;
+                    }
+                    let k = cell.pixel as usize;
+                    // One sender covers a pixel at most once (a huge near one is clamped to
+                    // the map).
+                    let coverage = (solid_angle * (o / area) / self.pixels[k].solid_angle).min(1.0);
+                    self.pending.push(Splat {
+                        pixel: k as u32,
+                        dist,
+                        cos,
+                        coverage,
+                        sender: *sender,
+                    });
+                }
             }
         }
-        while let Some(c) = stack.pop() {
-            let cell = self.cells[c as usize];
-            let (cx0, cy0) = (cell.corner.x, cell.corner.y);
-            if overlap(x0, x1, cx0, cx0 + cell.side) * overlap(y0, y1, cy0, cy0 + cell.side) <= 0.0
-            {
-                continue;
-            }
-            if cell.children != NO_CELL {
-                stack.extend(cell.children..cell.children + 4);
-                continue;
-            }
-            let k = cell.pixel as usize;
-            let o = overlap(x0, x1, cx0, cx0 + cell.side) * overlap(y0, y1, cy0, cy0 + cell.side);
-            // One sender covers a pixel at most once (a huge near one is clamped to the map).
-            let coverage = (solid_angle * (o / area) / self.pixels[k].solid_angle).min(1.0);
-            self.pending.push(Splat {
-                pixel: k as u32,
-                dist,
-                cos,
-                coverage,
-                sender: *sender,
-            });
-        }
+        self.scratch = stack;
         true
     }
 
@@ -463,9 +468,10 @@ impl Microbuffer {
     /// A layer then hides the fraction it covers of everything behind it. A pixel half covered by the edge of a surface gets half its
     /// light (a plain z-test lights it fully: +24 % irradiance under a disc at 16 × 16).
     pub fn resolve(&mut self) {
-        // Stable: equal keys keep their (deterministic) splatting order.
+        // By pixel, then distance (positive floats order as their bits). The sort is
+        // deterministic for a given splat order, which is fixed.
         self.pending
-            .sort_by(|a, b| a.pixel.cmp(&b.pixel).then(a.dist.total_cmp(&b.dist)));
+            .sort_unstable_by_key(|s| (u64::from(s.pixel) << 32) | u64::from(s.dist.to_bits()));
         self.radiance.fill(Rgb::ZERO);
         self.cos_radiance.fill(Rgb::ZERO);
         self.alpha.fill(0.0);

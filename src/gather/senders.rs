@@ -38,6 +38,8 @@ pub struct SenderNode {
     /// Normal cone: every surfel normal below is within `cone_angle` of `axis`.
     pub axis: Vec3,
     pub cone_angle: f32,
+    /// sin(cone_angle), or above 1 for cones wider than a hemisphere.
+    pub sin_cone: f32,
     /// Σ A n over the surfels below: for directions where every normal below faces the same
     /// way, the projected area is exactly |N·ω|.
     pub area_normal: Vec3,
@@ -91,6 +93,11 @@ impl Senders {
                 },
                 axis: Vec3::from(r.axis),
                 cone_angle: r.cone_angle,
+                sin_cone: if r.cone_angle < std::f32::consts::FRAC_PI_2 {
+                    r.cone_angle.sin()
+                } else {
+                    2.0
+                },
                 area_normal: Vec3::ZERO,
             })
             .collect();
@@ -211,8 +218,7 @@ impl Senders {
     /// when ω is more than the cone's angle away from the plane ⊥ the axis. The 8 × 8 map's
     /// texels (25° wide) would otherwise bias the coverage by a few percent.
     fn exact_projected(&self, node: &SenderNode, w: Vec3) -> Option<f32> {
-        let elevation = node.axis.dot(w).clamp(-1.0, 1.0).abs().asin();
-        (elevation > node.cone_angle).then(|| node.area_normal.dot(w).abs())
+        (node.axis.dot(w).abs() > node.sin_cone).then(|| node.area_normal.dot(w).abs())
     }
 
     /// Reflected radiance leaving surfel `i` along `w` (`cos` = n·w) towards a receiver on

@@ -77,7 +77,7 @@ impl Default for FinalSettings {
             glossy_below: 0.4,
             adaptive_share: 1.0 / 64.0,
             adaptive_levels: 5,
-            light_samples: 16,
+            light_samples: 32,
             specular_below: 0.03,
             chain_depth: 8,
             max_depth: -1,

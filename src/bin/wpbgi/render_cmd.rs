@@ -59,7 +59,7 @@ pub struct RenderArgs {
     #[arg(long)]
     pub uniform: bool,
     /// Emitter samples per shading point for direct light.
-    #[arg(long, default_value_t = 16)]
+    #[arg(long, default_value_t = 32)]
     pub light_samples: u32,
     /// Longest path in segments, as Mitsuba's max_depth (-1: everything the cache holds).
     #[arg(long, default_value_t = -1, allow_hyphen_values = true)]
