@@ -1,6 +1,6 @@
 //! The path-tracing loop for one camera sample (Mitsuba's `path` integrator).
 
-use super::RenderContext;
+use super::{RenderContext, Transport};
 use crate::bsdf::TransportMode;
 use crate::geometry::frame::Frame;
 use crate::geometry::offset::{interpolate_with_error, offset_origin};
@@ -87,6 +87,8 @@ pub fn radiance(ctx: &RenderContext, mut o: Vec3, mut d: Vec3, sampler: &mut Sam
     // The BSDF density of the direction that led here (for MIS at emitter hits).
     let mut prev_bsdf_pdf = 1.0_f32;
     let mut prev_delta = true;
+    // For `Transport::CacheOneBounce`: rough vertices and chain vertices so far.
+    let (mut rough, mut chain) = (0u32, 0u32);
     while let Some(si) = intersect(ctx, o, d) {
         let material = &scene.materials[scene.meshes[si.mesh as usize].material];
         let wi = si.frame.to_local(-d);
@@ -109,10 +111,33 @@ pub fn radiance(ctx: &RenderContext, mut o: Vec3, mut d: Vec3, sampler: &mut Sam
             break;
         }
         let bsdf = material.bsdf_at(&scene.textures, si.uv);
+        let mut nee = true;
+        if let Transport::CacheOneBounce {
+            smooth_below,
+            chain: longest,
+        } = ctx.transport
+        {
+            // After two rough vertices only the emission found from the second counts (its
+            // MIS partner is the second's next-event estimate).
+            if rough == 2 {
+                break;
+            }
+            if rough == 0 && bsdf.alpha().is_some_and(|a| a < smooth_below) {
+                if chain == longest {
+                    break;
+                }
+                chain += 1;
+                nee = false;
+            } else {
+                rough += 1;
+            }
+        }
         // Next-event estimation.
         let u_sel = sampler.next_1d();
         let u_em = sampler.next_2d();
-        if let Some(es) = ctx.emitters.sample(scene, si.p, u_sel, u_em) {
+        if !nee {
+            // A chain vertex: the emission found next counts fully (the render's chains).
+        } else if let Some(es) = ctx.emitters.sample(scene, si.p, u_sel, u_em) {
             let wo = si.frame.to_local(es.wi);
             let f = bsdf.eval(wi, wo, TransportMode::Radiance);
             if f != Rgb::ZERO && es.visible_from(&ctx.accel, si.spawn(es.wi)) {
@@ -134,7 +159,7 @@ pub fn radiance(ctx: &RenderContext, mut o: Vec3, mut d: Vec3, sampler: &mut Sam
         throughput *= bs.weight;
         eta *= bs.eta;
         prev_bsdf_pdf = bs.pdf;
-        prev_delta = false;
+        prev_delta = !nee;
         o = si.spawn(wo_world);
         d = wo_world.normalize();
         depth += 1;

@@ -39,6 +39,20 @@ pub struct RenderSettings {
     pub seed: u64,
     /// Render passes of `spp` samples until this much time has passed.
     pub time_limit: Option<Duration>,
+    /// The light transport to estimate.
+    pub transport: Transport,
+}
+
+/// Which paths the path tracer sums.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Transport {
+    /// Every path (within `max_depth`): the ground truth.
+    Full,
+    /// The paths the final render from a direct-only cache sums (`crate::render`), for
+    /// testing it: up to `chain` vertices smoother than `smooth_below` (no next-event
+    /// estimation there), then a rough vertex lit directly and by one more vertex that is
+    /// itself lit directly.
+    CacheOneBounce { smooth_below: f32, chain: u32 },
 }
 
 impl Default for RenderSettings {
@@ -49,6 +63,7 @@ impl Default for RenderSettings {
             rr_depth: 5,
             seed: 0,
             time_limit: None,
+            transport: Transport::Full,
         }
     }
 }
@@ -70,6 +85,7 @@ pub struct RenderContext<'a> {
     pub emitters: EmitterSampler,
     pub max_depth: i32,
     pub rr_depth: u32,
+    pub transport: Transport,
 }
 
 impl<'a> RenderContext<'a> {
@@ -80,6 +96,7 @@ impl<'a> RenderContext<'a> {
             emitters: EmitterSampler::new(scene),
             max_depth: settings.max_depth,
             rr_depth: settings.rr_depth,
+            transport: settings.transport,
         }
     }
 }

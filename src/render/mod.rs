@@ -1,8 +1,9 @@
 //! The final render from a cache (DESIGN.md §7, spec §2.3, §3, §7).
 //!
 //! 1. Centre rays find the primary hits; pixels on an edge (another mesh, a normal turning by
-//!    more than 25°, or a depth step of 5 %) get 8 × 8 stratified samples, of which one per
-//!    quarter gathers; the others one sample (adaptive anti-aliasing).
+//!    more than 25°, or a depth step of 5 %) or on a mirror or clear glass get 8 × 8
+//!    stratified samples, of which one per quarter gathers; the others one sample (adaptive
+//!    anti-aliasing).
 //! 2. Each camera sample is traced to its rough hits ([`primary`]): emission, direct light by
 //!    ray tracing, specular chains; every rough hit becomes a receiver.
 //! 3. The gather, per 32 × 32 tile: receivers get their indirect light from the cache through
@@ -184,7 +185,7 @@ pub fn render_final(
 
     let (w, h) = (camera.width, camera.height);
     let t = Instant::now();
-    let centre = centre_hits(&ctx, camera);
+    let centre = centre_hits(&ctx, camera, settings.specular_below);
     let tiles: Vec<(u32, u32)> = (0..h.div_ceil(TILE))
         .flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx, ty)))
         .collect();
@@ -258,24 +259,37 @@ pub fn render_final(
     Ok(out)
 }
 
-/// The primary hit through each pixel centre: mesh, shading normal, distance.
-type CentreHit = Option<(u32, Vec3, f32)>;
+/// The primary hit through each pixel centre: mesh, shading normal, distance, and whether
+/// the surface is smooth enough to start a specular chain.
+type CentreHit = Option<(u32, Vec3, f32, bool)>;
 
-fn centre_hits(ctx: &RenderContext, camera: &Camera) -> Vec<CentreHit> {
+fn centre_hits(ctx: &RenderContext, camera: &Camera, specular_below: f32) -> Vec<CentreHit> {
     let (w, h) = (camera.width, camera.height);
     (0..w * h)
         .into_par_iter()
         .map(|i| {
             let film = Vec2::new((i % w) as f32 + 0.5, (i / w) as f32 + 0.5);
             let (o, d) = camera.generate_ray(film);
-            intersect(ctx, o, d).map(|hit| (hit.mesh, hit.frame.n, hit.t))
+            intersect(ctx, o, d).map(|hit| {
+                let m = &ctx.scene.materials[ctx.scene.meshes[hit.mesh as usize].material];
+                let smooth = m
+                    .bsdf_at(&ctx.scene.textures, hit.uv)
+                    .alpha()
+                    .is_some_and(|a| a < specular_below);
+                (hit.mesh, hit.frame.n, hit.t, smooth)
+            })
         })
         .collect()
 }
 
-/// Whether pixel `(x, y)` lies on an edge of what its centre rays see.
+/// Whether pixel `(x, y)` needs many samples: it lies on an edge of what its centre rays see,
+/// or it sees a mirror or clear glass (whose reflected and refracted edges the centre ray
+/// cannot tell).
 fn is_edge(centre: &[CentreHit], w: u32, h: u32, x: u32, y: u32) -> bool {
     let here = centre[(y * w + x) as usize];
+    if here.is_some_and(|c| c.3) {
+        return true;
+    }
     let neighbours = [(-1i64, 0i64), (1, 0), (0, -1), (0, 1)];
     neighbours.iter().any(|(dx, dy)| {
         let (nx, ny) = (x as i64 + dx, y as i64 + dy);

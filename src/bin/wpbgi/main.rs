@@ -189,6 +189,7 @@ fn reference(a: ReferenceArgs) -> Result<()> {
             Some(_) => bail!("--time must be a positive number of seconds"),
             None => None,
         },
+        ..Default::default()
     };
     let out = run_render(&scene, &camera, &settings)?;
     write_exr(&a.output, &out.mean)?;
