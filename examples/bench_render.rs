@@ -5,7 +5,7 @@
 //! 2. FPBGI against plain PBGI on the same cache: gather time, nodes visited (the cut) and
 //!    splats (the rasterisation), and the relMSE between the two images.
 //! 3. Adaptive against uniform microbuffers for the glossy scene: error and gather time of
-//!    the adaptive 16² buffer and of uniform buffers of 16², 32², 64².
+//!    the adaptive 16² buffer and of uniform buffers of 16² and 32².
 //!
 //! `cargo run --release --example bench_render [-- SCENE_NAME]` (cbox-diffuse, cbox-rough or
 //! cbox-glossy from tests/data/mitsuba; default: all three for 1 and 2, glossy for 3).
@@ -125,7 +125,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 gather_seconds(&fast),
                 f.pixels
             );
-            for n in [16, 32, 64] {
+            for n in [16, 32] {
                 let u = render_final(
                     &scene,
                     &cache,

@@ -49,7 +49,9 @@ pub struct FinalSettings {
     pub mb_size: u32,
     /// Refine glossy receivers' buffers by BSDF importance (spec §7); off: uniform buffers.
     pub adaptive: bool,
-    /// Receivers rougher than this are not glossy.
+    /// Receivers smoother than this are glossy: they gather alone, through buffers refined by
+    /// their BSDF (rougher lobes are resolved by the uniform buffer: on cbox-rough, α = 0.2
+    /// gave relMSE 7.4e-4 uniform against 7.9e-4 adaptive).
     pub glossy_below: f32,
     /// BSDF importance: split a pixel holding more than this share of the reflected light.
     pub adaptive_share: f32,
@@ -75,7 +77,7 @@ impl Default for FinalSettings {
             gather: GatherMode::Fpbgi,
             mb_size: 16,
             adaptive: true,
-            glossy_below: 0.4,
+            glossy_below: 0.15,
             adaptive_share: 1.0 / 64.0,
             adaptive_levels: 5,
             light_samples: 32,
