@@ -43,6 +43,8 @@ pub struct SenderNode {
     /// Σ A n over the surfels below: for directions where every normal below faces the same
     /// way, the projected area is exactly |N·ω|.
     pub area_normal: Vec3,
+    /// The fraction of the area below whose radiance is directional (non-diffuse).
+    pub directional: f32,
 }
 
 impl SenderNode {
@@ -99,6 +101,7 @@ impl Senders {
                     2.0
                 },
                 area_normal: Vec3::ZERO,
+                directional: 0.0,
             })
             .collect();
         if nodes
@@ -111,18 +114,32 @@ impl Senders {
             });
         }
         let mut nodes = nodes;
-        // Children come after their parents: sum Σ A n bottom-up.
+        // Children come after their parents: sum Σ A n and the directional area bottom-up
+        // (the latter kept as an area, then turned into a fraction).
+        let mut directional_area = vec![0.0f32; nodes.len()];
         for j in (0..nodes.len()).rev() {
             let n = nodes[j];
-            nodes[j].area_normal = if n.is_leaf() {
+            (nodes[j].area_normal, directional_area[j]) = if n.is_leaf() {
                 let s = &cache.surfels[n.surfel as usize];
-                Vec3::from(s.n) * s.area
+                let d = if s.map != NO_MAP { s.area } else { 0.0 };
+                (Vec3::from(s.n) * s.area, d)
             } else {
                 n.children
                     .iter()
                     .filter(|&&c| (c as usize) < nodes.len() && c as usize > j)
-                    .map(|&c| nodes[c as usize].area_normal)
-                    .sum()
+                    .fold((Vec3::ZERO, 0.0), |(a, d), &c| {
+                        (
+                            a + nodes[c as usize].area_normal,
+                            d + directional_area[c as usize],
+                        )
+                    })
+            };
+        }
+        for (n, (d, r)) in nodes.iter_mut().zip(directional_area.iter().zip(records)) {
+            n.directional = if r.area > 0.0 {
+                (d / r.area).min(1.0)
+            } else {
+                0.0
             };
         }
         let intensity = rebuild(cache, records, |r| (r.g, r.h))?;
