@@ -92,8 +92,6 @@ fn senders() -> Senders {
             _ => panic!("diffuse surfels store RGB"),
         }
     }
-    let total: f32 = baked.surfels.iter().map(|s| s.area).sum();
-    eprintln!("surfel area total {total}");
     let path = dir.join("square.wpc");
     write(
         &path,
@@ -127,45 +125,6 @@ fn gather_matches_the_integrated_irradiance() {
         splat_cut(&senders, p, u32::MAX, &mut mb, &[0], &mut stack);
         mb.resolve();
         let lo = mb.convolve(&white, Vec3::Z);
-        if std::env::var("DEBUG_GATHER").is_ok() {
-            // Per ring: ours vs exact ∫ L V cos over the ring (64² sub-samples per pixel).
-            let mut rings = std::collections::BTreeMap::new();
-            for k in 0..mb.pixels.len() {
-                let px = mb.pixels[k];
-                let ours = mb.cos_radiance[k].x * px.solid_angle;
-                let (i, j) = ((k as u32) % n, (k as u32) / n);
-                let m = 64;
-                let mut exact = 0.0f64;
-                for b in 0..m {
-                    for a in 0..m {
-                        let u = glam::Vec2::new(
-                            (i as f32 + (a as f32 + 0.5) / m as f32) / n as f32,
-                            (j as f32 + (b as f32 + 0.5) / m as f32) / n as f32,
-                        );
-                        let d = wpbgi::geometry::warp::square_to_hemisphere_equal_area(u);
-                        let w = frame.to_world(d);
-                        if w.y > 0.0 {
-                            let t = -p.y / w.y;
-                            let q = p + w * t;
-                            if q.x.abs() <= 1.0 && q.z.abs() <= 1.0 {
-                                exact += 0.5 * d.z as f64;
-                            }
-                        }
-                    }
-                }
-                exact *= px.solid_angle as f64 / (m * m) as f64;
-                let ring = (i.max(n - 1 - i)).max(j.max(n - 1 - j));
-                let e = rings.entry(ring).or_insert((0.0f64, 0.0f64));
-                e.0 += ours as f64;
-                e.1 += exact;
-            }
-            for (r, (o, e)) in rings {
-                eprintln!(
-                    "  ring {r}: ours {o:.5} exact {e:.5} ({:+.2} %)",
-                    100.0 * (o / e - 1.0)
-                );
-            }
-        }
         let gathered = lo.x as f64 * std::f64::consts::PI;
         let expected = irradiance(p, 0.5);
         let err = gathered / expected - 1.0;

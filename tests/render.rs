@@ -11,9 +11,11 @@
 //! through a dark one, or a wrong convolution each cost 3–40× more (measured while building
 //! it: 1.8e-2 with a leaking glass sphere, 3.5 with one firefly per image).
 
+mod common;
+
 use std::path::{Path, PathBuf};
-use wpbgi::bake::store::{bake_hash, write, BakedCache};
-use wpbgi::bake::{bake, BakeSettings, Quality};
+use wpbgi::bake::store::BakedCache;
+use wpbgi::bake::{BakeSettings, Quality};
 use wpbgi::image::{error_against, read_exr, Image};
 use wpbgi::render::{render_final, FinalOutput, FinalSettings, GatherMode};
 use wpbgi::scene::Scene;
@@ -27,19 +29,10 @@ fn data(name: &str) -> PathBuf {
 /// Bake `name` at draft quality into a temporary cache and open it.
 fn baked(name: &str) -> (Scene, BakedCache) {
     let scene = Scene::load(&data(&format!("{name}.gltf"))).expect("scene");
-    let settings = BakeSettings::from_quality(Quality::Draft);
-    let b = bake(&scene, &settings, &|_, _| {}).expect("bake");
     let dir = std::env::temp_dir().join(format!("wpbgi-render-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
-    let path = dir.join(format!("{name}.wpc"));
-    write(
-        &path,
-        bake_hash(&scene, &settings.to_json()),
-        &b,
-        serde_json::json!({}),
-    )
-    .expect("write");
-    let cache = BakedCache::read(&path, None).expect("read");
+    let settings = BakeSettings::from_quality(Quality::Draft);
+    let cache = common::bake_to_cache(&scene, &settings, &dir.join(format!("{name}.wpc")));
     (scene, cache)
 }
 

@@ -14,9 +14,10 @@
 //! instead of following their chains fails in 55 % of the mirror and glass pixel-channels
 //! (asserted above 30 %).
 
+mod common;
+
 use std::path::Path;
-use wpbgi::bake::store::{bake_hash, write, BakedCache};
-use wpbgi::bake::{bake, BakeSettings, Quality};
+use wpbgi::bake::{BakeSettings, Quality};
 use wpbgi::reference::{render, RenderOutput, RenderSettings, Transport};
 use wpbgi::render::{render_final, FinalOutput, FinalSettings};
 use wpbgi::scene::Scene;
@@ -43,16 +44,7 @@ fn mirror_box_and_glass_sphere_match_the_path_tracer() {
     let scene = Scene::load(&path).expect("load");
 
     let settings = BakeSettings::from_quality(Quality::Draft);
-    let baked = bake(&scene, &settings, &|_, _| {}).expect("bake");
-    let cache_path = dir.join("smooth.wpc");
-    write(
-        &cache_path,
-        bake_hash(&scene, &settings.to_json()),
-        &baked,
-        serde_json::json!({}),
-    )
-    .expect("write");
-    let cache = BakedCache::read(&cache_path, None).expect("read");
+    let cache = common::bake_to_cache(&scene, &settings, &dir.join("smooth.wpc"));
     let size = 64;
     let camera = scene.default_camera(size, size).expect("camera");
     let fs = FinalSettings::default();

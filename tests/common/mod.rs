@@ -94,3 +94,15 @@ pub fn closed_sphere(levels: u32) -> Mesh {
         material: 0,
     }
 }
+
+/// Bake `scene` with `settings` into a cache file at `path` and open it.
+pub fn bake_to_cache(
+    scene: &wpbgi::scene::Scene,
+    settings: &wpbgi::bake::BakeSettings,
+    path: &std::path::Path,
+) -> wpbgi::bake::store::BakedCache {
+    let baked = wpbgi::bake::bake(scene, settings, &|_, _| {}).expect("bake");
+    let hash = wpbgi::bake::store::bake_hash(scene, &settings.to_json());
+    wpbgi::bake::store::write(path, hash, &baked, serde_json::json!({})).expect("write");
+    wpbgi::bake::store::BakedCache::read(path, None).expect("read")
+}
