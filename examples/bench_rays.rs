@@ -21,12 +21,10 @@ use rayon::prelude::*;
 use std::time::Duration;
 use std::time::Instant;
 use wpbgi::accel::Accel;
-use wpbgi::bsdf::{Bsdf, Diffuse};
 use wpbgi::geometry::frame::Frame;
 use wpbgi::geometry::warp::square_to_cosine_hemisphere;
 use wpbgi::sampler::Sampler;
-use wpbgi::scene::{Camera, Material, Mesh, Scattering, Scene};
-use wpbgi::spectrum::Rgb;
+use wpbgi::scene::{Camera, Mesh, Scene};
 
 fn sphere(center: Vec3, radius: f32, levels: u32) -> Mesh {
     let mut m = common::closed_sphere(levels);
@@ -75,17 +73,7 @@ fn scene() -> Scene {
             meshes.push(sphere(c, 0.9, 5));
         }
     }
-    Scene {
-        meshes,
-        materials: vec![Material {
-            name: "grey".into(),
-            scattering: Scattering::Explicit(Bsdf::Diffuse(Diffuse {
-                reflectance: Rgb::splat(0.5),
-            })),
-            emission: None,
-        }],
-        ..Default::default()
-    }
+    common::grey_scene(meshes)
 }
 
 /// One ray query: true when the ray hit something.

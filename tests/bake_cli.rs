@@ -54,16 +54,28 @@ fn same_cache_for_one_and_two_threads() {
 
 /// Kill a long bake at several moments: the cache already at the target path must come through
 /// byte for byte, and with no earlier cache there must be no file at the target at all.
+/// Bake 2000 surfels to `out`, which must succeed.
+fn bake_ok(out: &Path) -> Output {
+    let o = bake(out, "2", "2000");
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    o
+}
+
+/// The scene with a brighter light (both its glTF strength and its explicit Mitsuba radiance,
+/// which wins), written into `d`: a cache of the original is stale for it.
+fn brighter_scene(d: &Path) -> PathBuf {
+    let changed = d.join("brighter.gltf");
+    let original = std::fs::read_to_string(scene()).expect("scene");
+    assert!(original.contains("18.387"));
+    std::fs::write(&changed, original.replace("18.387", "18.5")).expect("write");
+    changed
+}
+
 #[test]
 fn a_killed_bake_leaves_the_previous_cache_intact() {
     let d = dir("kill");
     let target = d.join("scene.wpc");
-    let out = bake(&target, "2", "2000");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    bake_ok(&target);
     let before = std::fs::read(&target).expect("first cache");
     let fresh = d.join("fresh.wpc");
     for delay_ms in [200u64, 700, 1500] {
@@ -106,12 +118,7 @@ fn a_killed_bake_leaves_the_previous_cache_intact() {
 fn inspect_reports_and_refuses_stale_caches() {
     let d = dir("inspect");
     let cache = d.join("scene.wpc");
-    let out = bake(&cache, "2", "2000");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let out = bake_ok(&cache);
     // JSON progress lines end with a summary.
     let stderr = String::from_utf8_lossy(&out.stderr);
     let last: serde_json::Value =
@@ -157,12 +164,8 @@ fn inspect_reports_and_refuses_stale_caches() {
     assert_eq!(body.lines().count(), 2000);
     assert!(body.lines().all(|l| l.split(' ').count() == 9));
 
-    // The same scene with a brighter light (both its glTF strength and its explicit Mitsuba
-    // radiance, which wins): the cache is stale for it.
-    let changed = d.join("brighter.gltf");
-    let original = std::fs::read_to_string(scene()).expect("scene");
-    assert!(original.contains("18.387"));
-    std::fs::write(&changed, original.replace("18.387", "18.5")).expect("write");
+    // The cache is stale for the same scene with a brighter light.
+    let changed = brighter_scene(&d);
     let out = wpbgi(&[
         "inspect",
         cache.to_str().expect("utf-8"),
@@ -190,12 +193,7 @@ fn inspect_reports_and_refuses_stale_caches() {
 fn render_writes_layers_and_refuses_stale_caches() {
     let d = dir("render");
     let cache = d.join("scene.wpc");
-    let out = bake(&cache, "2", "2000");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    bake_ok(&cache);
     let image = d.join("out.exr");
     let render = |scene: &Path| {
         wpbgi(&[
@@ -227,10 +225,7 @@ fn render_writes_layers_and_refuses_stale_caches() {
             "no channel {layer}"
         );
     }
-    let changed = d.join("brighter.gltf");
-    let original = std::fs::read_to_string(scene()).expect("scene");
-    std::fs::write(&changed, original.replace("18.387", "18.5")).expect("write");
-    let out = render(&changed);
+    let out = render(&brighter_scene(&d));
     assert!(!out.status.success());
     let msg = String::from_utf8_lossy(&out.stderr);
     assert!(msg.contains("stale") && msg.lines().count() == 1, "{msg}");

@@ -1,10 +1,10 @@
 //! Poisson-disk surfels: counts, areas, blue-noise spacing, thin walls and determinism.
 
+mod common;
+
 use glam::Vec3;
 use wpbgi::bake::{sample_surfels, Surfel};
-use wpbgi::bsdf::{Bsdf, Diffuse};
-use wpbgi::scene::{Material, Mesh, Scattering, Scene};
-use wpbgi::spectrum::Rgb;
+use wpbgi::scene::{Mesh, Scene};
 
 /// A square of side `s` in the plane z = `z`, facing +z (or −z when `up` is false).
 fn square(s: f32, offset: Vec3, up: bool) -> Mesh {
@@ -30,17 +30,7 @@ fn square(s: f32, offset: Vec3, up: bool) -> Mesh {
 }
 
 fn scene(meshes: Vec<Mesh>) -> Scene {
-    Scene {
-        meshes,
-        materials: vec![Material {
-            name: "grey".into(),
-            scattering: Scattering::Explicit(Bsdf::Diffuse(Diffuse {
-                reflectance: Rgb::splat(0.5),
-            })),
-            emission: None,
-        }],
-        ..Default::default()
-    }
+    common::grey_scene(meshes)
 }
 
 fn nearest_neighbour_distances(s: &[Surfel]) -> Vec<f32> {

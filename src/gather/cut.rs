@@ -80,15 +80,17 @@ pub fn splat_cut(
                 continue;
             }
             let dir = v / d;
-            let seen = senders.seen(j, -dir, mesh);
-            let omega = seen.projected / d2;
+            // A leaf's projected area is exact and cheap; its radiance is looked up only if it
+            // is splatted whole (split leaves look up each piece's).
             let s = &senders.surfels[node.surfel as usize];
+            let omega = s.area * Vec3::from(s.n).dot(dir).abs() / d2;
             let disc = (s.area / std::f32::consts::PI).sqrt();
             let pixel = mb
                 .pixel_of(dir)
                 .map_or(mb.pixel_solid_angle(), |k| mb.pixels[k].solid_angle);
             if omega <= pixel && d > NEAR_RADII * disc {
-                if seen.projected > 0.0 {
+                if omega > 0.0 {
+                    let seen = senders.seen(j, -dir, mesh);
                     stats.splats += u64::from(mb.splat(&senders.sender(j, v, seen), omega));
                 }
             } else {
@@ -97,19 +99,14 @@ pub fn splat_cut(
             }
             continue;
         }
-        // The bounding sphere's solid angle against the largest pixel first: it rejects most
-        // nodes near the root without a map lookup.
-        let sphere = std::f32::consts::PI * node.radius * node.radius / d2;
-        let accept = d > 2.0 * node.radius && sphere <= 4.0 * mb.pixel_solid_angle() && {
-            let dir = v / d;
-            mb.pixel_of(dir).is_some_and(|k| {
-                let pixel = mb.pixels[k].solid_angle;
-                sphere <= 4.0 * pixel && senders.projected_area(j, -dir) / d2 <= pixel
-            })
-        };
+        // Against the largest pixel first: it rejects most nodes near the root without a
+        // pixel lookup.
+        let accept = fits_pixel(senders, j, d2, v / d, mb.pixel_solid_angle())
+            && mb
+                .pixel_of(v / d)
+                .is_some_and(|k| fits_pixel(senders, j, d2, v / d, mb.pixels[k].solid_angle));
         if accept {
-            let dir = v / d;
-            let seen = senders.seen(j, -dir, mesh);
+            let seen = senders.seen(j, -v / d, mesh);
             stats.splats += u64::from(mb.splat(&senders.sender(j, v, seen), seen.projected / d2));
         } else {
             for c in node.children {
@@ -120,6 +117,17 @@ pub fn splat_cut(
         }
     }
     stats
+}
+
+/// Whether inner node `j`, at squared distance `d2` along unit direction `dir` from the
+/// receiver, may be splatted into a pixel of solid angle `pixel`: it is at least two radii
+/// away, its bounding sphere is not wider than four pixels, and the solid angle it covers,
+/// P/d², is no larger than the pixel.
+pub(crate) fn fits_pixel(senders: &Senders, j: u32, d2: f32, dir: Vec3, pixel: f32) -> bool {
+    let r = senders.nodes[j as usize].radius;
+    d2 > 4.0 * r * r
+        && std::f32::consts::PI * r * r / d2 <= 4.0 * pixel
+        && senders.projected_area(j, -dir) / d2 <= pixel
 }
 
 /// Splat surfel `i`, at distance `d` from the receiver (position, mesh), as m × m equal-area

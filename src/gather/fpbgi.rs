@@ -20,7 +20,7 @@
 //!   depth per pixel, the cluster buffer looked up along each member pixel's direction
 //!   (spec §3.4 step 3).
 
-use super::cut::{splat_cut, CutStats};
+use super::cut::{fits_pixel, splat_cut, CutStats};
 use super::microbuffer::Microbuffer;
 use super::senders::Senders;
 use crate::bake::tree::NONE;
@@ -171,10 +171,7 @@ pub fn cluster_cut(
         }
         let dir = v / d;
         let pixel = buffer.pixels[buffer.pixel_of(dir).unwrap_or(0)].solid_angle;
-        let small = node.is_leaf() || {
-            let bound = std::f32::consts::PI * node.radius * node.radius / d2;
-            bound <= 4.0 * pixel && senders.projected_area(j, -dir) / d2 <= pixel
-        };
+        let small = node.is_leaf() || fits_pixel(senders, j, d2, dir, pixel);
         if small {
             let seen = senders.seen(j, -dir, mesh);
             let omega = seen.projected / d2;

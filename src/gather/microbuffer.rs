@@ -428,13 +428,7 @@ impl Microbuffer {
                     // One sender covers a pixel at most once (a huge near one is clamped to
                     // the map).
                     let coverage = (solid_angle * (o / area) / self.pixels[k].solid_angle).min(1.0);
-                    self.pending.push(Splat {
-                        pixel: k as u32,
-                        dist,
-                        cos,
-                        coverage,
-                        sender: *sender,
-                    });
+                    self.record(k, dist, cos, coverage, sender);
                 }
             }
         }
@@ -447,26 +441,30 @@ impl Microbuffer {
         let dist = sender.offset.length();
         if coverage > 0.0 && dist > 0.0 && dist.is_finite() {
             let cos = self.frame.to_local(sender.offset / dist).z.abs();
-            self.pending.push(Splat {
-                pixel: k as u32,
-                dist,
-                cos,
-                coverage,
-                sender: *sender,
-            });
+            self.record(k, dist, cos, coverage, sender);
         }
+    }
+
+    fn record(&mut self, k: usize, dist: f32, cos: f32, coverage: f32, sender: &Sender) {
+        self.pending.push(Splat {
+            pixel: k as u32,
+            dist,
+            cos,
+            coverage,
+            sender: *sender,
+        });
     }
 
     /// Composite the recorded senders front to back in every pixel.
     ///
     /// Senders are grouped into layers, each the nearest remaining sender and those on its
     /// surface (see [`Sender`]; by depth alone, a surface seen at a grazing angle would split
-    /// into layers that hide one another). Within a layer the
-    /// coverages add without a clamp: the senders tile the surface, and a pixel that one of
-    /// them overlaps by more than its share is balanced by a neighbour that gets less (clamping
-    /// each pixel at full coverage loses 6 % of the light under an emitting disc at 16 × 16).
-    /// A layer then hides the fraction it covers of everything behind it. A pixel half covered by the edge of a surface gets half its
-    /// light (a plain z-test lights it fully: +24 % irradiance under a disc at 16 × 16).
+    /// into layers that hide one another). Within a layer the coverages add without a clamp:
+    /// the senders tile the surface, and a pixel that one of them overlaps by more than its
+    /// share is balanced by a neighbour that gets less (clamping each pixel at full coverage
+    /// loses 6 % of the light under an emitting disc at 16 × 16). A layer behind fills at most
+    /// what the nearer ones left open. A pixel half covered by the edge of a surface gets half
+    /// its light (a plain z-test lights it fully: +24 % irradiance under a disc at 16 × 16).
     pub fn resolve(&mut self) {
         // By pixel, then distance (positive floats order as their bits). The sort is
         // deterministic for a given splat order, which is fixed.

@@ -66,7 +66,7 @@ pub fn intersect(ctx: &RenderContext, o: Vec3, d: Vec3) -> Option<SurfaceHit> {
 
 /// Power heuristic with exponent 2.
 #[inline]
-fn mis(a: f32, b: f32) -> f32 {
+pub(crate) fn mis(a: f32, b: f32) -> f32 {
     let (a2, b2) = (a * a, b * b);
     if a2 + b2 > 0.0 && a2.is_finite() {
         a2 / (a2 + b2)

@@ -13,6 +13,7 @@
 
 mod integrator;
 
+pub(crate) use integrator::mis;
 pub use integrator::{intersect, radiance, SurfaceHit};
 
 use crate::accel::Accel;

@@ -409,17 +409,10 @@ fn gather_tile(
     let mut stack = Vec::new();
     let root = [0u32];
     let start: &[u32] = if senders.nodes.is_empty() { &[] } else { &root };
-    let clustered: Vec<usize> = match settings.gather {
-        GatherMode::Pbgi => Vec::new(),
-        GatherMode::Fpbgi => (0..receivers.len())
-            .filter(|&i| !is_glossy(&receivers[i], settings))
-            .collect(),
-    };
-    let mut alone = vec![true; receivers.len()];
-    for &i in &clustered {
-        alone[i] = false;
-    }
-    for (r, _) in receivers.iter().zip(&alone).filter(|(_, a)| **a) {
+    let (clustered, alone): (Vec<&Receiver>, Vec<&Receiver>) = receivers
+        .iter()
+        .partition(|r| settings.gather == GatherMode::Fpbgi && !is_glossy(r, settings));
+    for r in alone {
         let mut mb = receiver_buffer(r, settings);
         stats.receiver_cut += splat_cut(senders, r.p, r.mesh, &mut mb, start, &mut stack);
         mb.resolve();
@@ -427,15 +420,12 @@ fn gather_tile(
         out.push((r.pixel, r.weight * mb.convolve(&r.bsdf, r.view)));
     }
     if !clustered.is_empty() && !start.is_empty() {
-        let points: Vec<(Vec3, Vec3)> = clustered
-            .iter()
-            .map(|&i| (receivers[i].p, receivers[i].frame.n))
-            .collect();
+        let points: Vec<(Vec3, Vec3)> = clustered.iter().map(|r| (r.p, r.frame.n)).collect();
         let clusters = cluster(&points, settings.clusters);
         stats.clustered = clustered.len() as u64;
         stats.clusters = clusters.len() as u64;
         for c in &clusters {
-            let active = &receivers[clustered[c.active as usize]];
+            let active = clustered[c.active as usize];
             let cut = cluster_cut(
                 senders,
                 active.p,
@@ -447,7 +437,7 @@ fn gather_tile(
             );
             stats.cluster_cut += cut.stats;
             for &m in &c.members {
-                let r = &receivers[clustered[m as usize]];
+                let r = clustered[m as usize];
                 let mut mb = receiver_buffer(r, settings);
                 stats.receiver_cut +=
                     member_buffer(senders, &cut, r.p, r.mesh, &mut mb, &mut stack);

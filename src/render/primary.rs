@@ -12,7 +12,7 @@
 use crate::bsdf::fresnel::fresnel_dielectric;
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::geometry::frame::Frame;
-use crate::reference::{intersect, RenderContext, SurfaceHit};
+use crate::reference::{intersect, mis, RenderContext, SurfaceHit};
 use crate::sampler::{sobol02, Sampler};
 use crate::spectrum::{max_component, Rgb};
 use glam::Vec3;
@@ -60,16 +60,6 @@ pub struct PrimarySettings {
 /// Whether a path of `segments` segments is within `max_depth` (−1: unlimited).
 fn within(max_depth: i32, segments: u32) -> bool {
     max_depth < 0 || segments as i64 <= max_depth as i64
-}
-
-/// Power heuristic with exponent 2.
-fn mis(a: f32, b: f32) -> f32 {
-    let (a2, b2) = (a * a, b * b);
-    if a2 + b2 > 0.0 && a2.is_finite() {
-        a2 / (a2 + b2)
-    } else {
-        0.0
-    }
 }
 
 /// An estimate of the surface's colour for the albedo AOV.

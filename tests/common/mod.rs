@@ -106,3 +106,20 @@ pub fn bake_to_cache(
     wpbgi::bake::store::write(path, hash, &baked, serde_json::json!({})).expect("write");
     wpbgi::bake::store::BakedCache::read(path, None).expect("read")
 }
+
+/// A scene of `meshes`, all of one grey (albedo 0.5) diffuse material.
+pub fn grey_scene(meshes: Vec<Mesh>) -> wpbgi::scene::Scene {
+    use wpbgi::bsdf::{Bsdf, Diffuse};
+    use wpbgi::scene::{Material, Scattering, Scene};
+    Scene {
+        meshes,
+        materials: vec![Material {
+            name: "grey".into(),
+            scattering: Scattering::Explicit(Bsdf::Diffuse(Diffuse {
+                reflectance: wpbgi::spectrum::Rgb::splat(0.5),
+            })),
+            emission: None,
+        }],
+        ..Default::default()
+    }
+}

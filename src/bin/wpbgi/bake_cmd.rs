@@ -2,11 +2,9 @@
 
 use anyhow::{Context, Result};
 use clap::{Args, ValueEnum};
-use indicatif::ProgressBar;
 use serde_json::{json, Value};
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::sync::Mutex;
 use std::time::Instant;
 use wpbgi::bake::store::{bake_hash, BakedCache};
 use wpbgi::bake::{bake, BakeSettings, Quality};
@@ -126,22 +124,16 @@ pub fn bake_command(a: BakeArgs) -> Result<()> {
             eprintln!("  left out: {}", l.as_str().unwrap_or_default());
         }
     }
-    let bar = (!a.json).then(|| crate::progress_bar("baking"));
-    let last = Mutex::new(String::new());
+    let bar = (!a.json).then(|| crate::StagedBar::new("baking"));
     let progress = |stage: &str, f: f32| {
         if a.json {
             emit_json(json!({"event": "progress", "stage": stage, "fraction": f}));
         } else if let Some(b) = &bar {
-            let mut l = last.lock().unwrap_or_else(|e| e.into_inner());
-            if *l != stage {
-                b.set_message(stage.to_string());
-                *l = stage.to_string();
-            }
-            b.set_position((f * 1000.0) as u64);
+            b.update(stage, f);
         }
     };
     let baked = bake(&scene, &settings, &progress)?;
-    bar.as_ref().map(ProgressBar::finish_and_clear);
+    bar.as_ref().map(crate::StagedBar::finish);
     let (maps, coefficients) = baked.coded.stored_counts();
     // Only what the inputs determine goes into the cache, so that it is byte-identical from run
     // to run; times and memory are reported here.

@@ -148,6 +148,35 @@ pub(crate) fn progress_bar(what: &str) -> ProgressBar {
     bar
 }
 
+/// A progress bar for work in named stages: the message follows the stage.
+pub(crate) struct StagedBar {
+    bar: ProgressBar,
+    stage: std::sync::Mutex<String>,
+}
+
+impl StagedBar {
+    pub(crate) fn new(what: &str) -> Self {
+        StagedBar {
+            bar: progress_bar(what),
+            stage: Default::default(),
+        }
+    }
+
+    /// Show stage `stage` at `fraction` done (from any thread).
+    pub(crate) fn update(&self, stage: &str, fraction: f32) {
+        let mut current = self.stage.lock().unwrap_or_else(|e| e.into_inner());
+        if *current != stage {
+            self.bar.set_message(stage.to_string());
+            *current = stage.to_string();
+        }
+        self.bar.set_position((fraction * 1000.0) as u64);
+    }
+
+    pub(crate) fn finish(&self) {
+        self.bar.finish_and_clear();
+    }
+}
+
 fn run_render(scene: &Scene, camera: &Camera, settings: &RenderSettings) -> Result<RenderOutput> {
     let bar = progress_bar("path tracing");
     let out = render(scene, camera, settings, &|f| {
@@ -220,11 +249,9 @@ fn demo(a: DemoArgs) -> Result<()> {
     warn(&scene);
     // Bake.
     let settings = wpbgi::bake::BakeSettings::from_quality(wpbgi::bake::Quality::Draft);
-    let bar = progress_bar("baking");
-    let baked = wpbgi::bake::bake(&scene, &settings, &|_, f| {
-        bar.set_position((f * 1000.0) as u64)
-    })?;
-    bar.finish_and_clear();
+    let bar = StagedBar::new("baking");
+    let baked = wpbgi::bake::bake(&scene, &settings, &|stage, f| bar.update(stage, f))?;
+    bar.finish();
     let cache_path = a.output.join("demo.wpc");
     let hash = wpbgi::bake::store::bake_hash(&scene, &settings.to_json());
     wpbgi::bake::store::write(&cache_path, hash, &baked, serde_json::json!({}))?;

@@ -5,7 +5,6 @@ use crate::CameraArgs;
 use anyhow::{bail, Result};
 use clap::{Args, ValueEnum};
 use std::path::{Path, PathBuf};
-use std::sync::Mutex;
 use std::time::Instant;
 use wpbgi::bake::store::{bake_hash, BakedCache};
 use wpbgi::image::{error_against, read_exr, write_exr_layers, write_png, Image};
@@ -100,17 +99,11 @@ pub fn run_final(
     camera: &Camera,
     settings: &FinalSettings,
 ) -> Result<FinalOutput> {
-    let bar = crate::progress_bar("rendering");
-    let last = Mutex::new(String::new());
+    let bar = crate::StagedBar::new("rendering");
     let out = render_final(scene, cache, camera, settings, &|stage, f| {
-        let mut l = last.lock().unwrap_or_else(|e| e.into_inner());
-        if *l != stage {
-            bar.set_message(stage.to_string());
-            *l = stage.to_string();
-        }
-        bar.set_position((f * 1000.0) as u64);
+        bar.update(stage, f)
     })?;
-    bar.finish_and_clear();
+    bar.finish();
     Ok(out)
 }
 
