@@ -45,19 +45,16 @@ fn output_error(path: &Path, reason: impl ToString) -> Error {
 
 /// Write a float32 RGB OpenEXR file.
 pub fn write_exr(path: &Path, img: &Image) -> Result<()> {
-    if img.pixels.iter().any(|p| !p.is_finite()) {
-        return Err(output_error(
-            path,
-            "the image holds NaN or infinite values (a bug: please report it)",
-        ));
+    write_exr_layers(path, img, &[])
+}
+
+/// Lossless compression with the blocks in increasing order: the default order is the order
+/// in which parallel compression finishes, which made two writes of one image differ.
+fn deterministic_encoding() -> exr::prelude::Encoding {
+    exr::prelude::Encoding {
+        line_order: exr::prelude::LineOrder::Increasing,
+        ..exr::prelude::Encoding::FAST_LOSSLESS
     }
-    write_atomically(path, |tmp| {
-        exr::prelude::write_rgb_file(tmp, img.width as usize, img.height as usize, |x, y| {
-            let p = img.get(x as u32, y as u32);
-            (p.x, p.y, p.z)
-        })
-        .map_err(|e| e.to_string())
-    })
 }
 
 /// Write a float32 OpenEXR file holding `beauty` as its R, G, B channels and each of `aovs` as
@@ -74,7 +71,14 @@ pub fn write_exr_layers(path: &Path, beauty: &Image, aovs: &[(&str, &Image)]) ->
         if img.pixels.iter().any(|p| !p.is_finite()) {
             return Err(output_error(
                 path,
-                format!("layer \"{name}\" holds NaN or infinite values (a bug: please report it)"),
+                format!(
+                    "the {} holds NaN or infinite values (a bug: please report it)",
+                    if name.is_empty() {
+                        "image".to_string()
+                    } else {
+                        format!("layer \"{name}\"")
+                    }
+                ),
             ));
         }
         for (c, letter) in ["R", "G", "B"].iter().enumerate() {
@@ -91,7 +95,7 @@ pub fn write_exr_layers(path: &Path, beauty: &Image, aovs: &[(&str, &Image)]) ->
     let layer = Layer::new(
         size,
         LayerAttributes::default(),
-        Encoding::FAST_LOSSLESS,
+        deterministic_encoding(),
         AnyChannels::sort(channels),
     );
     write_atomically(path, |tmp| {

@@ -187,7 +187,8 @@ fn inspect_reports_and_refuses_stale_caches() {
     assert!(String::from_utf8_lossy(&out.stderr).contains("corrupted"));
 }
 
-/// `wpbgi render` writes the beauty and the AOV layers, and refuses a cache baked from
+/// `wpbgi render` writes the beauty and the AOV layers, the same bytes for any thread count,
+/// and refuses a cache baked from
 /// another version of the scene with one sentence.
 #[test]
 fn render_writes_layers_and_refuses_stale_caches() {
@@ -195,7 +196,7 @@ fn render_writes_layers_and_refuses_stale_caches() {
     let cache = d.join("scene.wpc");
     bake_ok(&cache);
     let image = d.join("out.exr");
-    let render = |scene: &Path| {
+    let render_with = |scene: &Path, image: &Path, threads: &str| {
         wpbgi(&[
             "render",
             scene.to_str().expect("utf-8"),
@@ -204,11 +205,14 @@ fn render_writes_layers_and_refuses_stale_caches() {
             "-o",
             image.to_str().expect("utf-8"),
             "--size",
-            "24x24",
+            "128x128",
             "--aov",
             "all",
+            "--threads",
+            threads,
         ])
     };
+    let render = |scene: &Path| render_with(scene, &image, "2");
     let out = render(&scene());
     assert!(
         out.status.success(),
@@ -216,7 +220,7 @@ fn render_writes_layers_and_refuses_stale_caches() {
         String::from_utf8_lossy(&out.stderr)
     );
     let beauty = wpbgi::image::read_exr(&image).expect("an EXR");
-    assert_eq!((beauty.width, beauty.height), (24, 24));
+    assert_eq!((beauty.width, beauty.height), (128, 128));
     assert!(beauty.mean().max_element() > 0.0);
     let bytes = std::fs::read(&image).expect("exr");
     for layer in ["direct.R", "indirect.G", "albedo.B", "normal.R", "depth.R"] {
@@ -225,6 +229,14 @@ fn render_writes_layers_and_refuses_stale_caches() {
             "no channel {layer}"
         );
     }
+    // The file, not only the image, is the same for any thread count (the EXR's blocks were
+    // once written in the order parallel compression finished them).
+    let one = d.join("one.exr");
+    assert!(render_with(&scene(), &one, "1").status.success());
+    assert!(
+        std::fs::read(&one).expect("exr") == bytes,
+        "the files differ"
+    );
     let out = render(&brighter_scene(&d));
     assert!(!out.status.success());
     let msg = String::from_utf8_lossy(&out.stderr);
