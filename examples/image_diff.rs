@@ -37,6 +37,24 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         a.pixels[worst],
         b.pixels[worst]
     );
+    // The pixels that add most to the relative MSE.
+    let rel_of = |k: usize| {
+        let (x, r) = (a.pixels[k], b.pixels[k]);
+        ((x - r) * (x - r) / (r * r + glam::Vec3::splat(0.01))).element_sum() / 3.0
+    };
+    let mut order: Vec<usize> = (0..a.pixels.len()).collect();
+    order.sort_by(|&i, &j| rel_of(j).total_cmp(&rel_of(i)));
+    let total: f32 = order.iter().map(|&k| rel_of(k)).sum();
+    for &k in order.iter().take(8) {
+        println!(
+            "  ({}, {}): {:.1} % of relMSE, ours {:?} reference {:?}",
+            k as u32 % a.width,
+            k as u32 / a.width,
+            100.0 * rel_of(k) / total,
+            a.pixels[k],
+            b.pixels[k]
+        );
+    }
     if let Some(out) = args.get(3) {
         let mut s = Image::new(3 * a.width, a.height);
         for y in 0..a.height {

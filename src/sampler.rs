@@ -50,6 +50,13 @@ impl Sampler {
         let x = self.next_1d();
         Vec2::new(x, self.next_1d())
     }
+
+    /// A scramble for [`sobol02`]: two random words (their 24 bits that [`sobol02`] keeps).
+    #[inline]
+    pub fn next_scramble(&mut self) -> [u32; 2] {
+        let mut word = || (self.next_1d() * 16_777_216.0) as u32 * 256;
+        [word(), word()]
+    }
 }
 
 /// Point `k` of the first two Sobol dimensions, a (0, 2)-sequence, xor-scrambled by

@@ -76,9 +76,12 @@ fn depth3() -> FinalSettings {
 }
 
 /// Measured at 128² (draft cache of 20 000 surfels, default settings), relMSE / MSE:
-/// cbox-diffuse 4.9e-4 / 2.8e-4, cbox-rough 5.6e-4 / 2.8e-4, cbox-glossy 7.5e-4 / 2.8e-4.
-/// The MSE is mostly the light's edge (radiance 18 against 0 in one pixel), the relMSE the
-/// cache's resolution at contacts; the image means agree with Mitsuba's to 0.7 %.
+/// cbox-diffuse 3.2e-4 / 4.8e-5, cbox-rough 4.4e-4 / 5.0e-5, cbox-glossy 6.6e-4 / 6.1e-5.
+/// The bounds leave about 1.5× on the relMSE and 2× on the MSE, which a few edge pixels of the
+/// light (radiance 18 against 0) dominate: a leak of one pixel row of the ceiling above the
+/// emitter cost +60 % relMSE, and a jittered instead of a (0, 2) edge pattern 3× the MSE.
+/// The rest of the relMSE is the cache's resolution at contacts; the image means agree with
+/// Mitsuba's to 0.7 %.
 fn check(name: &str, max_rel: f64, max_mse: f64) {
     let (scene, cache) = baked(name);
     let out = render(&scene, &cache, 128, &depth3());
@@ -97,17 +100,17 @@ fn check(name: &str, max_rel: f64, max_mse: f64) {
 
 #[test]
 fn cbox_diffuse_matches_mitsuba_at_depth_3() {
-    check("cbox-diffuse", 1e-3, 4.5e-4);
+    check("cbox-diffuse", 5e-4, 1e-4);
 }
 
 #[test]
 fn cbox_rough_matches_mitsuba_at_depth_3() {
-    check("cbox-rough", 1e-3, 4.5e-4);
+    check("cbox-rough", 7e-4, 1e-4);
 }
 
 #[test]
 fn cbox_glossy_matches_mitsuba_at_depth_3() {
-    check("cbox-glossy", 1.2e-3, 4.5e-4);
+    check("cbox-glossy", 1e-3, 1.2e-4);
 }
 
 /// FPBGI shares the far field among the receivers of a cluster: the same image within relMSE

@@ -32,6 +32,10 @@ pub const MAX_PIECES: u32 = 64;
 /// Pieces per pixel width of a split leaf.
 pub const PIECES_PER_PIXEL: f32 = 1.0;
 
+/// How far from a receiver's plane, in disc radii, a parallel disc of another mesh still
+/// counts as the receiver's own surface (coplanar meshes, to rounding).
+pub const COPLANAR: f32 = 0.01;
+
 /// What one traversal did (for the render statistics).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct CutStats {
@@ -86,8 +90,8 @@ pub fn splat_cut(
             let omega = s.area * Vec3::from(s.n).dot(dir).abs() / d2;
             let disc = (s.area / std::f32::consts::PI).sqrt();
             let pixel = mb
-                .pixel_of(dir)
-                .map_or(mb.pixel_solid_angle(), |k| mb.pixels[k].solid_angle);
+                .solid_angle_towards(dir)
+                .unwrap_or(mb.pixel_solid_angle());
             if omega <= pixel && d > NEAR_RADII * disc {
                 if omega > 0.0 {
                     let seen = senders.seen(j, -dir, mesh);
@@ -101,12 +105,14 @@ pub fn splat_cut(
         }
         // Against the largest pixel first: it rejects most nodes near the root without a
         // pixel lookup.
-        let accept = fits_pixel(senders, j, d2, v / d, mb.pixel_solid_angle())
+        let dir = v / d;
+        let base = mb.pixel_solid_angle();
+        let accept = fits_pixel(senders, j, d2, dir, base)
             && mb
-                .pixel_of(v / d)
-                .is_some_and(|k| fits_pixel(senders, j, d2, v / d, mb.pixels[k].solid_angle));
+                .solid_angle_towards(dir)
+                .is_some_and(|pixel| pixel == base || fits_pixel(senders, j, d2, dir, pixel));
         if accept {
-            let seen = senders.seen(j, -v / d, mesh);
+            let seen = senders.seen(j, -dir, mesh);
             stats.splats += u64::from(mb.splat(&senders.sender(j, v, seen), seen.projected / d2));
         } else {
             for c in node.children {
@@ -147,16 +153,22 @@ fn split_leaf(
     // A disc facing the receiver's way whose plane passes within half its radius of the
     // receiver is the receiver's own surface (its own surfel, a coplanar neighbour, or on a
     // curved surface a neighbour whose tangent plane passes just above it): seen edge-on, it
-    // sends nothing there and must not occlude. (A surface facing the receiver at a contact,
-    // a sphere resting on a floor, is not skipped: it hides what lies behind it.)
-    if ns.dot(mb.frame.n) > 0.5 && (c - p).dot(ns).abs() < 0.5 * radius {
+    // sends nothing there and must not occlude. A disc of another mesh is the same surface
+    // only when coplanar to rounding; one parallel a little off (an emitter hung 1 cm under
+    // the ceiling) hides what lies behind it. (A surface facing the receiver at a contact, a
+    // sphere resting on a floor, is not skipped either.)
+    let own = if s.mesh == mesh { 0.5 } else { COPLANAR };
+    if ns.dot(mb.frame.n) > 0.5 && (c - p).dot(ns).abs() < own * radius {
         return 0;
     }
-    // Seen from behind within a radius of its plane, a disc stands for a surface curving
-    // round the receiver (at a contact, inside a crease), not for its back side: its back
-    // radiance there (a glass surfel's transmitted light) would leak through.
+    // Seen from behind within a radius of its plane, a disc of the receiver's own mesh stands
+    // for that surface curving round the receiver (inside a crease, or a glass sphere's
+    // inside), not for its back side: its back radiance there (a glass surfel's transmitted
+    // light) would leak through. Another mesh seen from behind is an occluder however near
+    // (the ceiling 1 cm above an emitter's back must stay dark: skipping the emitter's discs
+    // there lit it, and the light's edges then held most of the diffuse box's relMSE).
     let front = (p - c).dot(ns);
-    if front < 0.0 && -front < radius {
+    if front < 0.0 && -front < radius && s.mesh == mesh {
         return 0;
     }
     let nearest = (d - radius).max(0.25 * radius);

@@ -131,6 +131,45 @@ pub struct ClusterCut {
     pub buffer: Microbuffer,
     pub near: Vec<u32>,
     pub stats: CutStats,
+    /// For the last few member buffer layouts (frame, spherical), the shared pixel along each
+    /// member pixel's direction (or [`NO_PIXEL`]): members on one flat surface share a frame,
+    /// and the lookups were a tenth of the gather.
+    lookups: Vec<(Frame, bool, Vec<u32>)>,
+}
+
+/// A member pixel whose direction the shared buffer has no pixel for.
+const NO_PIXEL: u32 = u32::MAX;
+
+/// Layouts [`ClusterCut`] remembers.
+const LOOKUPS: usize = 4;
+
+impl ClusterCut {
+    /// The index in `lookups` of the shared pixels along each pixel of the buffer `mb`.
+    fn lookup(&mut self, mb: &Microbuffer) -> usize {
+        let found = self.lookups.iter().position(|(f, sph, t)| {
+            *f == mb.frame && *sph == mb.spherical && t.len() == mb.pixels.len()
+        });
+        let index = match found {
+            Some(i) => i,
+            None => {
+                let table = mb
+                    .pixels
+                    .iter()
+                    .map(|px| {
+                        self.buffer
+                            .pixel_of(mb.frame.to_world(px.dir))
+                            .map_or(NO_PIXEL, |c| c as u32)
+                    })
+                    .collect();
+                if self.lookups.len() == LOOKUPS {
+                    self.lookups.remove(0);
+                }
+                self.lookups.push((mb.frame, mb.spherical, table));
+                self.lookups.len() - 1
+            }
+        };
+        index
+    }
 }
 
 /// The cluster cut from the active receiver at `p` on mesh `mesh` with frame `frame`, for a cluster of
@@ -193,6 +232,7 @@ pub fn cluster_cut(
         buffer,
         near,
         stats,
+        lookups: Vec::new(),
     }
 }
 
@@ -200,7 +240,7 @@ pub fn cluster_cut(
 /// cluster buffer looked up along each of its pixels' directions.
 pub fn member_buffer(
     senders: &Senders,
-    cut: &ClusterCut,
+    cut: &mut ClusterCut,
     p: Vec3,
     mesh: u32,
     mb: &mut Microbuffer,
@@ -208,12 +248,13 @@ pub fn member_buffer(
 ) -> CutStats {
     let stats = splat_cut(senders, p, mesh, mb, &cut.near, stack);
     mb.resolve();
-    let shared = &cut.buffer;
-    for k in 0..mb.pixels.len() {
-        let w = mb.frame.to_world(mb.pixels[k].dir);
-        let Some(c) = shared.pixel_of(w) else {
+    let index = cut.lookup(mb);
+    let (lookup, shared) = (&cut.lookups[index].2, &cut.buffer);
+    for (k, &c) in lookup.iter().enumerate() {
+        if c == NO_PIXEL {
             continue;
-        };
+        }
+        let c = c as usize;
         let (lc, ac, dc) = (shared.radiance[c], shared.alpha[c], shared.depth[c]);
         if ac <= 0.0 {
             continue;

@@ -22,25 +22,42 @@ pub fn square_to_uniform_disk_concentric(u: Vec2) -> Vec2 {
 }
 
 /// Inverse of [`square_to_uniform_disk_concentric`] (Shirley & Chiu, as Mitsuba's
-/// `uniform_disk_to_square_concentric`).
+/// `uniform_disk_to_square_concentric`). Each octant's angle is the arctangent of the smaller
+/// coordinate over the larger, in [−1, 1], where [`atan_unit`] needs no range reduction (the
+/// microbuffer looks up every splat here, and libm's `atan2` took 10 % of a render).
 #[inline]
 pub fn uniform_disk_to_square_concentric(p: Vec2) -> Vec2 {
-    use std::f32::consts::PI;
     let r = p.length();
-    let mut phi = p.y.atan2(p.x);
-    if phi < -FRAC_PI_4 {
-        phi += 2.0 * PI;
-    }
-    let (a, b) = if phi < FRAC_PI_4 {
-        (r, phi * r / FRAC_PI_4)
-    } else if phi < 3.0 * FRAC_PI_4 {
-        (-(phi - FRAC_PI_2) * r / FRAC_PI_4, r)
-    } else if phi < 5.0 * FRAC_PI_4 {
-        (-r, -(phi - PI) * r / FRAC_PI_4)
+    let scale = r * (1.0 / FRAC_PI_4);
+    let (a, b) = if p.x.abs() >= p.y.abs() {
+        if p.x == 0.0 {
+            return Vec2::splat(0.5);
+        }
+        let s = p.x.signum();
+        (s * r, s * atan_unit(p.y / p.x) * scale)
     } else {
-        ((phi - 3.0 * FRAC_PI_2) * r / FRAC_PI_4, -r)
+        let s = p.y.signum();
+        (s * atan_unit(p.x / p.y) * scale, s * r)
     };
     Vec2::new(0.5 * (a + 1.0), 0.5 * (b + 1.0))
+}
+
+/// atan t for t in [−1, 1], within 2·10⁻⁸ (Abramowitz & Stegun 4.4.49), below f32's resolution.
+#[inline]
+fn atan_unit(t: f32) -> f32 {
+    const A: [f32; 8] = [
+        -0.333_331_45,
+        0.199_935_51,
+        -0.142_089,
+        0.106_562_64,
+        -0.075_289_64,
+        0.042_909_614,
+        -0.016_165_737,
+        0.002_866_225_7,
+    ];
+    let t2 = t * t;
+    let poly = A.iter().rev().fold(0.0f32, |acc, &c| acc * t2 + c);
+    t + t * t2 * poly
 }
 
 /// The equal-area map from the unit square to the hemisphere around +z: the concentric disk,
@@ -108,6 +125,29 @@ mod tests {
         // Mitsuba's diffuse sample() at u = (0.25, 0.75) gives wo = (-0.35355338, 0.35355341, ·).
         let p = square_to_uniform_disk_concentric(Vec2::new(0.25, 0.75));
         assert!((p.x + 0.353_553_38).abs() < 1e-7 && (p.y - 0.353_553_4).abs() < 1e-7);
+    }
+
+    #[test]
+    fn atan_unit_is_exact_to_f32() {
+        for i in -1000..=1000 {
+            let t = i as f32 / 1000.0;
+            let err = (atan_unit(t) as f64 - (t as f64).atan()).abs();
+            assert!(err < 1.2e-7, "t = {t}: error {err:e}");
+        }
+    }
+
+    #[test]
+    fn concentric_inverse_round_trips() {
+        // A 64 × 64 grid of points of the square, including its edges, diagonals and centre.
+        for i in 0..=64 {
+            for j in 0..=64 {
+                let u = Vec2::new(i as f32, j as f32) / 64.0;
+                let back = uniform_disk_to_square_concentric(square_to_uniform_disk_concentric(u));
+                assert!((back - u).abs().max_element() < 2e-6, "{u} -> {back}");
+                let h = hemisphere_equal_area_to_square(square_to_hemisphere_equal_area(u));
+                assert!((h - u).abs().max_element() < 1e-5, "{u} -> {h}");
+            }
+        }
     }
 
     #[test]

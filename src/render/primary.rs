@@ -205,10 +205,7 @@ fn direct_light(
 ) -> Rgb {
     let k = settings.light_samples.max(1);
     let glossy = !matches!(bsdf, Bsdf::Diffuse(_));
-    let scramble = [
-        (sampler.next_1d() * 16_777_216.0) as u32 * 256,
-        (sampler.next_1d() * 16_777_216.0) as u32 * 256,
-    ];
+    let scramble = sampler.next_scramble();
     let shift = sampler.next_1d();
     let mut sum = Rgb::ZERO;
     for i in 0..k {
