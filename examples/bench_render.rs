@@ -16,7 +16,8 @@ use wpbgi::bake::store::{bake_hash, write, BakedCache};
 use wpbgi::bake::{bake, BakeSettings, Quality};
 use wpbgi::image::{error_against, read_exr};
 use wpbgi::reference::{render, RenderSettings};
-use wpbgi::render::{render_final, FinalOutput, FinalSettings, GatherMode};
+use wpbgi::render::{render_final, FinalOutput, FinalSettings, GatherMode, GatherStats};
+use wpbgi::scene::camera::Camera;
 use wpbgi::scene::Scene;
 
 fn data(name: &str) -> PathBuf {
@@ -30,6 +31,49 @@ fn gather_seconds(o: &FinalOutput) -> f64 {
         .iter()
         .find(|(k, _)| *k == "gather")
         .map_or(0.0, |(_, s)| *s)
+}
+
+/// Render plain PBGI with `settings` and print its figures against the FPBGI render `fast`.
+fn fpbgi_vs_pbgi(
+    scene: &Scene,
+    cache: &BakedCache,
+    camera: &Camera,
+    fast: &FinalOutput,
+    settings: &FinalSettings,
+) -> Result<(), Box<dyn std::error::Error>> {
+    let plain = render_final(
+        scene,
+        cache,
+        camera,
+        &FinalSettings {
+            gather: GatherMode::Pbgi,
+            ..settings.clone()
+        },
+        &|_, _| {},
+    )?;
+    let (_, between) = error_against(&fast.beauty, &plain.beauty).ok_or("size")?;
+    let (p, f) = (&plain.stats, &fast.stats);
+    let visited = |s: &GatherStats| s.receiver_cut.visited + s.cluster_cut.visited;
+    let splats = |s: &GatherStats| s.receiver_cut.splats + s.cluster_cut.splats;
+    println!(
+        "  FPBGI vs PBGI at {}x{}: gather {:.2} s vs {:.2} s ({:.2}×); cut: {} vs {} nodes visited ({:.2}×); \
+         rasterisation: {} vs {} splats ({:.2}×); relMSE between {between:.2e}; {} of {} receivers in {} clusters",
+        camera.width,
+        camera.height,
+        gather_seconds(fast),
+        gather_seconds(&plain),
+        gather_seconds(&plain) / gather_seconds(fast),
+        visited(f),
+        visited(p),
+        visited(p) as f64 / visited(f) as f64,
+        splats(f),
+        splats(p),
+        splats(p) as f64 / splats(f) as f64,
+        f.clustered,
+        f.receivers,
+        f.clusters
+    );
+    Ok(())
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -86,38 +130,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             pt.spp,
             pt_rel / rel
         );
-        // 2. FPBGI against PBGI.
-        let plain = render_final(
-            &scene,
-            &cache,
-            &camera,
-            &FinalSettings {
-                gather: GatherMode::Pbgi,
-                ..depth3.clone()
-            },
-            &|_, _| {},
-        )?;
-        let (_, between) = error_against(&fast.beauty, &plain.beauty).ok_or("size")?;
-        let (p, f) = (&plain.stats, &fast.stats);
-        let visited =
-            |s: &wpbgi::render::GatherStats| s.receiver_cut.visited + s.cluster_cut.visited;
-        let splats = |s: &wpbgi::render::GatherStats| s.receiver_cut.splats + s.cluster_cut.splats;
-        println!(
-            "  FPBGI vs PBGI: gather {:.2} s vs {:.2} s ({:.2}×); cut: {} vs {} nodes visited ({:.2}×); \
-             rasterisation: {} vs {} splats ({:.2}×); relMSE between {between:.2e}; {} of {} receivers in {} clusters",
-            gather_seconds(&fast),
-            gather_seconds(&plain),
-            gather_seconds(&plain) / gather_seconds(&fast),
-            visited(f),
-            visited(p),
-            visited(p) as f64 / visited(f) as f64,
-            splats(f),
-            splats(p),
-            splats(p) as f64 / splats(f) as f64,
-            f.clustered,
-            f.receivers,
-            f.clusters
-        );
+        // 2. FPBGI against PBGI, at the reference's 256² and at the scene camera's 512².
+        fpbgi_vs_pbgi(&scene, &cache, &camera, &fast, &depth3)?;
+        let own = scene.default_camera(512, 512)?;
+        let fast_512 = render_final(&scene, &cache, &own, &depth3, &|_, _| {})?;
+        fpbgi_vs_pbgi(&scene, &cache, &own, &fast_512, &depth3)?;
+        let f = &fast.stats;
         // 3. Adaptive against uniform buffers.
         if name == "cbox-glossy" {
             println!(
