@@ -26,6 +26,7 @@
 pub mod accel;
 pub mod atomic;
 pub mod bake;
+pub mod bounce;
 pub mod bsdf;
 pub mod cache;
 pub mod emitters;

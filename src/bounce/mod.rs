@@ -1,0 +1,5 @@
+//! Multi-bounce light in the cache (DESIGN.md §5.7–§5.8, spec §8).
+
+pub mod bsdf_operator;
+
+pub use bsdf_operator::BsdfOperator;
