@@ -76,8 +76,8 @@ fn depth3() -> FinalSettings {
 }
 
 /// Measured at 128² (draft cache of 20 000 surfels, default settings), relMSE / MSE:
-/// cbox-diffuse 3.2e-4 / 4.8e-5, cbox-rough 4.4e-4 / 5.0e-5, cbox-glossy 6.6e-4 / 6.1e-5.
-/// The bounds leave about 1.5× on the relMSE and 2× on the MSE, which a few edge pixels of the
+/// cbox-diffuse 2.5e-4 / 4.7e-5, cbox-rough 3.9e-4 / 4.9e-5, cbox-glossy 6.1e-4 / 6.0e-5.
+/// The bounds leave 1.6–2× on the relMSE and 2× on the MSE, which a few edge pixels of the
 /// light (radiance 18 against 0) dominate: a leak of one pixel row of the ceiling above the
 /// emitter cost +60 % relMSE, and a jittered instead of a (0, 2) edge pattern 3× the MSE.
 /// The rest of the relMSE is the cache's resolution at contacts; the image means agree with

@@ -45,6 +45,10 @@ pub struct SenderNode {
     pub area_normal: Vec3,
     /// The fraction of the area below whose radiance is directional (non-diffuse).
     pub directional: f32,
+    /// Per colour channel, Σ A L n over the (diffuse) surfels below, L their reflected
+    /// radiance: where every surfel below faces ω, the node's radiance along ω is exactly
+    /// (S·ω)/(N·ω), without the intensity map's texels (see [`Senders::seen`]).
+    pub radiance_normal: [Vec3; 3],
 }
 
 impl SenderNode {
@@ -102,6 +106,7 @@ impl Senders {
                 },
                 area_normal: Vec3::ZERO,
                 directional: 0.0,
+                radiance_normal: [Vec3::ZERO; 3],
             })
             .collect();
         if nodes
@@ -119,20 +124,36 @@ impl Senders {
         let mut directional_area = vec![0.0f32; nodes.len()];
         for j in (0..nodes.len()).rev() {
             let n = nodes[j];
-            (nodes[j].area_normal, directional_area[j]) = if n.is_leaf() {
+            (
+                nodes[j].area_normal,
+                directional_area[j],
+                nodes[j].radiance_normal,
+            ) = if n.is_leaf() {
                 let s = &cache.surfels[n.surfel as usize];
                 let d = if s.map != NO_MAP { s.area } else { 0.0 };
-                (Vec3::from(s.n) * s.area, d)
+                let an = Vec3::from(s.n) * s.area;
+                let reflected = (Vec3::from(s.rgb) - Vec3::from(s.emitted)).max(Vec3::ZERO);
+                (
+                    an,
+                    d,
+                    [an * reflected.x, an * reflected.y, an * reflected.z],
+                )
             } else {
                 n.children
                     .iter()
                     .filter(|&&c| (c as usize) < nodes.len() && c as usize > j)
-                    .fold((Vec3::ZERO, 0.0), |(a, d), &c| {
-                        (
-                            a + nodes[c as usize].area_normal,
-                            d + directional_area[c as usize],
-                        )
-                    })
+                    .fold(
+                        (Vec3::ZERO, 0.0, [Vec3::ZERO; 3]),
+                        |(a, d, [r, g, b]), &c| {
+                            let ch = &nodes[c as usize];
+                            let [cr, cg, cb] = ch.radiance_normal;
+                            (
+                                a + ch.area_normal,
+                                d + directional_area[c as usize],
+                                [r + cr, g + cg, b + cb],
+                            )
+                        },
+                    )
             };
         }
         for (n, (d, r)) in nodes.iter_mut().zip(directional_area.iter().zip(records)) {
@@ -174,6 +195,17 @@ impl Senders {
             return Seen {
                 radiance: self.surfel_radiance(node.surfel, w, cos, receiver_mesh),
                 projected: s.area * cos.abs(),
+            };
+        }
+        // Every surfel below diffuse and facing ω: Σ A L (n·ω) / Σ A (n·ω), exactly. The
+        // maps' texels (25° wide at 8²) straddle a wall's edge-on band there and took up to
+        // 8 % of a closed room's light (tests/furnace.rs).
+        let facing = node.area_normal.dot(w);
+        if node.directional == 0.0 && facing > 0.0 && node.axis.dot(w) > node.sin_cone {
+            let [r, g, b] = node.radiance_normal;
+            return Seen {
+                radiance: (Vec3::new(r.dot(w), g.dot(w), b.dot(w)) / facing).max(Rgb::ZERO),
+                projected: facing,
             };
         }
         let p = direction_to_square(w);
