@@ -117,94 +117,118 @@ pub fn bake_hash(scene: &Scene, settings: &Value) -> [u8; 16] {
 
 /// Serialize `baked` to `path` atomically. `stats` is added to the plan section as is.
 pub fn write(path: &Path, hash: [u8; 16], baked: &Baked, stats: Value) -> Result<(), CacheError> {
-    let mut pool = MapPool::default();
-    let mut nodes = Vec::with_capacity(baked.tree.nodes.len());
-    for ((n, c), a) in baked
-        .tree
-        .nodes
-        .iter()
-        .zip(&baked.coded.nodes)
-        .zip(&baked.projected.nodes)
-    {
-        nodes.push(NodeRecord {
-            center: n.center.to_array(),
-            radius: n.radius,
-            axis: n.axis.to_array(),
-            cone_angle: n.cone_angle,
-            area: n.area,
-            level: n.level,
-            parent: n.parent,
-            children: n.children,
-            first: n.first,
-            count: n.count,
-            g: c.g.as_ref().map_or(NO_MAP, |m| pool.push(m)),
-            h: c.h.as_ref().map_or(NO_MAP, |m| pool.push(m)),
-            area_g: a.g.as_ref().map_or(NO_MAP, |m| pool.push(m)),
-            area_h: a.h.as_ref().map_or(NO_MAP, |m| pool.push(m)),
-        });
-    }
-    let mut surfels = Vec::with_capacity(baked.surfels.len());
-    for ((s, r), e) in baked
-        .surfels
-        .iter()
-        .zip(&baked.radiance)
-        .zip(&baked.emitted)
-    {
-        let (rgb, map) = match r {
-            SurfelRadiance::Rgb(c) => (*c, NO_MAP),
-            SurfelRadiance::Map(m) => {
-                let at = crate::haar::direction_to_square(s.n);
-                (m.eval(at.x, at.y), pool.push(m))
-            }
-        };
-        surfels.push(SurfelRecord {
-            p: s.p.to_array(),
-            n: s.n.to_array(),
-            area: s.area,
-            mesh: s.mesh,
-            rgb: rgb.to_array(),
-            map,
-            emitted: e.to_array(),
-            flags: if baked.solid[s.mesh as usize] {
-                SOLID
-            } else {
-                0
-            },
-        });
-    }
-    let plan = json!({
-        "format": "wpbgi bake",
-        "bake_format": BAKE_FORMAT,
-        "crate_version": env!("CARGO_PKG_VERSION"),
-        "settings": baked.settings.to_json(),
-        "split_level": baked.coded.split_level,
-        "plan": baked.plan.json,
-        "stats": stats,
-    });
-    let plan_bytes = serde_json::to_vec_pretty(&plan).map_err(|e| CacheError::Write {
+    let werr = |reason: String| CacheError::Write {
         path: path.to_path_buf(),
-        reason: e.to_string(),
-    })?;
-    let order: Vec<u8> = baked
-        .tree
-        .order
-        .iter()
-        .flat_map(|i| i.to_le_bytes())
-        .collect();
-    let index_bytes: Vec<u8> = pool.index.iter().flat_map(|o| o.to_le_bytes()).collect();
-    let maps = pool.bytes;
-    cache::write(
-        path,
-        hash,
-        &[
-            ("plan", &plan_bytes),
-            ("nodes", bytemuck::cast_slice(&nodes)),
-            ("map_index", &index_bytes),
-            ("maps", &maps),
-            ("surfels", bytemuck::cast_slice(&surfels)),
-            ("order", &order),
-        ],
-    )
+        reason,
+    };
+    let parts = Sections::of(baked, stats).map_err(werr)?;
+    cache::write(path, hash, &parts.list())
+}
+
+/// The sections of a cache of `baked`, encoded.
+struct Sections {
+    plan: Vec<u8>,
+    nodes: Vec<NodeRecord>,
+    map_index: Vec<u8>,
+    maps: Vec<u8>,
+    surfels: Vec<SurfelRecord>,
+    order: Vec<u8>,
+}
+
+impl Sections {
+    fn list(&self) -> [(&str, &[u8]); 6] {
+        [
+            ("plan", &self.plan),
+            ("nodes", bytemuck::cast_slice(&self.nodes)),
+            ("map_index", &self.map_index),
+            ("maps", &self.maps),
+            ("surfels", bytemuck::cast_slice(&self.surfels)),
+            ("order", &self.order),
+        ]
+    }
+
+    fn of(baked: &Baked, stats: Value) -> Result<Sections, String> {
+        let mut pool = MapPool::default();
+        let mut nodes = Vec::with_capacity(baked.tree.nodes.len());
+        for ((n, c), a) in baked
+            .tree
+            .nodes
+            .iter()
+            .zip(&baked.coded.nodes)
+            .zip(&baked.projected.nodes)
+        {
+            nodes.push(NodeRecord {
+                center: n.center.to_array(),
+                radius: n.radius,
+                axis: n.axis.to_array(),
+                cone_angle: n.cone_angle,
+                area: n.area,
+                level: n.level,
+                parent: n.parent,
+                children: n.children,
+                first: n.first,
+                count: n.count,
+                g: c.g.as_ref().map_or(NO_MAP, |m| pool.push(m)),
+                h: c.h.as_ref().map_or(NO_MAP, |m| pool.push(m)),
+                area_g: a.g.as_ref().map_or(NO_MAP, |m| pool.push(m)),
+                area_h: a.h.as_ref().map_or(NO_MAP, |m| pool.push(m)),
+            });
+        }
+        let mut surfels = Vec::with_capacity(baked.surfels.len());
+        for ((s, r), e) in baked
+            .surfels
+            .iter()
+            .zip(&baked.radiance)
+            .zip(&baked.emitted)
+        {
+            let (rgb, map) = match r {
+                SurfelRadiance::Rgb(c) => (*c, NO_MAP),
+                SurfelRadiance::Map(m) => {
+                    let at = crate::haar::direction_to_square(s.n);
+                    (m.eval(at.x, at.y), pool.push(m))
+                }
+            };
+            surfels.push(SurfelRecord {
+                p: s.p.to_array(),
+                n: s.n.to_array(),
+                area: s.area,
+                mesh: s.mesh,
+                rgb: rgb.to_array(),
+                map,
+                emitted: e.to_array(),
+                flags: if baked.solid[s.mesh as usize] {
+                    SOLID
+                } else {
+                    0
+                },
+            });
+        }
+        let plan = json!({
+            "format": "wpbgi bake",
+            "bake_format": BAKE_FORMAT,
+            "crate_version": env!("CARGO_PKG_VERSION"),
+            "settings": baked.settings.to_json(),
+            "split_level": baked.coded.split_level,
+            "plan": baked.plan.json,
+            "stats": stats,
+        });
+        let plan = serde_json::to_vec_pretty(&plan).map_err(|e| e.to_string())?;
+        let order: Vec<u8> = baked
+            .tree
+            .order
+            .iter()
+            .flat_map(|i| i.to_le_bytes())
+            .collect();
+        let map_index: Vec<u8> = pool.index.iter().flat_map(|o| o.to_le_bytes()).collect();
+        Ok(Sections {
+            plan,
+            nodes,
+            map_index,
+            maps: pool.bytes,
+            surfels,
+            order,
+        })
+    }
 }
 
 /// What `inspect` and the point-cloud export read back.
@@ -219,7 +243,23 @@ pub struct BakedCache {
 
 impl BakedCache {
     pub fn read(path: &Path, expected_hash: Option<[u8; 16]>) -> Result<BakedCache, CacheError> {
-        let cache = Cache::read(path, expected_hash)?;
+        Self::from_cache(Cache::read(path, expected_hash)?)
+    }
+
+    /// The cache that [`write`] would write of `baked`, without a file (`path` only names it
+    /// in errors).
+    pub fn in_memory(path: &Path, baked: &Baked) -> Result<BakedCache, CacheError> {
+        let werr = |reason: String| CacheError::Write {
+            path: path.to_path_buf(),
+            reason,
+        };
+        let parts = Sections::of(baked, Value::Null).map_err(werr)?;
+        let bytes = cache::to_bytes([0; 16], &parts.list()).map_err(werr)?;
+        Self::from_cache(Cache::parse(path, bytes, None)?)
+    }
+
+    fn from_cache(cache: Cache) -> Result<BakedCache, CacheError> {
+        let path = cache.path.clone();
         let bad = |what: &str| CacheError::Malformed {
             path: path.to_path_buf(),
             what: what.to_string(),

@@ -91,53 +91,90 @@ pub fn write(path: &Path, hash: [u8; 16], sections: &[(&str, &[u8])]) -> Result<
         path: path.to_path_buf(),
         reason,
     };
-    let aligned = |x: usize| x.div_ceil(ALIGNMENT) * ALIGNMENT;
-    let mut table = Vec::with_capacity(sections.len() * ENTRY_LEN);
-    let mut offsets = Vec::with_capacity(sections.len());
-    let mut at = HEADER_LEN;
-    for (name, bytes) in sections {
-        if name.is_empty() || name.len() > NAME_LEN || name.contains('\0') {
-            return Err(werr(format!("bad section name \"{name}\"")));
-        }
-        at = aligned(at);
-        offsets.push(at);
-        let mut n = [0u8; NAME_LEN];
-        n[..name.len()].copy_from_slice(name.as_bytes());
-        table.extend_from_slice(&n);
-        table.extend_from_slice(&(at as u64).to_le_bytes());
-        table.extend_from_slice(&(bytes.len() as u64).to_le_bytes());
-        table.extend_from_slice(&xxh3_64(bytes).to_le_bytes());
-        at += bytes.len();
-    }
-    let table_offset = aligned(at);
-    let mut h = [0u8; HEADER_LEN];
-    h[0..8].copy_from_slice(&MAGIC);
-    h[8..12].copy_from_slice(&FORMAT_VERSION.to_le_bytes());
-    h[12..16].copy_from_slice(&BYTE_ORDER_MARK.to_le_bytes());
-    h[16..32].copy_from_slice(&hash);
-    h[32..40].copy_from_slice(&(table_offset as u64).to_le_bytes());
-    h[40..44].copy_from_slice(&(sections.len() as u32).to_le_bytes());
-    h[48..56].copy_from_slice(&xxh3_64(&table).to_le_bytes());
-    let header_sum = xxh3_64(&h[..56]);
-    h[56..64].copy_from_slice(&header_sum.to_le_bytes());
+    let layout = Layout::new(hash, sections).map_err(werr)?;
     write_atomically(path, |tmp| {
         let stream = || -> std::io::Result<()> {
             let mut f = std::io::BufWriter::new(std::fs::File::create(tmp)?);
-            let zeros = [0u8; ALIGNMENT];
-            let mut written = HEADER_LEN;
-            f.write_all(&h)?;
-            for ((_, bytes), &offset) in sections.iter().zip(&offsets) {
-                f.write_all(&zeros[..offset - written])?;
-                f.write_all(bytes)?;
-                written = offset + bytes.len();
-            }
-            f.write_all(&zeros[..table_offset - written])?;
-            f.write_all(&table)?;
+            layout.stream(&mut f, sections)?;
             f.into_inner().map_err(|e| e.into_error())?.sync_all()
         };
         stream().map_err(|e| e.to_string())
     })
     .map_err(|e| werr(e.to_string()))
+}
+
+/// The bytes of a cache holding `sections`, in memory (what [`write`] would write), for a
+/// reader that needs a cache that never goes to disk: the bake's bounces read the tree of
+/// the previous bounce this way.
+pub fn to_bytes(hash: [u8; 16], sections: &[(&str, &[u8])]) -> Result<Vec<u8>, String> {
+    let layout = Layout::new(hash, sections)?;
+    let mut bytes = Vec::new();
+    layout
+        .stream(&mut bytes, sections)
+        .map_err(|e| e.to_string())?;
+    Ok(bytes)
+}
+
+/// Where everything of a cache goes: its header, the sections' offsets and the table.
+struct Layout {
+    header: [u8; HEADER_LEN],
+    offsets: Vec<usize>,
+    table: Vec<u8>,
+    table_offset: usize,
+}
+
+impl Layout {
+    fn new(hash: [u8; 16], sections: &[(&str, &[u8])]) -> Result<Layout, String> {
+        let aligned = |x: usize| x.div_ceil(ALIGNMENT) * ALIGNMENT;
+        let mut table = Vec::with_capacity(sections.len() * ENTRY_LEN);
+        let mut offsets = Vec::with_capacity(sections.len());
+        let mut at = HEADER_LEN;
+        for (name, bytes) in sections {
+            if name.is_empty() || name.len() > NAME_LEN || name.contains('\0') {
+                return Err(format!("bad section name \"{name}\""));
+            }
+            at = aligned(at);
+            offsets.push(at);
+            let mut n = [0u8; NAME_LEN];
+            n[..name.len()].copy_from_slice(name.as_bytes());
+            table.extend_from_slice(&n);
+            table.extend_from_slice(&(at as u64).to_le_bytes());
+            table.extend_from_slice(&(bytes.len() as u64).to_le_bytes());
+            table.extend_from_slice(&xxh3_64(bytes).to_le_bytes());
+            at += bytes.len();
+        }
+        let table_offset = aligned(at);
+        let mut h = [0u8; HEADER_LEN];
+        h[0..8].copy_from_slice(&MAGIC);
+        h[8..12].copy_from_slice(&FORMAT_VERSION.to_le_bytes());
+        h[12..16].copy_from_slice(&BYTE_ORDER_MARK.to_le_bytes());
+        h[16..32].copy_from_slice(&hash);
+        h[32..40].copy_from_slice(&(table_offset as u64).to_le_bytes());
+        h[40..44].copy_from_slice(&(sections.len() as u32).to_le_bytes());
+        h[48..56].copy_from_slice(&xxh3_64(&table).to_le_bytes());
+        let header_sum = xxh3_64(&h[..56]);
+        h[56..64].copy_from_slice(&header_sum.to_le_bytes());
+        Ok(Layout {
+            header: h,
+            offsets,
+            table,
+            table_offset,
+        })
+    }
+
+    /// Write the header, the (aligned) sections and the table to `out`.
+    fn stream(&self, out: &mut impl Write, sections: &[(&str, &[u8])]) -> std::io::Result<()> {
+        let zeros = [0u8; ALIGNMENT];
+        let mut written = HEADER_LEN;
+        out.write_all(&self.header)?;
+        for ((_, bytes), &offset) in sections.iter().zip(&self.offsets) {
+            out.write_all(&zeros[..offset - written])?;
+            out.write_all(bytes)?;
+            written = offset + bytes.len();
+        }
+        out.write_all(&zeros[..self.table_offset - written])?;
+        out.write_all(&self.table)
+    }
 }
 
 /// One section of a read cache.
