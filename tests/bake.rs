@@ -21,6 +21,7 @@ fn settings() -> BakeSettings {
         split_level: None,
         seed: 1,
         max_cut: 1000,
+        bounces: wpbgi::bounce::BounceSettings::exactly(0),
     }
 }
 

@@ -12,6 +12,7 @@ use super::plan::{map_levels, Plan};
 use super::surfels::{sample_surfels, Surfel};
 use super::tree::SurfelTree;
 use crate::accel::Accel;
+use crate::bounce::{add_bounces, BounceReport, BounceSettings};
 use crate::bsdf::Bsdf;
 use crate::emitters::EmitterSampler;
 use crate::error::{Error, Result};
@@ -66,6 +67,8 @@ pub struct BakeSettings {
     pub seed: u64,
     /// Largest lightcut (clusters) when a light tree is used.
     pub max_cut: usize,
+    /// Indirect bounces after the direct light (none: a direct-only cache).
+    pub bounces: BounceSettings,
 }
 
 impl BakeSettings {
@@ -77,6 +80,7 @@ impl BakeSettings {
             split_level: None,
             seed: 0,
             max_cut: 1000,
+            bounces: BounceSettings::exactly(0),
         }
     }
 
@@ -89,6 +93,11 @@ impl BakeSettings {
             "split_level": self.split_level,
             "seed": self.seed,
             "max_cut": self.max_cut,
+            "bounces": {
+                "max": self.bounces.max,
+                "tolerance": self.bounces.tolerance,
+                "operator_tau": self.bounces.operator_tau,
+            },
         })
     }
 }
@@ -120,6 +129,8 @@ pub struct Baked {
     pub projected: CodedTree<f32>,
     /// Seconds per stage, in order.
     pub timings: Vec<(&'static str, f64)>,
+    /// What the indirect bounces did, if any ran.
+    pub bounces: Option<BounceReport>,
 }
 
 /// Which stage is running and how far it is (from 0 to 1), for progress display.
@@ -145,6 +156,7 @@ pub fn bake(scene: &Scene, settings: &BakeSettings, progress: Progress) -> Resul
 
     let t = Instant::now();
     let mut plan = Plan::new(scene);
+    plan.note_bounces(&settings.bounces);
     let accel = Accel::build(scene);
     // Many point and spot lights go through a light tree; a few are sampled with the rest.
     let punctual = scene
@@ -220,7 +232,7 @@ pub fn bake(scene: &Scene, settings: &BakeSettings, progress: Progress) -> Resul
     progress("coding", 1.0);
     stage("coding", t);
 
-    Ok(Baked {
+    let mut baked = Baked {
         plan,
         settings: settings.clone(),
         surfels,
@@ -231,7 +243,27 @@ pub fn bake(scene: &Scene, settings: &BakeSettings, progress: Progress) -> Resul
         coded,
         projected,
         timings,
-    })
+        bounces: None,
+    };
+    if settings.bounces.max > 0 {
+        let t = Instant::now();
+        baked.bounces = Some(add_bounces(scene, &mut baked, &settings.bounces, progress)?);
+        baked.timings.push(("bounces", t.elapsed().as_secs_f64()));
+    }
+    Ok(baked)
+}
+
+/// The material of surfel `s` and its texture coordinates there.
+fn surfel_material<'a>(scene: &'a Scene, s: &Surfel) -> (&'a crate::scene::Material, glam::Vec2) {
+    let mesh = &scene.meshes[s.mesh as usize];
+    let uv = mesh.uv_at(s.triangle, [1.0 - s.b.x - s.b.y, s.b.x, s.b.y]);
+    (&scene.materials[mesh.material], uv)
+}
+
+/// The BSDF at surfel `s` (textures looked up).
+pub fn surfel_bsdf(scene: &Scene, s: &Surfel) -> Bsdf {
+    let (material, uv) = surfel_material(scene, s);
+    material.bsdf_at(&scene.textures, uv)
 }
 
 /// Direct light plus emission leaving surfel `s`, and the emission alone.
@@ -242,8 +274,7 @@ fn surfel_radiance(
     id: u64,
     tau: f32,
 ) -> (SurfelRadiance, Rgb) {
-    let material = &scene.materials[scene.meshes[s.mesh as usize].material];
-    let uv = scene.meshes[s.mesh as usize].uv_at(s.triangle, [1.0 - s.b.x - s.b.y, s.b.x, s.b.y]);
+    let (material, uv) = surfel_material(scene, s);
     let bsdf = material.bsdf_at(&scene.textures, uv);
     // Emission leaves the front face (both faces for two-sided emitters are not separate
     // surfels: the front is what a surfel stands for).

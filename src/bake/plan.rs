@@ -43,6 +43,25 @@ pub struct Plan {
 impl Plan {
     /// Analyse `scene` (the materials its meshes use). Materials are classified by their BSDF at texture coordinate (0, 0);
     /// each surfel then takes the resolution of its own BSDF, so textured roughness is honoured.
+    /// Record the bounce settings: `bounces` 0 leaves indirect light out.
+    pub fn note_bounces(&mut self, bounces: &crate::bounce::BounceSettings) {
+        if bounces.max == 0 {
+            if let Some(l) = self.json["left_out"].as_array_mut() {
+                l.push("indirect bounces: this bake computes direct light only".into());
+            }
+        } else {
+            self.json["bounces"] = if bounces.tolerance > 0.0 {
+                format!(
+                    "until a bounce adds less than {} of the light, at most {}",
+                    bounces.tolerance, bounces.max
+                )
+            } else {
+                format!("exactly {}", bounces.max)
+            }
+            .into();
+        }
+    }
+
     pub fn new(scene: &Scene) -> Plan {
         let mut finest = 3;
         let mut transmission = false;
@@ -95,7 +114,6 @@ impl Plan {
         if emissive_triangles == 0 {
             left_out.push("emitting surfels: no surface emits");
         }
-        left_out.push("indirect bounces: this bake computes direct light only");
         let json = json!({
             "map_resolution": 1u32 << finest,
             "transmission": transmission,

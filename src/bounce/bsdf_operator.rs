@@ -335,6 +335,11 @@ impl BsdfOperator {
         (self.hemispheres * self.n * self.n) as usize
     }
 
+    /// The texel of local direction `w`, or `None` below a one-hemisphere grid's horizon.
+    pub fn texel_of(&self, w: Vec3) -> Option<u32> {
+        texel_of(w, self.n, self.hemispheres)
+    }
+
     /// Stored coefficients of V.
     pub fn nonzeros(&self) -> usize {
         self.entries.len()

@@ -126,6 +126,9 @@ pub struct Microbuffer {
     pub cos_radiance: Vec<Rgb>,
     pub depth: Vec<f32>,
     pub alpha: Vec<f32>,
+    /// After [`Microbuffer::resolve`]: per pixel, the coverage its radiance was summed over
+    /// (up to [`MAX_LAYER_COVER`]; `alpha` is this clamped to 1).
+    cover: Vec<f32>,
     pending: Vec<Splat>,
     /// Cells still to visit while splatting (kept to save allocations).
     scratch: Vec<u32>,
@@ -239,6 +242,7 @@ impl Microbuffer {
             cos_radiance: vec![Rgb::ZERO; count],
             depth: vec![f32::INFINITY; count],
             alpha: vec![0.0; count],
+            cover: vec![0.0; count],
             pending: Vec::new(),
             scratch: Vec::new(),
             order: Vec::new(),
@@ -261,8 +265,10 @@ impl Microbuffer {
             }
             self.depth.resize(count, f32::INFINITY);
             self.depth.truncate(count);
-            self.alpha.resize(count, 0.0);
-            self.alpha.truncate(count);
+            for v in [&mut self.alpha, &mut self.cover] {
+                v.resize(count, 0.0);
+                v.truncate(count);
+            }
         }
         self.frame = frame;
         self.pending.clear();
@@ -363,6 +369,7 @@ impl Microbuffer {
                 self.cos_radiance.push(Rgb::ZERO);
                 self.depth.push(f32::INFINITY);
                 self.alpha.push(0.0);
+                self.cover.push(0.0);
             }
             self.cells.push(cell);
         }
@@ -511,6 +518,7 @@ impl Microbuffer {
         self.radiance.fill(Rgb::ZERO);
         self.cos_radiance.fill(Rgb::ZERO);
         self.alpha.fill(0.0);
+        self.cover.fill(0.0);
         self.depth.fill(f32::INFINITY);
         let splats = std::mem::take(&mut self.pending);
         let order = self.order_by_pixel_and_depth(&splats);
@@ -524,6 +532,7 @@ impl Microbuffer {
             };
             let footprint = self.pixels[k].solid_angle.sqrt();
             let mut open = 1.0f32;
+            let mut covered = 0.0f32;
             let mut sum = Rgb::ZERO;
             let mut cos_sum = Rgb::ZERO;
             self.depth[k] = splats[first as usize].dist;
@@ -557,11 +566,13 @@ impl Microbuffer {
                 };
                 sum += layer_sum * scale;
                 cos_sum += layer_cos * scale;
+                covered += layer_cover * scale;
                 open = (open - layer_cover).max(0.0);
             }
             self.radiance[k] = sum;
             self.cos_radiance[k] = cos_sum;
             self.alpha[k] = 1.0 - open;
+            self.cover[k] = covered;
         }
         self.order = order;
         self.pending = splats;
@@ -600,6 +611,22 @@ impl Microbuffer {
             begin = end as usize;
         }
         order
+    }
+
+    /// Normalise every pixel for which `closed(pixel)` holds (something lies behind it) to
+    /// exactly full coverage: its radiance becomes the coverage-weighted mean of the senders
+    /// that cover it. The splats' coverage is right on average but not pixel by pixel; in a
+    /// bake's bounces that error would be passed on to every further bounce.
+    pub fn close_gaps(&mut self, closed: impl Fn(usize) -> bool) {
+        for k in 0..self.pixels.len() {
+            let c = self.cover[k];
+            if c > 0.0 && closed(k) {
+                self.radiance[k] /= c;
+                self.cos_radiance[k] /= c;
+                self.alpha[k] = 1.0;
+                self.cover[k] = 1.0;
+            }
+        }
     }
 
     /// Set every pixel to a uniform, fully covering radiance `l` (a sky).

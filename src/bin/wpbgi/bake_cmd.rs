@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 use wpbgi::bake::store::{bake_hash, BakedCache};
 use wpbgi::bake::{bake, BakeSettings, Quality};
+use wpbgi::bounce::BounceSettings;
 use wpbgi::scene::Scene;
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -53,9 +54,23 @@ pub struct BakeArgs {
     /// With many point and spot lights (Lightcuts): the largest cut per surfel, in clusters.
     #[arg(long, default_value_t = 1000)]
     max_cut: usize,
+    /// Indirect bounces after the direct light: a number (0: a direct-only cache), or `auto`:
+    /// until a bounce adds less than 0.1 % of the light (at most 30), the geometric tail
+    /// extrapolated once successive bounces lose light at a steady ratio.
+    #[arg(long, default_value = "auto", value_parser = parse_bounces)]
+    bounces: BounceSettings,
     /// Report the plan, progress and summary as JSON lines on standard error.
     #[arg(long)]
     json: bool,
+}
+
+fn parse_bounces(s: &str) -> Result<BounceSettings, String> {
+    if s == "auto" {
+        return Ok(BounceSettings::auto());
+    }
+    s.parse::<u32>()
+        .map(BounceSettings::exactly)
+        .map_err(|_| format!("expected a number of bounces or `auto`, got \"{s}\""))
 }
 
 #[derive(Args)]
@@ -95,6 +110,7 @@ fn settings_of(a: &BakeArgs) -> BakeSettings {
     s.split_level = a.split_level;
     s.seed = a.seed;
     s.max_cut = a.max_cut;
+    s.bounces = a.bounces;
     s
 }
 
@@ -108,7 +124,8 @@ pub fn bake_command(a: BakeArgs) -> Result<()> {
     let scene = Scene::load(&a.scene)?;
     crate::warn(&scene);
     let settings = settings_of(&a);
-    let plan = wpbgi::bake::Plan::new(&scene);
+    let mut plan = wpbgi::bake::Plan::new(&scene);
+    plan.note_bounces(&settings.bounces);
     if a.json {
         emit_json(json!({"event": "plan", "plan": plan.json, "settings": settings.to_json()}));
     } else {
@@ -119,6 +136,9 @@ pub fn bake_command(a: BakeArgs) -> Result<()> {
         );
         for m in plan.json["materials"].as_array().into_iter().flatten() {
             eprintln!("  material {}: {}, {}", m["name"], m["model"], m["storage"]);
+        }
+        if let Some(b) = plan.json["bounces"].as_str() {
+            eprintln!("  indirect bounces: {b}");
         }
         for l in plan.json["left_out"].as_array().into_iter().flatten() {
             eprintln!("  left out: {}", l.as_str().unwrap_or_default());
@@ -155,6 +175,10 @@ pub fn bake_command(a: BakeArgs) -> Result<()> {
         .collect::<serde_json::Map<_, _>>()
         .into();
     stats["seconds"]["write"] = json!(t.elapsed().as_secs_f64());
+    if let Some(r) = &baked.bounces {
+        stats["bounces"] = r.to_json();
+        stats["bounces"]["seconds"] = json!(r.seconds);
+    }
     let peak = peak_memory();
     let per_surfel = bytes as f64 / baked.surfels.len().max(1) as f64;
     let total = start.elapsed().as_secs_f64();
@@ -178,6 +202,18 @@ pub fn bake_command(a: BakeArgs) -> Result<()> {
         );
         for (stage, secs) in &baked.timings {
             eprintln!("  {stage}: {secs:.2} s");
+        }
+        if let Some(r) = &baked.bounces {
+            let per: Vec<String> = r.seconds.iter().map(|s| format!("{s:.2}")).collect();
+            eprintln!(
+                "  {} bounces ({} s each), residual {:.1e}{}",
+                r.bounces,
+                per.join(", "),
+                r.residual,
+                r.extrapolated.map_or(String::new(), |t| format!(
+                    ", tail extrapolated (× {t:.2} of the last bounce)"
+                )),
+            );
         }
     }
     Ok(())

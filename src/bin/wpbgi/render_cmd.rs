@@ -135,6 +135,16 @@ pub fn render_command(a: RenderArgs) -> Result<()> {
     crate::warn(&scene);
     let camera = crate::pick_camera(&scene, &a.camera)?;
     let cache = open_fresh_cache(&scene, &a.cache)?;
+    let bounces = cache.plan["plan"]["bounces"]["bounces"]
+        .as_u64()
+        .unwrap_or(0);
+    if a.max_depth >= 0 && bounces > 0 {
+        eprintln!(
+            "warning: the cache holds {bounces} indirect bounces, which --max-depth {} cannot cut: \
+             its light is rendered whole (bake with --bounces 0 for a depth-limited render)",
+            a.max_depth
+        );
+    }
     if a.light_samples == 0 {
         bail!("--light-samples must be at least 1");
     }
