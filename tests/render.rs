@@ -13,22 +13,15 @@
 
 mod common;
 
-use std::path::{Path, PathBuf};
 use wpbgi::bake::store::BakedCache;
 use wpbgi::bake::{BakeSettings, Quality};
-use wpbgi::image::{error_against, read_exr, Image};
+use wpbgi::image::error_against;
 use wpbgi::render::{render_final, FinalOutput, FinalSettings, GatherMode};
 use wpbgi::scene::Scene;
 
-fn data(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data/mitsuba")
-        .join(name)
-}
-
 /// Bake `name` at draft quality into a temporary cache and open it.
 fn baked(name: &str) -> (Scene, BakedCache) {
-    let scene = Scene::load(&data(&format!("{name}.gltf"))).expect("scene");
+    let scene = Scene::load(&common::mitsuba_data(&format!("{name}.gltf"))).expect("scene");
     let dir = std::env::temp_dir().join(format!("wpbgi-render-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
     let settings = BakeSettings::from_quality(Quality::Draft);
@@ -52,22 +45,6 @@ fn render(scene: &Scene, cache: &BakedCache, size: u32, settings: &FinalSettings
     out
 }
 
-/// The 256² reference averaged 2 × 2.
-fn reference_128(name: &str, depth: u32) -> Image {
-    let r = read_exr(&data(&format!("{name}_d{depth}_ref.exr"))).expect("reference");
-    let mut out = Image::new(r.width / 2, r.height / 2);
-    for y in 0..out.height {
-        for x in 0..out.width {
-            out.pixels[(y * out.width + x) as usize] = (r.get(2 * x, 2 * y)
-                + r.get(2 * x + 1, 2 * y)
-                + r.get(2 * x, 2 * y + 1)
-                + r.get(2 * x + 1, 2 * y + 1))
-                * 0.25;
-        }
-    }
-    out
-}
-
 fn depth3() -> FinalSettings {
     FinalSettings {
         max_depth: 3,
@@ -85,7 +62,7 @@ fn depth3() -> FinalSettings {
 fn check(name: &str, max_rel: f64, max_mse: f64) {
     let (scene, cache) = baked(name);
     let out = render(&scene, &cache, 128, &depth3());
-    let reference = reference_128(name, 3);
+    let reference = common::reference_128(name, 3);
     let (mse, rel) = error_against(&out.beauty, &reference).expect("same size");
     let (mean, ref_mean) = (out.beauty.mean(), reference.mean());
     eprintln!("{name}: MSE {mse:.3e}, relMSE {rel:.3e}, mean {mean} vs {ref_mean}");

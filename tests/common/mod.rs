@@ -123,3 +123,28 @@ pub fn grey_scene(meshes: Vec<Mesh>) -> wpbgi::scene::Scene {
         ..Default::default()
     }
 }
+
+/// A file of tests/data/mitsuba (Mitsuba 3's reference scenes and renders).
+pub fn mitsuba_data(name: &str) -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/mitsuba")
+        .join(name)
+}
+
+/// Mitsuba's 256² reference of `name` at max_depth `depth`, averaged 2 × 2: the box filter over
+/// a 128² pixel is exactly the mean of its four 256² box-filtered quarters.
+pub fn reference_128(name: &str, depth: u32) -> wpbgi::image::Image {
+    let r = wpbgi::image::read_exr(&mitsuba_data(&format!("{name}_d{depth}_ref.exr")))
+        .expect("reference");
+    let mut out = wpbgi::image::Image::new(r.width / 2, r.height / 2);
+    for y in 0..out.height {
+        for x in 0..out.width {
+            out.pixels[(y * out.width + x) as usize] = (r.get(2 * x, 2 * y)
+                + r.get(2 * x + 1, 2 * y)
+                + r.get(2 * x, 2 * y + 1)
+                + r.get(2 * x + 1, 2 * y + 1))
+                * 0.25;
+        }
+    }
+    out
+}
