@@ -85,11 +85,12 @@ fn cached_radiance(
     (sum / area, baked.bounces.unwrap_or_default(), values)
 }
 
-/// ρ = 0.5: within 3 % of Le/(1 − ρ) with 3 000 surfels, the same cache for 1 and 2 threads.
+/// ρ = 0.5: within 2.5 % of Le/(1 − ρ) with 3 000 surfels, the same cache for 1 and 2 threads.
 ///
-/// The issue asks for 1 % at ρ = 0.5 and 0.9 and 2 % at 0.99; measured now: −2.3 %, −16 %,
-/// −67 %. Each bounce loses about 2.5 % (the gather of a closed room, below), which a stiff
-/// scene multiplies: that target is open, and this bound guards what is reached.
+/// The issue asks for 1 % at ρ = 0.5 and 0.9 and 2 % at 0.99; measured now (`furnace_table`):
+/// −1.7 %, −8.9 %, −49 %. Each bounce loses about 1 % (the gather of a closed room, below) and
+/// the direct light near the edges 1 %; a stiff scene multiplies the first. That target is
+/// open, and this bound guards what is reached.
 #[test]
 fn diffuse_furnace_at_half_albedo() {
     let (rho, le) = (0.5f32, 1.0f32);
@@ -100,7 +101,7 @@ fn diffuse_furnace_at_half_albedo() {
         "ρ = {rho}: mean {mean:.4}, expected {expected:.4} ({:+.2} %); {report:?}",
         100.0 * err
     );
-    assert!(err.abs() <= 0.03, "{:+.2} %", 100.0 * err);
+    assert!(err.abs() <= 0.025, "{:+.2} %", 100.0 * err);
     assert!(report.bounces >= 3 && report.bounces <= 30);
     let (_, _, two) = cached_radiance(&furnace(rho, le), BounceSettings::auto(), 2);
     assert!(one == two, "the bounces depend on the thread count");
@@ -117,19 +118,19 @@ fn stiff_furnace_extrapolates_its_tail() {
     let e = &report.energies;
     let r = e[e.len() - 1] / e[e.len() - 2];
     assert!((tail - r / (1.0 - r)).abs() < 1e-9 * tail);
-    // Every bounce keeps 0.99 of the light less what the gather loses (2.5 %, see above).
-    assert!(r > 0.94 && r < 0.99, "ratio {r}");
+    // Every bounce keeps 0.99 of the light less what the gather loses (1 %, see above).
+    assert!(r > 0.97 && r < 0.99, "ratio {r}");
 }
 
 /// Inside a closed room whose every surfel sends radiance 1, the surfels' microbuffers (as a
-/// bounce builds them) gather irradiance π. Measured with 3 000 surfels: a mean of 0.975 π;
-/// 0.986 π on surfels more than 0.15 from another face; the rest is lost at the room's edges
-/// (0.91 π within 0.02), where the aggregated nodes of two walls are seen through their maps.
+/// bounce builds them) gather irradiance π. Measured with 3 000 surfels: a mean of 0.991 π,
+/// 0.989 π on surfels more than 0.15 from another face. Before the holes between a nearby
+/// wall's discs were filled from ray hits, surfels within 0.02 of an edge saw 0.91 π.
 #[test]
 fn closed_room_gathers_pi() {
     use wpbgi::bake::pipeline::intensity_map;
     use wpbgi::bake::store::BakedCache;
-    use wpbgi::bounce::iterate::pixel_hits;
+    use wpbgi::bounce::iterate::close_buffer;
     use wpbgi::gather::cut::splat_cut;
     use wpbgi::gather::microbuffer::Microbuffer;
     use wpbgi::gather::senders::Senders;
@@ -164,8 +165,7 @@ fn closed_room_gathers_pi() {
         let mut mb = Microbuffer::new(16, false, Frame::from_normal(s.n));
         splat_cut(&senders, s.p, s.mesh, &mut mb, &[0], &mut stack);
         mb.resolve();
-        let hits = pixel_hits(&accel, &scene, s, &mb);
-        mb.close_gaps(|k| hits[k]);
+        close_buffer(&senders, (&accel, &scene), s, &mut mb);
         let e = mb
             .cos_radiance
             .iter()
@@ -185,6 +185,22 @@ fn closed_room_gathers_pi() {
     }
     let (mean, inner_mean) = (all.0 / f64::from(all.1), inner.0 / f64::from(inner.1));
     eprintln!("irradiance / π: mean {mean:.4}, away from the edges {inner_mean:.4}");
-    assert!(inner_mean > 0.98 && inner_mean < 1.01, "{inner_mean}");
-    assert!(mean > 0.965 && mean < 1.01, "{mean}");
+    assert!(inner_mean > 0.983 && inner_mean < 1.01, "{inner_mean}");
+    assert!(mean > 0.985 && mean < 1.01, "{mean}");
+}
+
+/// The figures of docs/bounces.md: `cargo test --release --test furnace -- --ignored`.
+#[test]
+#[ignore = "a measurement, not a check"]
+fn furnace_table() {
+    for rho in [0.5f32, 0.9, 0.99] {
+        let expected = f64::from(1.0 / (1.0 - rho));
+        let (mean, report, _) = cached_radiance(&furnace(rho, 1.0), BounceSettings::auto(), 2);
+        eprintln!(
+            "ρ = {rho}: {:+.2} % after {} bounces (tail × {:?})",
+            100.0 * (mean / expected - 1.0),
+            report.bounces,
+            report.extrapolated
+        );
+    }
 }

@@ -629,6 +629,16 @@ impl Microbuffer {
         }
     }
 
+    /// Set pixel `k` to full coverage by radiance `l` (a pixel no splat reached, filled from
+    /// what a ray through it hits).
+    pub fn fill_pixel(&mut self, k: usize, l: Rgb) {
+        let px = &self.pixels[k];
+        self.radiance[k] = l;
+        self.cos_radiance[k] = l * (px.dir.z.abs() * px.cos_weight);
+        self.alpha[k] = 1.0;
+        self.cover[k] = 1.0;
+    }
+
     /// Set every pixel to a uniform, fully covering radiance `l` (a sky).
     pub fn fill(&mut self, l: Rgb) {
         for (k, px) in self.pixels.iter().enumerate() {

@@ -12,12 +12,13 @@
 //! subtracted (emitting surfels still occlude).
 
 use super::microbuffer::Sender;
+use crate::bake::pipeline::PROJECTED_AREA_LEVELS;
 use crate::bake::pipeline::{intensity_map, SurfelRadiance};
 use crate::bake::store::{BakedCache, NodeRecord, SurfelRecord, NO_MAP, SOLID};
 use crate::bake::surfels::Surfel;
 use crate::bake::tree::NONE;
 use crate::cache::CacheError;
-use crate::haar::{direction_to_square, Coefficient, Haar2d, SparseHaar};
+use crate::haar::{direction_to_square, square_to_direction, Coefficient, Haar2d, SparseHaar};
 use crate::spectrum::Rgb;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
@@ -25,6 +26,9 @@ use rayon::prelude::*;
 /// Nodes whose normals lie within this angle (radians) of their axis are flat enough to
 /// have a plane, which tells the surface they lie on from occluders (30°).
 pub const FLAT_CONE: f32 = std::f32::consts::FRAC_PI_6;
+
+/// Texels per side of the projected-area maps.
+const PROJECTED_TEXELS: f32 = (1u32 << PROJECTED_AREA_LEVELS) as f32;
 
 /// One node of the tree, as traversal needs it.
 #[derive(Clone, Copy, Debug)]
@@ -214,10 +218,33 @@ impl Senders {
         if let Some(e) = &self.emitted[j as usize] {
             i -= e.eval(p.x, p.y);
         }
+        let projected = self.exact_projected(node, w).unwrap_or(mapped);
+        if node.directional == 0.0 {
+            // Diffuse surfels send light from their front only, so the radiance is I over the
+            // front projected area P⁺ = (P + N·ω)/2 (cos⁺ = (|cos| + cos)/2), taken at the
+            // 8 × 8 texel's centre as I and P are: I/P lost up to 8 % where the texel
+            // straddles an edge-on band (tests/furnace.rs). The node covers what faces the
+            // receiver, or its back where that is larger (a sheet seen from behind, whose
+            // back still occludes): for a solid the back lies behind the front.
+            let texel = (p * PROJECTED_TEXELS)
+                .floor()
+                .min(Vec2::splat(PROJECTED_TEXELS - 1.0));
+            let centre = square_to_direction((texel + 0.5) / PROJECTED_TEXELS);
+            let front_texel = 0.5 * (mapped + node.area_normal.dot(centre));
+            let n_dot = node.area_normal.dot(w);
+            let (front, back) = (0.5 * (projected + n_dot), 0.5 * (projected - n_dot));
+            // Near the edge-on band the texel's centre may see much less front than ω does;
+            // I/P⁺ there is ill-conditioned and falls back to I/P below.
+            if front >= back && front_texel > 0.0 && front_texel >= 0.5 * front {
+                return Seen {
+                    radiance: (i / front_texel).max(Rgb::ZERO),
+                    projected: front.max(0.0),
+                };
+            }
+        }
         // Radiance from the two maps at the same texel (their quantisation cancels), unless
         // the texel straddles the node's edge-on band and its P is far below the exact one;
         // the solid angle from the exact projected area where it is known.
-        let projected = self.exact_projected(node, w).unwrap_or(mapped);
         let denominator = if mapped >= 0.5 * projected {
             mapped
         } else {
@@ -232,6 +259,44 @@ impl Senders {
             radiance,
             projected,
         }
+    }
+
+    /// The surfel nearest `q` among those `accept` takes (branch and bound over the nodes'
+    /// bounding spheres).
+    pub fn nearest_surfel(&self, q: Vec3, accept: impl Fn(&SurfelRecord) -> bool) -> Option<u32> {
+        let mut best = (f32::INFINITY, None);
+        let mut stack = if self.nodes.is_empty() {
+            vec![]
+        } else {
+            vec![0u32]
+        };
+        while let Some(j) = stack.pop() {
+            let node = &self.nodes[j as usize];
+            if ((node.center - q).length() - node.radius).max(0.0) >= best.0 {
+                continue;
+            }
+            if node.is_leaf() {
+                let s = &self.surfels[node.surfel as usize];
+                let d = (Vec3::from(s.p) - q).length();
+                if d < best.0 && accept(s) {
+                    best = (d, Some(node.surfel));
+                }
+                continue;
+            }
+            // The nearer child last, so that it is searched first.
+            let mut children: Vec<u32> = node
+                .children
+                .iter()
+                .copied()
+                .filter(|&c| c != NONE)
+                .collect();
+            children.sort_by(|&a, &b| {
+                let d = |c: u32| (self.nodes[c as usize].center - q).length_squared();
+                d(b).total_cmp(&d(a))
+            });
+            stack.extend(children);
+        }
+        best.1
     }
 
     /// Node `j` as a microbuffer records it, at `offset` from the receiver, seen as `seen`.
