@@ -107,7 +107,8 @@ pub fn splat_cut(
         // pixel lookup.
         let dir = v / d;
         let base = mb.pixel_solid_angle();
-        let accept = fits_pixel(senders, j, d2, dir, base)
+        let accept = !senders.needs_leaves(j, mesh)
+            && fits_pixel(senders, j, d2, dir, base)
             && mb
                 .solid_angle_towards(dir)
                 .is_some_and(|pixel| pixel == base || fits_pixel(senders, j, d2, dir, pixel));

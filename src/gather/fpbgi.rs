@@ -204,7 +204,7 @@ pub fn cluster_cut(
         } else {
             far_eps
         };
-        if !(d > 0.0) || radius > eps * d {
+        if !(d > 0.0) || radius > eps * d || senders.needs_leaves(j, mesh) {
             near.push(j);
             continue;
         }

@@ -53,6 +53,9 @@ pub struct SenderNode {
     /// radiance: where every surfel below faces ω, the node's radiance along ω is exactly
     /// (S·ω)/(N·ω), without the intensity map's texels (see [`Senders::seen`]).
     pub radiance_normal: [Vec3; 3],
+    /// Whether surfels of a solid (see [`SOLID`]) lie below: their inward light is not in
+    /// the node's maps, so a receiver on a solid must reach them as leaves.
+    pub solid: bool,
 }
 
 impl SenderNode {
@@ -64,6 +67,8 @@ impl SenderNode {
 /// The tree of senders.
 pub struct Senders {
     pub nodes: Vec<SenderNode>,
+    /// Per mesh: whether it bounds a solid.
+    solid_meshes: Vec<bool>,
     pub surfels: Vec<SurfelRecord>,
     /// Per inner node: G of the radiant intensity and of the projected area (leaves: empty).
     intensity: Vec<SparseHaar<Rgb>>,
@@ -111,6 +116,7 @@ impl Senders {
                 area_normal: Vec3::ZERO,
                 directional: 0.0,
                 radiance_normal: [Vec3::ZERO; 3],
+                solid: false,
             })
             .collect();
         if nodes
@@ -160,6 +166,23 @@ impl Senders {
                     )
             };
         }
+        for j in (0..nodes.len()).rev() {
+            nodes[j].solid = if nodes[j].is_leaf() {
+                cache.surfels[nodes[j].surfel as usize].flags & SOLID != 0
+            } else {
+                nodes[j].children.iter().any(|&c| {
+                    (c as usize) < nodes.len() && c as usize > j && nodes[c as usize].solid
+                })
+            };
+        }
+        let mut solid_meshes = Vec::new();
+        for s in &cache.surfels {
+            let m = s.mesh as usize;
+            if m >= solid_meshes.len() {
+                solid_meshes.resize(m + 1, false);
+            }
+            solid_meshes[m] |= s.flags & SOLID != 0;
+        }
         for (n, (d, r)) in nodes.iter_mut().zip(directional_area.iter().zip(records)) {
             n.directional = if r.area > 0.0 {
                 (d / r.area).min(1.0)
@@ -180,6 +203,7 @@ impl Senders {
             .collect::<Result<_, _>>()?;
         let emitted = emitted_intensities(records, &nodes, &cache.surfels, &maps, levels);
         Ok(Senders {
+            solid_meshes,
             nodes,
             surfels: cache.surfels.clone(),
             intensity,
@@ -259,6 +283,13 @@ impl Senders {
             radiance,
             projected,
         }
+    }
+
+    /// Whether a receiver on `mesh` must reach the surfels of a solid below node `j` one by
+    /// one: it lies on a solid itself, whose inward light only leaves carry (the light inside
+    /// a glass sphere, on its way to a caustic).
+    pub fn needs_leaves(&self, j: u32, mesh: u32) -> bool {
+        self.nodes[j as usize].solid && self.solid_meshes.get(mesh as usize) == Some(&true)
     }
 
     /// The surfel nearest `q` among those `accept` takes (branch and bound over the nodes'
