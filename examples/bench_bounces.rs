@@ -1,0 +1,87 @@
+//! Multi-bounce caches against Mitsuba 3's max_depth 8 references (256²), and our path tracer
+//! at equal time: bake (draft, `--bounces auto`) + render with the defaults, then the path
+//! tracer at max_depth 8 for the same wall time; the relMSE and MSE of both, the bounces and
+//! the time of each.
+//!
+//! `cargo run --release --example bench_bounces [-- SCENE_NAME]` (cbox-diffuse, cbox-rough or
+//! cbox-glossy from tests/data/mitsuba; default: cbox-diffuse and cbox-rough).
+
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+use wpbgi::bake::store::{bake_hash, write, BakedCache};
+use wpbgi::bake::{bake, BakeSettings, Quality};
+use wpbgi::bounce::BounceSettings;
+use wpbgi::image::{error_against, read_exr};
+use wpbgi::reference::{render, RenderSettings};
+use wpbgi::render::{render_final, FinalSettings};
+use wpbgi::scene::Scene;
+
+fn data(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/mitsuba")
+        .join(name)
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let names: Vec<String> = match std::env::args().nth(1) {
+        Some(n) => vec![n],
+        None => vec!["cbox-diffuse".into(), "cbox-rough".into()],
+    };
+    println!("threads: {}", rayon::current_num_threads());
+    for name in &names {
+        let scene = Scene::load(&data(&format!("{name}.gltf")))?;
+        let reference = read_exr(&data(&format!("{name}_d8_ref.exr")))?;
+        let camera = scene.default_camera(256, 256)?;
+        let start = Instant::now();
+        let settings = BakeSettings {
+            bounces: BounceSettings::auto(),
+            ..BakeSettings::from_quality(Quality::Draft)
+        };
+        let baked = bake(&scene, &settings, &|_, _| {})?;
+        let path = std::env::temp_dir().join(format!("wpbgi-bench-bounces-{name}.wpc"));
+        write(
+            &path,
+            bake_hash(&scene, &settings.to_json()),
+            &baked,
+            serde_json::json!({}),
+        )?;
+        let bake_s = start.elapsed().as_secs_f64();
+        let cache = BakedCache::read(&path, None)?;
+        let t = Instant::now();
+        let out = render_final(
+            &scene,
+            &cache,
+            &camera,
+            &FinalSettings::default(),
+            &|_, _| {},
+        )?;
+        let render_s = t.elapsed().as_secs_f64();
+        let total = start.elapsed().as_secs_f64();
+        let (mse, rel) = error_against(&out.beauty, &reference).ok_or("size")?;
+        let pt = render(
+            &scene,
+            &camera,
+            &RenderSettings {
+                spp: 1,
+                max_depth: 8,
+                time_limit: Some(Duration::from_secs_f64(total)),
+                ..Default::default()
+            },
+            &|_| {},
+        )?;
+        let (pt_mse, pt_rel) = error_against(&pt.mean, &reference).ok_or("size")?;
+        let report = baked.bounces.unwrap_or_default();
+        println!(
+            "{name}: bake {bake_s:.1} s ({} bounces, {:.1} s each on average) + render {render_s:.1} s: \
+             relMSE {rel:.3e}, MSE {mse:.3e}; path tracer in {:.1} s ({} spp): relMSE {pt_rel:.3e}, \
+             MSE {pt_mse:.3e} ({:.2}× our relMSE, {:.2}× our MSE)",
+            report.bounces,
+            report.seconds.iter().sum::<f64>() / report.seconds.len().max(1) as f64,
+            pt.seconds,
+            pt.spp,
+            pt_rel / rel,
+            pt_mse / mse
+        );
+    }
+    Ok(())
+}
