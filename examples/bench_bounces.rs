@@ -6,21 +6,16 @@
 //! `cargo run --release --example bench_bounces [-- SCENE_NAME]` (cbox-diffuse, cbox-rough or
 //! cbox-glossy from tests/data/mitsuba; default: cbox-diffuse and cbox-rough).
 
-use std::path::{Path, PathBuf};
-use std::time::{Duration, Instant};
-use wpbgi::bake::store::{bake_hash, write, BakedCache};
-use wpbgi::bake::{bake, BakeSettings, Quality};
+use std::time::Instant;
+use wpbgi::bake::{BakeSettings, Quality};
 use wpbgi::bounce::BounceSettings;
 use wpbgi::image::{error_against, read_exr};
-use wpbgi::reference::{render, RenderSettings};
 use wpbgi::render::{render_final, FinalSettings};
 use wpbgi::scene::Scene;
 
-fn data(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data/mitsuba")
-        .join(name)
-}
+mod common;
+
+use common::data;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let names: Vec<String> = match std::env::args().nth(1) {
@@ -32,21 +27,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let scene = Scene::load(&data(&format!("{name}.gltf")))?;
         let reference = read_exr(&data(&format!("{name}_d8_ref.exr")))?;
         let camera = scene.default_camera(256, 256)?;
-        let start = Instant::now();
         let settings = BakeSettings {
             bounces: BounceSettings::auto(),
             ..BakeSettings::from_quality(Quality::Draft)
         };
-        let baked = bake(&scene, &settings, &|_, _| {})?;
-        let path = std::env::temp_dir().join(format!("wpbgi-bench-bounces-{name}.wpc"));
-        write(
-            &path,
-            bake_hash(&scene, &settings.to_json()),
-            &baked,
-            serde_json::json!({}),
-        )?;
-        let bake_s = start.elapsed().as_secs_f64();
-        let cache = BakedCache::read(&path, None)?;
+        let (baked, cache, bake_s) =
+            common::bake_cache(&scene, &settings, &format!("bounces-{name}"))?;
         let t = Instant::now();
         let out = render_final(
             &scene,
@@ -56,19 +42,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             &|_, _| {},
         )?;
         let render_s = t.elapsed().as_secs_f64();
-        let total = start.elapsed().as_secs_f64();
         let (mse, rel) = error_against(&out.beauty, &reference).ok_or("size")?;
-        let pt = render(
-            &scene,
-            &camera,
-            &RenderSettings {
-                spp: 1,
-                max_depth: 8,
-                time_limit: Some(Duration::from_secs_f64(total)),
-                ..Default::default()
-            },
-            &|_| {},
-        )?;
+        let pt = common::path_tracer_for(&scene, &camera, 8, bake_s + render_s)?;
         let (pt_mse, pt_rel) = error_against(&pt.mean, &reference).ok_or("size")?;
         let report = baked.bounces.unwrap_or_default();
         println!(

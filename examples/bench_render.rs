@@ -10,21 +10,17 @@
 //! `cargo run --release --example bench_render [-- SCENE_NAME]` (cbox-diffuse, cbox-rough or
 //! cbox-glossy from tests/data/mitsuba; default: all three for 1 and 2, glossy for 3).
 
-use std::path::{Path, PathBuf};
-use std::time::{Duration, Instant};
-use wpbgi::bake::store::{bake_hash, write, BakedCache};
-use wpbgi::bake::{bake, BakeSettings, Quality};
+use std::time::Instant;
+use wpbgi::bake::store::BakedCache;
+use wpbgi::bake::{BakeSettings, Quality};
 use wpbgi::image::{error_against, read_exr};
-use wpbgi::reference::{render, RenderSettings};
 use wpbgi::render::{render_final, FinalOutput, FinalSettings, GatherMode, GatherStats};
 use wpbgi::scene::camera::Camera;
 use wpbgi::scene::Scene;
 
-fn data(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data/mitsuba")
-        .join(name)
-}
+mod common;
+
+use common::data;
 
 fn gather_seconds(o: &FinalOutput) -> f64 {
     o.timings
@@ -90,18 +86,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let reference = read_exr(&data(&format!("{name}_d3_ref.exr")))?;
         let camera = scene.default_camera(256, 256)?;
         // 1. Bake + render against the path tracer at equal time.
-        let start = Instant::now();
         let settings = BakeSettings::from_quality(Quality::Draft);
-        let baked = bake(&scene, &settings, &|_, _| {})?;
-        let path = std::env::temp_dir().join(format!("wpbgi-bench-{name}.wpc"));
-        write(
-            &path,
-            bake_hash(&scene, &settings.to_json()),
-            &baked,
-            serde_json::json!({}),
-        )?;
-        let bake_s = start.elapsed().as_secs_f64();
-        let cache = BakedCache::read(&path, None)?;
+        let (_, cache, bake_s) = common::bake_cache(&scene, &settings, name)?;
         let depth3 = FinalSettings {
             max_depth: 3,
             ..Default::default()
@@ -109,19 +95,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let t = Instant::now();
         let fast = render_final(&scene, &cache, &camera, &depth3, &|_, _| {})?;
         let render_s = t.elapsed().as_secs_f64();
-        let total = start.elapsed().as_secs_f64();
+        let total = bake_s + render_s;
         let (mse, rel) = error_against(&fast.beauty, &reference).ok_or("size")?;
-        let pt = render(
-            &scene,
-            &camera,
-            &RenderSettings {
-                spp: 1,
-                max_depth: 3,
-                time_limit: Some(Duration::from_secs_f64(total)),
-                ..Default::default()
-            },
-            &|_| {},
-        )?;
+        let pt = common::path_tracer_for(&scene, &camera, 3, total)?;
         let (pt_mse, pt_rel) = error_against(&pt.mean, &reference).ok_or("size")?;
         println!(
             "{name}: bake {bake_s:.2} s + render {render_s:.2} s = {total:.2} s: relMSE {rel:.3e}, MSE {mse:.3e}; \

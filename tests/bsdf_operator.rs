@@ -3,6 +3,7 @@
 
 use glam::Vec3;
 use wpbgi::bounce::bsdf_operator::{forward, inverse, kernel, mean_cosines, BsdfOperator};
+use wpbgi::bounce::iterate::operator_side;
 use wpbgi::bsdf::{Bsdf, Diffuse, Distribution, Microfacet, RoughConductor, RoughDielectric};
 use wpbgi::sampler::Sampler;
 use wpbgi::spectrum::Rgb;
@@ -30,17 +31,6 @@ fn diffuse() -> Bsdf {
     Bsdf::Diffuse(Diffuse {
         reflectance: Vec3::new(0.8, 0.5, 0.2),
     })
-}
-
-/// The grid side the bake uses for a roughness (8 for rough, 16, 32 for glossy).
-fn side(alpha: f32) -> u32 {
-    if alpha >= 0.3 {
-        8
-    } else if alpha >= 0.08 {
-        16
-    } else {
-        32
-    }
 }
 
 /// A lighting with structure at every scale: a smooth gradient, a bright small source and
@@ -94,7 +84,7 @@ fn product_matches_brute_force_within_the_thresholding_bound() {
         .chain([("diffuse", 1.0, diffuse())])
         .collect();
     for (name, alpha, bsdf) in cases {
-        let n = side(alpha);
+        let n = operator_side(&bsdf);
         let k = kernel(&bsdf, n).rows;
         let x = lighting(k.len(), 7);
         let exact = brute_force(&k, &x);
@@ -141,7 +131,7 @@ fn outgoing_flux_is_at_most_incoming() {
         cases.push(("roughdielectric", a, dielectric(a)));
     }
     for (name, alpha, bsdf) in cases {
-        let n = side(alpha);
+        let n = operator_side(&bsdf);
         let exact = BsdfOperator::new(&bsdf, n, 0.0);
         let op = BsdfOperator::new(&bsdf, n, 1e-2);
         let cos = mean_cosines(n, op.hemispheres);

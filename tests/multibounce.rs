@@ -8,8 +8,7 @@
 
 mod common;
 
-use wpbgi::bake::store::{bake_hash, write, BakedCache};
-use wpbgi::bake::{bake, BakeSettings, Quality};
+use wpbgi::bake::{BakeSettings, Quality};
 use wpbgi::bounce::BounceSettings;
 use wpbgi::image::error_against;
 use wpbgi::render::{render_final, FinalSettings};
@@ -32,18 +31,9 @@ fn against_depth_8(name: &str, bounces: BounceSettings, window: [u32; 4]) -> Aga
         bounces,
         ..BakeSettings::from_quality(Quality::Draft)
     };
-    let baked = bake(&scene, &settings, &|_, _| {}).expect("bake");
     let dir = std::env::temp_dir().join(format!("wpbgi-multibounce-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
-    let path = dir.join(format!("{name}.wpc"));
-    write(
-        &path,
-        bake_hash(&scene, &settings.to_json()),
-        &baked,
-        serde_json::json!({}),
-    )
-    .expect("write");
-    let cache = BakedCache::read(&path, None).expect("read");
+    let cache = common::bake_to_cache(&scene, &settings, &dir.join(format!("{name}.wpc")));
     let camera = scene.default_camera(128, 128).expect("camera");
     let out = render_final(
         &scene,
@@ -70,8 +60,8 @@ fn against_depth_8(name: &str, bounces: BounceSettings, window: [u32; 4]) -> Aga
     };
     let window_ratio = sum(&out.beauty) / sum(&reference);
     eprintln!(
-        "{name}: {:?} bounces, relMSE {rel:.3e}, mean {mean} vs {ref_mean}, window {window_ratio:.3}",
-        baked.bounces.map(|b| b.bounces)
+        "{name}: {} bounces, relMSE {rel:.3e}, mean {mean} vs {ref_mean}, window {window_ratio:.3}",
+        cache.plan["plan"]["bounces"]["bounces"]
     );
     Against8 {
         rel,

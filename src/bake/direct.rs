@@ -17,7 +17,7 @@ use crate::accel::Accel;
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::emitters::{EmitterSample, EmitterSampler};
 use crate::geometry::frame::Frame;
-use crate::geometry::offset::{interpolate_with_error, offset_origin};
+use crate::geometry::offset::offset_origin;
 use crate::haar::texel_directions;
 use crate::sampler::{sobol02, Sampler};
 use crate::scene::Scene;
@@ -54,16 +54,10 @@ struct Arrival {
 impl DirectLight<'_> {
     /// The visible emitter samples of surfel number `id`.
     fn arrivals(&self, s: &Surfel, id: u64) -> Vec<Arrival> {
-        let m = &self.scene.meshes[s.mesh as usize];
-        let t = m.triangles[s.triangle as usize];
-        let v = t.map(|k| Vec3A::from(m.positions[k as usize]));
-        let (p, err) = interpolate_with_error(v, [1.0 - s.b.x - s.b.y, s.b.x, s.b.y]);
+        let (p, err) = s.position_with_error(self.scene);
         let ng = Vec3A::from(s.n);
         let mut r = Sampler::new(self.seed, id, 0);
-        let scramble = [
-            (r.next_1d() * 16_777_216.0) as u32 * 256,
-            (r.next_1d() * 16_777_216.0) as u32 * 256,
-        ];
+        let scramble = r.next_scramble();
         let shift = r.next_1d();
         let k = self.samples.max(1);
         let mut out: Vec<Arrival> = (0..k)

@@ -15,10 +15,11 @@
 //! Neighbours count only when they face the same way (n·n' > 0). The two sides of a thin wall
 //! then do not thin each other out, and the area of one side is never credited to the other.
 
+use crate::geometry::offset::interpolate_with_error;
 use crate::geometry::warp::square_to_uniform_triangle;
 use crate::sampler::Sampler;
 use crate::scene::Scene;
-use glam::{IVec3, Vec2, Vec3};
+use glam::{IVec3, Vec2, Vec3, Vec3A};
 use rayon::prelude::*;
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
@@ -44,6 +45,15 @@ impl Surfel {
     /// Radius of the disc of the surfel's area.
     pub fn radius(&self) -> f32 {
         (self.area / std::f32::consts::PI).sqrt()
+    }
+
+    /// Its position on its triangle of `scene` and the bound on that position's rounding
+    /// error, from which rays leave it (see [`crate::geometry::offset::offset_origin`]).
+    pub fn position_with_error(&self, scene: &Scene) -> (Vec3A, Vec3A) {
+        let m = &scene.meshes[self.mesh as usize];
+        let t = m.triangles[self.triangle as usize];
+        let v = t.map(|k| Vec3A::from(m.positions[k as usize]));
+        interpolate_with_error(v, [1.0 - self.b.x - self.b.y, self.b.x, self.b.y])
     }
 }
 

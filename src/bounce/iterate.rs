@@ -23,7 +23,7 @@
 
 use super::bsdf_operator::BsdfOperator;
 use crate::accel::Accel;
-use crate::bake::coding::encode;
+use crate::bake::coding::{encode, CodedTree};
 use crate::bake::pipeline::{intensity_map, surfel_bsdf, Baked, Progress, SurfelRadiance};
 use crate::bake::plan::map_levels;
 use crate::bake::store::BakedCache;
@@ -34,7 +34,7 @@ use crate::gather::cut::splat_cut;
 use crate::gather::microbuffer::Microbuffer;
 use crate::gather::senders::Senders;
 use crate::geometry::frame::Frame;
-use crate::geometry::offset::{interpolate_with_error, offset_origin};
+use crate::geometry::offset::offset_origin;
 use crate::haar::{texel_directions, Haar2d, SparseHaar};
 use crate::scene::Scene;
 use crate::spectrum::{luminance, Rgb};
@@ -118,7 +118,7 @@ fn energy(baked: &Baked, radiance: &[SurfelRadiance]) -> f64 {
         .map(|(s, r)| {
             let mean = match r {
                 SurfelRadiance::Rgb(c) => *c,
-                SurfelRadiance::Map(m) => m.to_dense().scale,
+                SurfelRadiance::Map(m) => m.mean(),
             };
             f64::from(s.area) * f64::from(luminance(mean))
         })
@@ -199,10 +199,7 @@ pub fn add_bounces(
     for bounce in 1..=settings.max {
         let start = std::time::Instant::now();
         progress("bounces", (bounce - 1) as f32 / settings.max as f32);
-        let senders = match &emit {
-            None => senders_of(baked, None)?,
-            Some(e) => senders_of(baked, Some(e))?,
-        };
+        let senders = senders_of(baked, emit.take())?;
         let light = gather_bounce((scene, &accel), &senders, baked, &bsdfs, &ops);
         let e = energy(baked, &light);
         report.energies.push(e);
@@ -220,11 +217,8 @@ pub fn add_bounces(
         } else {
             0.0
         };
-        if settings.tolerance <= 0.0 {
-            emit = Some(light);
-            continue;
-        }
-        if report.residual < f64::from(settings.tolerance) {
+        let fixed_count = settings.tolerance <= 0.0;
+        if !fixed_count && report.residual < f64::from(settings.tolerance) {
             break;
         }
         let settled = ratios.len() >= 3 && {
@@ -234,7 +228,7 @@ pub fn add_bounces(
             });
             hi < 1.0 && hi - lo <= 0.01 * hi
         };
-        if settled || bounce == settings.max {
+        if !fixed_count && (settled || bounce == settings.max) {
             let r = *ratios.last().unwrap_or(&0.0);
             if r > 0.0 && r < 1.0 {
                 let tail = r / (1.0 - r);
@@ -249,42 +243,44 @@ pub fn add_bounces(
         emit = Some(light);
     }
     progress("bounces", 1.0);
-    recode(baked, None);
+    baked.coded = coded_for(baked);
     baked.plan.json["bounces"] = report.to_json();
     Ok(report)
 }
 
-/// Code the tree of `baked` for `radiance` (its own radiance when `None`).
-fn recode(baked: &mut Baked, radiance: Option<&[SurfelRadiance]>) {
+/// The tree of `baked` coded for its surfels' radiance.
+fn coded_for(baked: &Baked) -> CodedTree<Rgb> {
     let levels = baked.plan.map_levels;
-    let solid = &baked.solid;
-    let surfels = &baked.surfels;
-    let radiance = radiance.unwrap_or(&baked.radiance);
     let leaf = |i: u32| {
-        let s = &surfels[i as usize];
-        intensity_map(s, &radiance[i as usize], levels, !solid[s.mesh as usize])
+        let s = &baked.surfels[i as usize];
+        intensity_map(
+            s,
+            &baked.radiance[i as usize],
+            levels,
+            !baked.solid[s.mesh as usize],
+        )
     };
-    baked.coded = encode(
+    encode(
         &baked.tree,
         &leaf,
         baked.coded.split_level,
         baked.settings.tau,
-    );
+    )
 }
 
 /// The senders of `baked`'s tree with the surfels sending `emit` (their total radiance, less
 /// emission, when `None`).
-fn senders_of(baked: &mut Baked, emit: Option<&Vec<SurfelRadiance>>) -> Result<Senders> {
+fn senders_of(baked: &mut Baked, emit: Option<Vec<SurfelRadiance>>) -> Result<Senders> {
     let path = Path::new("(the previous bounce, in memory)");
     let Some(emit) = emit else {
         return Ok(Senders::from_cache(&BakedCache::in_memory(path, baked)?)?);
     };
     // Swap the bounce's light in (no emission: it was sent by the direct light already),
     // read it as a cache, and swap the total back.
-    let total = std::mem::replace(&mut baked.radiance, emit.clone());
+    let total = std::mem::replace(&mut baked.radiance, emit);
     let emitted = std::mem::replace(&mut baked.emitted, vec![Rgb::ZERO; baked.surfels.len()]);
-    let coded = baked.coded.clone();
-    recode(baked, None);
+    let emit_coded = coded_for(baked);
+    let coded = std::mem::replace(&mut baked.coded, emit_coded);
     let cache = BakedCache::in_memory(path, baked);
     baked.radiance = total;
     baked.emitted = emitted;
@@ -300,10 +296,7 @@ pub fn pixel_hits(
     s: &Surfel,
     mb: &Microbuffer,
 ) -> Vec<Option<PixelHit>> {
-    let m = &scene.meshes[s.mesh as usize];
-    let t = m.triangles[s.triangle as usize];
-    let v = t.map(|k| Vec3A::from(m.positions[k as usize]));
-    let (p, err) = interpolate_with_error(v, [1.0 - s.b.x - s.b.y, s.b.x, s.b.y]);
+    let (p, err) = s.position_with_error(scene);
     let ng = Vec3A::from(s.n);
     mb.pixels
         .iter()

@@ -641,10 +641,8 @@ impl Microbuffer {
 
     /// Set every pixel to a uniform, fully covering radiance `l` (a sky).
     pub fn fill(&mut self, l: Rgb) {
-        for (k, px) in self.pixels.iter().enumerate() {
-            self.radiance[k] = l;
-            self.cos_radiance[k] = l * (px.dir.z.abs() * px.cos_weight);
-            self.alpha[k] = 1.0;
+        for k in 0..self.pixels.len() {
+            self.fill_pixel(k, l);
         }
     }
 

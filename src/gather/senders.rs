@@ -315,17 +315,14 @@ impl Senders {
                 continue;
             }
             // The nearer child last, so that it is searched first.
-            let mut children: Vec<u32> = node
-                .children
-                .iter()
-                .copied()
-                .filter(|&c| c != NONE)
-                .collect();
-            children.sort_by(|&a, &b| {
-                let d = |c: u32| (self.nodes[c as usize].center - q).length_squared();
-                d(b).total_cmp(&d(a))
-            });
-            stack.extend(children);
+            let [a, b] = node.children;
+            let d = |c: u32| (self.nodes[c as usize].center - q).length_squared();
+            let (near, far) = if b != NONE && d(b) < d(a) {
+                (b, a)
+            } else {
+                (a, b)
+            };
+            stack.extend([far, near].into_iter().filter(|&c| c != NONE));
         }
         best.1
     }

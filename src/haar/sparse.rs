@@ -121,6 +121,11 @@ impl<T: Coefficient> SparseHaar<T> {
     }
 
     /// The resolution (log2 of the map side).
+    /// The mean of the function over the unit square (its scaling coefficient).
+    pub fn mean(&self) -> T {
+        self.scale
+    }
+
     pub fn levels(&self) -> u32 {
         self.levels
     }

@@ -1,0 +1,51 @@
+//! What the benchmarks share: the reference scenes, a bake written to and read back from a
+//! cache file, and the path tracer given a wall-clock budget.
+
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+use wpbgi::bake::store::{bake_hash, write, BakedCache};
+use wpbgi::bake::{bake, BakeSettings, Baked};
+use wpbgi::reference::{render, RenderOutput, RenderSettings};
+use wpbgi::scene::camera::Camera;
+use wpbgi::scene::Scene;
+
+pub type Result<T> = std::result::Result<T, Box<dyn std::error::Error>>;
+
+/// A file of tests/data/mitsuba.
+pub fn data(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/mitsuba")
+        .join(name)
+}
+
+/// Bake `scene` into a temporary cache named after `tag` and open it, as a user's bake and
+/// render would; also the seconds that took.
+pub fn bake_cache(
+    scene: &Scene,
+    settings: &BakeSettings,
+    tag: &str,
+) -> Result<(Baked, BakedCache, f64)> {
+    let start = Instant::now();
+    let baked = bake(scene, settings, &|_, _| {})?;
+    let path = std::env::temp_dir().join(format!("wpbgi-bench-{tag}.wpc"));
+    let hash = bake_hash(scene, &settings.to_json());
+    write(&path, hash, &baked, serde_json::json!({}))?;
+    let seconds = start.elapsed().as_secs_f64();
+    Ok((baked, BakedCache::read(&path, None)?, seconds))
+}
+
+/// Our path tracer at `max_depth`, one sample per pixel per pass, for `seconds` of wall time.
+pub fn path_tracer_for(
+    scene: &Scene,
+    camera: &Camera,
+    max_depth: i32,
+    seconds: f64,
+) -> Result<RenderOutput> {
+    let settings = RenderSettings {
+        spp: 1,
+        max_depth,
+        time_limit: Some(Duration::from_secs_f64(seconds)),
+        ..Default::default()
+    };
+    Ok(render(scene, camera, &settings, &|_| {})?)
+}
