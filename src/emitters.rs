@@ -4,6 +4,7 @@
 
 use crate::accel::Accel;
 use crate::geometry::offset::{interpolate_with_error, offset_origin, SHADOW_EPSILON};
+use crate::geometry::spherical_triangle::SphericalTriangle;
 use crate::geometry::warp::square_to_uniform_triangle;
 use crate::scene::{LightKind, Scene};
 use crate::spectrum::{luminance, Rgb};
@@ -159,8 +160,34 @@ impl EmitterSampler {
         self.selection_probability(i) / self.tris[i].area * dist * dist / cos
     }
 
-    /// Sample an emitter as seen from `p`: `u_sel` picks the emitter, `u` the point on it.
+    /// Sample an emitter as seen from `p`: `u_sel` picks the emitter, `u` the point on it
+    /// (uniform by area on a triangle, the density [`EmitterSampler::pdf_hit`] gives).
     pub fn sample(&self, scene: &Scene, p: Vec3, u_sel: f32, u: Vec2) -> Option<EmitterSample> {
+        self.sample_with(scene, p, u_sel, u, false)
+    }
+
+    /// Like [`EmitterSampler::sample`], but a triangle that subtends enough solid angle is
+    /// sampled uniformly over it ([`SphericalTriangle`]): a bounded estimator for light
+    /// sampling on its own. Its densities are not [`EmitterSampler::pdf_hit`]'s, so it does
+    /// not serve multiple importance sampling.
+    pub fn sample_solid_angle(
+        &self,
+        scene: &Scene,
+        p: Vec3,
+        u_sel: f32,
+        u: Vec2,
+    ) -> Option<EmitterSample> {
+        self.sample_with(scene, p, u_sel, u, true)
+    }
+
+    fn sample_with(
+        &self,
+        scene: &Scene,
+        p: Vec3,
+        u_sel: f32,
+        u: Vec2,
+        by_solid_angle: bool,
+    ) -> Option<EmitterSample> {
         if self.is_empty() {
             return None;
         }
@@ -178,8 +205,16 @@ impl EmitterSampler {
             let m = &scene.meshes[et.mesh as usize];
             let t = m.triangles[et.tri as usize];
             let v = [t[0], t[1], t[2]].map(|k| Vec3A::from(m.positions[k as usize]));
-            let bb = square_to_uniform_triangle(u);
-            let b = [1.0 - bb.x - bb.y, bb.x, bb.y];
+            let spherical = by_solid_angle
+                .then(|| SphericalTriangle::new(p, v.map(Vec3::from)))
+                .flatten();
+            let b = match &spherical {
+                Some(st) => st.sample(u).map(|x| x as f32),
+                None => {
+                    let bb = square_to_uniform_triangle(u);
+                    [1.0 - bb.x - bb.y, bb.x, bb.y]
+                }
+            };
             let (q, err) = interpolate_with_error(v, b);
             let (q, err) = (Vec3::from(q), Vec3::from(err));
             let ng = Vec3::from((v[1] - v[0]).cross(v[2] - v[0])).normalize();
@@ -196,7 +231,10 @@ impl EmitterSampler {
             if le == Rgb::ZERO || cos_light == 0.0 {
                 return None;
             }
-            let pdf = sel / et.area * dist2 / cos_light.abs();
+            let pdf = match &spherical {
+                Some(st) => sel / st.solid_angle() as f32,
+                None => sel / et.area * dist2 / cos_light.abs(),
+            };
             return Some(EmitterSample {
                 wi,
                 dist,

@@ -1,7 +1,9 @@
 //! Direct light at surfels by ray tracing (DESIGN.md §5.2, spec §5.1).
 //!
 //! Each surfel draws `samples` emitter samples, chosen by power and placed on the emitter by a
-//! scrambled (0, 2)-sequence (see [`crate::sampler::sobol02`]), each with a shadow ray. The same
+//! scrambled (0, 2)-sequence (see [`crate::sampler::sobol02`]), uniformly over the solid angle
+//! of a near triangle (a bounded estimator by an emitting wall's edge, see
+//! [`crate::geometry::spherical_triangle`]), each with a shadow ray. The same
 //! samples serve every outgoing direction of the surfel, so its radiance map is one consistent
 //! function rather than independent noise per texel:
 //!
@@ -64,9 +66,12 @@ impl DirectLight<'_> {
             .filter_map(|i| {
                 // Emitter choice stratified over the K samples, the point by the (0, 2)-sequence.
                 let u_sel = ((i as f32 + shift) / k as f32).min(1.0 - f32::EPSILON);
-                let es: EmitterSample =
-                    self.emitters
-                        .sample(self.scene, Vec3::from(p), u_sel, sobol02(i, scramble))?;
+                let es: EmitterSample = self.emitters.sample_solid_angle(
+                    self.scene,
+                    Vec3::from(p),
+                    u_sel,
+                    sobol02(i, scramble),
+                )?;
                 let origin = Vec3::from(offset_origin(p, err, ng, Vec3A::from(es.wi)));
                 es.visible_from(self.accel, origin).then_some(Arrival {
                     wi: es.wi,
