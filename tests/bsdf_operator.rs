@@ -166,7 +166,7 @@ fn outgoing_flux_is_at_most_incoming() {
         );
         // Thresholded, the product alone sent up to 1.6× the flux of light through one texel
         // (α = 0.02): a delta's coefficients fill every level, and each column's dropped
-        // part adds up; `outgoing` caps the flux at the albedo.
+        // part adds up; `outgoing` scales the flux to the albedo's.
         assert!(worst <= 1.0 + 1e-3, "{name} α {alpha}: flux ratio {worst}");
         // Under uniform light each texel's value is its albedo, which the columns' scaling
         // gets only on average over a lobe: 1.5 % above 1 measured at α = 0.02.

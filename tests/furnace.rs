@@ -1,11 +1,20 @@
-//! White furnace (issue 5): a closed box with inward normals, diffuse albedo ρ and uniform
-//! emission Le everywhere. Every point sees Le + ρ·(everything it sees), so the radiance is
-//! Le/(1 − ρ) everywhere: the cache must hold that after its bounces.
+//! White furnaces (issue 5): a closed box with inward normals and uniform emission Le
+//! everywhere.
+//!
+//! - Diffuse albedo ρ: every point sees Le + ρ·(everything it sees), so the radiance is
+//!   Le/(1 − ρ) everywhere; the cache must hold that after its bounces.
+//! - A `roughconductor` with `material: none` (Fresnel 1) and specular_reflectance ρ: Mitsuba's
+//!   microfacet model scatters once, and the light its masking stops is lost (about 3 % per
+//!   bounce at α = 0.1 in this box), so the answer is not Le/(1 − ρ) but what our path tracer
+//!   (checked against Mitsuba's images in tests/reference_vs_mitsuba.rs) finds for the same
+//!   scene.
+//! - Inside a closed room of uniform radiance, a bounce's microbuffers gather exactly π.
 
 use glam::Vec3;
-use wpbgi::bake::{bake, BakeSettings, SurfelRadiance};
-use wpbgi::bounce::{BounceReport, BounceSettings};
-use wpbgi::bsdf::{Bsdf, Diffuse};
+use wpbgi::bake::{bake, BakeSettings, Baked, SurfelRadiance};
+use wpbgi::bounce::BounceSettings;
+use wpbgi::bsdf::{Bsdf, Diffuse, Distribution, Microfacet, RoughConductor};
+use wpbgi::haar::direction_to_square;
 use wpbgi::scene::{Emission, Material, Mesh, Scattering, Scene};
 use wpbgi::spectrum::Rgb;
 
@@ -55,79 +64,162 @@ fn furnace(rho: f32, le: f32) -> Scene {
     }
 }
 
-/// The area-weighted mean cached radiance, and the bounce report.
-fn cached_radiance(
-    scene: &Scene,
-    bounces: BounceSettings,
-    threads: usize,
-) -> (f64, BounceReport, Vec<f32>) {
+/// The furnace with a `roughconductor` of roughness `alpha`, `material: none` (η = 0, k = 1).
+fn conductor_furnace(rho: f32, le: f32, alpha: f32) -> Scene {
+    let mut scene = furnace(rho, le);
+    scene.materials[0].scattering = Scattering::Explicit(Bsdf::Conductor(RoughConductor {
+        distr: Microfacet::new(Distribution::Ggx, alpha, alpha),
+        eta: Rgb::ZERO,
+        k: Rgb::ONE,
+        specular_reflectance: Rgb::splat(rho),
+    }));
+    scene
+}
+
+const CENTRE: Vec3 = Vec3::splat(0.5);
+
+/// The furnace baked with 3 000 surfels and automatic bounces on `threads` threads.
+fn bake_furnace(scene: &Scene, threads: usize) -> Baked {
     let settings = BakeSettings {
         points: 3000,
         light_samples: 64,
-        bounces,
+        bounces: BounceSettings::auto(),
         ..BakeSettings::from_quality(wpbgi::bake::Quality::Draft)
     };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
         .expect("pool");
-    let baked = pool.install(|| bake(scene, &settings, &|_, _| {}).expect("bake"));
+    pool.install(|| bake(scene, &settings, &|_, _| {}).expect("bake"))
+}
+
+/// Surfel `i`'s cached radiance (red) towards the centre of the box.
+fn towards_centre(baked: &Baked, i: usize) -> f64 {
+    let s = &baked.surfels[i];
+    f64::from(match &baked.radiance[i] {
+        SurfelRadiance::Rgb(c) => c.x,
+        SurfelRadiance::Map(m) => {
+            let p = direction_to_square((CENTRE - s.p).normalize());
+            m.eval(p.x, p.y).x
+        }
+    })
+}
+
+/// The area-weighted mean of [`towards_centre`].
+fn mean_radiance(baked: &Baked) -> f64 {
     let (mut sum, mut area) = (0.0f64, 0.0f64);
-    let mut values = Vec::new();
-    for (s, r) in baked.surfels.iter().zip(&baked.radiance) {
-        let SurfelRadiance::Rgb(c) = r else {
-            panic!("diffuse surfels hold RGB");
-        };
-        sum += f64::from(c.x * s.area);
+    for (i, s) in baked.surfels.iter().enumerate() {
+        sum += towards_centre(baked, i) * f64::from(s.area);
         area += f64::from(s.area);
-        values.push(c.x);
     }
-    (sum / area, baked.bounces.unwrap_or_default(), values)
+    sum / area
 }
 
-/// ρ = 0.5: within 2.5 % of Le/(1 − ρ) with 3 000 surfels, the same cache for 1 and 2 threads.
+/// Diffuse furnaces at ρ = 0.5, 0.9 and 0.99: within 1 %, 1 % and 2 % of Le/(1 − ρ) with at
+/// most 30 explicit bounces, the stiff one by its extrapolated tail, whose ratio is ρ. At
+/// ρ = 0.5, the same cache for 1 and 2 threads.
 ///
-/// The issue asks for 1 % at ρ = 0.5 and 0.9 and 2 % at 0.99; measured now (`furnace_table`):
-/// −1.7 %, −8.9 %, −49 %. Each bounce loses about 1 % (the gather of a closed room, below) and
-/// the direct light near the edges 1 %; a stiff scene multiplies the first. That target is
-/// open, and this bound guards what is reached.
+/// Measured (3 000 surfels): +0.13 %, +0.23 %, +0.18 %, each after 4 bounces (the ratios
+/// settle at once), the last bounce ratio at 0.99 0.98999. Before the gather was made exact
+/// (this commit's history: straddling nodes, horizon texels, solid-angle light sampling) the
+/// same furnaces measured −1.7 %, −8.9 % and −49 %.
 #[test]
-fn diffuse_furnace_at_half_albedo() {
-    let (rho, le) = (0.5f32, 1.0f32);
-    let expected = f64::from(le / (1.0 - rho));
-    let (mean, report, one) = cached_radiance(&furnace(rho, le), BounceSettings::auto(), 1);
-    let err = mean / expected - 1.0;
-    eprintln!(
-        "ρ = {rho}: mean {mean:.4}, expected {expected:.4} ({:+.2} %); {report:?}",
-        100.0 * err
-    );
-    assert!(err.abs() <= 0.025, "{:+.2} %", 100.0 * err);
-    assert!(report.bounces >= 3 && report.bounces <= 30);
-    let (_, _, two) = cached_radiance(&furnace(rho, le), BounceSettings::auto(), 2);
-    assert!(one == two, "the bounces depend on the thread count");
+fn diffuse_furnace_holds_le_over_one_minus_rho() {
+    for (rho, tolerance) in [(0.5f32, 0.01), (0.9, 0.01), (0.99, 0.02)] {
+        let expected = 1.0 / (1.0 - f64::from(rho));
+        let baked = bake_furnace(&furnace(rho, 1.0), 2);
+        let report = baked.bounces.clone().unwrap_or_default();
+        let err = mean_radiance(&baked) / expected - 1.0;
+        eprintln!("diffuse ρ = {rho}: {:+.2} %; {report:?}", 100.0 * err);
+        assert!(err.abs() <= tolerance, "ρ = {rho}: {:+.2} %", 100.0 * err);
+        assert!(report.bounces >= 3 && report.bounces <= 30);
+        if rho == 0.99 {
+            let tail = report.extrapolated.expect("an extrapolated tail");
+            let e = &report.energies;
+            let r = e[e.len() - 1] / e[e.len() - 2];
+            assert!((tail - r / (1.0 - r)).abs() < 1e-9 * tail);
+            assert!((r / 0.99 - 1.0).abs() < 1e-3, "bounce ratio {r}");
+        }
+        if rho == 0.5 {
+            let one = bake_furnace(&furnace(rho, 1.0), 1);
+            assert!(
+                one.radiance == baked.radiance,
+                "the bounces depend on the thread count"
+            );
+        }
+    }
 }
 
-/// A stiff furnace (ρ = 0.99) stops within 30 explicit bounces with the geometric tail
-/// extrapolated, and its bounce energies fall at a steady ratio near ρ.
+/// Conductor furnaces (α = 0.1, `material: none`) at ρ = 0.5, 0.9 and 0.99 against the path
+/// tracer: the mean cached radiance of every surfel towards the box's centre against
+/// [`PATHS`] paths from the centre through each, within 1 %, 1 % and 2 %. The path tracer's
+/// own standard error is under a quarter of the tolerance (asserted).
+///
+/// Measured: +0.11 %, −0.57 %, −1.22 % (the path tracer's standard error 0.05 %, 0.19 %,
+/// 0.45 %); the furnace holds 1.96, 8.0 and 26 where Le/(1 − ρ) is 2, 10 and 100. Before the operator's
+/// output was scaled to its albedo's flux, and before the gather was exact, the same
+/// furnaces measured +1.3 %, +8.8 % and +35 %.
 #[test]
-fn stiff_furnace_extrapolates_its_tail() {
-    let (_, report, _) = cached_radiance(&furnace(0.99, 1.0), BounceSettings::auto(), 2);
-    eprintln!("{report:?}");
-    assert!(report.bounces <= 30);
-    let tail = report.extrapolated.expect("an extrapolated tail");
-    let e = &report.energies;
-    let r = e[e.len() - 1] / e[e.len() - 2];
-    assert!((tail - r / (1.0 - r)).abs() < 1e-9 * tail);
-    // Every bounce keeps 0.99 of the light less what the gather loses (1 %, see above).
-    assert!(r > 0.97 && r < 0.99, "ratio {r}");
+fn conductor_furnace_matches_the_path_tracer() {
+    const PATHS: u32 = 64;
+    for (rho, tolerance) in [(0.5f32, 0.01), (0.9, 0.01), (0.99, 0.02)] {
+        let scene = conductor_furnace(rho, 1.0, 0.1);
+        let baked = bake_furnace(&scene, 2);
+        let settings = wpbgi::reference::RenderSettings {
+            max_depth: -1,
+            ..Default::default()
+        };
+        let ctx = wpbgi::reference::RenderContext::new(&scene, &settings);
+        let (mut ours, mut sum, mut sum2, mut count) = (0.0f64, 0.0f64, 0.0f64, 0u32);
+        for (i, s) in baked.surfels.iter().enumerate() {
+            ours += towards_centre(&baked, i);
+            let d = (s.p - CENTRE).normalize();
+            let mut sampler = wpbgi::sampler::Sampler::new(7, i as u64, 0);
+            for _ in 0..PATHS {
+                let l = f64::from(wpbgi::reference::radiance(&ctx, CENTRE, d, &mut sampler).x);
+                sum += l;
+                sum2 += l * l;
+                count += 1;
+            }
+        }
+        let n = f64::from(count);
+        let reference = sum / n;
+        let standard_error = ((sum2 / n - reference * reference) / n).sqrt() / reference;
+        let ours = ours / f64::from(count / PATHS);
+        let err = ours / reference - 1.0;
+        eprintln!(
+            "conductor ρ = {rho}: cache {ours:.4}, path tracer {reference:.4} (± {:.2} %): \
+             {:+.2} %; {:?}",
+            100.0 * standard_error,
+            100.0 * err,
+            baked.bounces
+        );
+        assert!(standard_error < tolerance / 4.0);
+        assert!(err.abs() <= tolerance, "ρ = {rho}: {:+.2} %", 100.0 * err);
+        // Not Le/(1 − ρ): the BSDF loses light.
+        assert!(reference < 0.99 / (1.0 - f64::from(rho)));
+    }
 }
 
-/// Inside a closed room whose every surfel sends radiance 1, the surfels' microbuffers (as a
-/// bounce builds them) gather irradiance π. Measured with 3 000 surfels: a mean of 0.991 π,
-/// 0.989 π on surfels more than 0.15 from another face. Before the holes between a nearby
-/// wall's discs were filled from ray hits, surfels within 0.02 of an edge saw 0.91 π.
+/// Inside a closed room whose every surfel sends radiance 1 (towards its front), the
+/// surfels' microbuffers, as a bounce builds them, gather irradiance π: for diffuse surfels
+/// (RGB) and for conductor surfels (16² sphere maps). Measured with 3 000 surfels: 1.0000 π
+/// for both, also on surfels near an edge. Before, 0.991 π (diffuse) and 0.992 π (maps):
+/// nodes straddling the receiver's plane were seen from behind, maps' texels straddling the
+/// horizon read black, and a node's I and P came from texels of different sizes.
 #[test]
 fn closed_room_gathers_pi() {
+    for scene in [furnace(0.5, 1.0), conductor_furnace(0.5, 1.0, 0.1)] {
+        let (mean, near_edges) = closed_room_irradiance(&scene);
+        eprintln!("irradiance / π: mean {mean:.5}, within 0.15 of an edge {near_edges:.5}");
+        assert!((mean - 1.0).abs() < 2e-3, "{mean}");
+        assert!((near_edges - 1.0).abs() < 2e-3, "{near_edges}");
+    }
+}
+
+/// The mean irradiance / π that the bounce's microbuffers gather in `scene`'s box with every
+/// surfel's radiance set to 1: over all surfels and over those within 0.15 of another face.
+fn closed_room_irradiance(scene: &Scene) -> (f64, f64) {
     use wpbgi::bake::pipeline::intensity_map;
     use wpbgi::bake::store::BakedCache;
     use wpbgi::bounce::iterate::close_buffer;
@@ -135,37 +227,44 @@ fn closed_room_gathers_pi() {
     use wpbgi::gather::microbuffer::Microbuffer;
     use wpbgi::gather::senders::Senders;
     use wpbgi::geometry::frame::Frame;
-    let scene = furnace(0.5, 1.0);
+    use wpbgi::haar::{texel_directions, Haar2d, SparseHaar};
     let settings = BakeSettings {
         points: 3000,
         light_samples: 4,
         ..BakeSettings::from_quality(wpbgi::bake::Quality::Draft)
     };
-    let mut baked = bake(&scene, &settings, &|_, _| {}).expect("bake");
-    for r in baked.radiance.iter_mut() {
-        *r = SurfelRadiance::Rgb(Rgb::ONE);
+    let mut baked = bake(scene, &settings, &|_, _| {}).expect("bake");
+    let levels = baked.plan.map_levels;
+    for (r, s) in baked.radiance.iter_mut().zip(&baked.surfels) {
+        *r = match r {
+            SurfelRadiance::Rgb(_) => SurfelRadiance::Rgb(Rgb::ONE),
+            SurfelRadiance::Map(m) => {
+                let l = m.levels();
+                let texels: Vec<Rgb> = texel_directions(l)
+                    .iter()
+                    .map(|w| Rgb::splat(if w.dot(s.n) > 0.0 { 1.0 } else { 0.0 }))
+                    .collect();
+                SurfelRadiance::Map(SparseHaar::compress(&Haar2d::forward(&texels, 1 << l), 0.0))
+            }
+        };
     }
     baked.emitted.fill(Rgb::ZERO);
-    let levels = baked.plan.map_levels;
     let leaf = |i: u32| {
-        intensity_map(
-            &baked.surfels[i as usize],
-            &baked.radiance[i as usize],
-            levels,
-            true,
-        )
+        let s = &baked.surfels[i as usize];
+        intensity_map(s, &baked.radiance[i as usize], levels, true)
     };
     baked.coded = wpbgi::bake::encode(&baked.tree, &leaf, baked.coded.split_level, settings.tau);
     let cache = BakedCache::in_memory("furnace".as_ref(), &baked).expect("cache");
     let senders = Senders::from_cache(&cache).expect("senders");
-    let accel = wpbgi::accel::Accel::build(&scene);
+    let accel = wpbgi::accel::Accel::build(scene);
     let mut stack = Vec::new();
-    let (mut all, mut inner) = ((0.0f64, 0u32), (0.0f64, 0u32));
+    let (mut all, mut edges) = ((0.0f64, 0u32), (0.0f64, 0u32));
+    let n = if levels > 3 { 1 << levels } else { 16 };
     for s in &baked.surfels {
-        let mut mb = Microbuffer::new(16, false, Frame::from_normal(s.n));
+        let mut mb = Microbuffer::new(n, false, Frame::from_normal(s.n));
         splat_cut(&senders, s.p, s.mesh, &mut mb, &[0], &mut stack);
         mb.resolve();
-        close_buffer(&senders, (&accel, &scene), s, &mut mb);
+        close_buffer(&senders, (&accel, scene), s, &mut mb);
         let e = mb
             .cos_radiance
             .iter()
@@ -179,28 +278,9 @@ fn closed_room_gathers_pi() {
             .map(|a| s.p[a].min(1.0 - s.p[a]))
             .fold(f32::INFINITY, f32::min);
         all = (all.0 + e, all.1 + 1);
-        if edge > 0.15 {
-            inner = (inner.0 + e, inner.1 + 1);
+        if edge < 0.15 {
+            edges = (edges.0 + e, edges.1 + 1);
         }
     }
-    let (mean, inner_mean) = (all.0 / f64::from(all.1), inner.0 / f64::from(inner.1));
-    eprintln!("irradiance / π: mean {mean:.4}, away from the edges {inner_mean:.4}");
-    assert!(inner_mean > 0.983 && inner_mean < 1.01, "{inner_mean}");
-    assert!(mean > 0.985 && mean < 1.01, "{mean}");
-}
-
-/// The figures of docs/bounces.md: `cargo test --release --test furnace -- --ignored`.
-#[test]
-#[ignore = "a measurement, not a check"]
-fn furnace_table() {
-    for rho in [0.5f32, 0.9, 0.99] {
-        let expected = f64::from(1.0 / (1.0 - rho));
-        let (mean, report, _) = cached_radiance(&furnace(rho, 1.0), BounceSettings::auto(), 2);
-        eprintln!(
-            "ρ = {rho}: {:+.2} % after {} bounces (tail × {:?})",
-            100.0 * (mean / expected - 1.0),
-            report.bounces,
-            report.extrapolated
-        );
-    }
+    (all.0 / f64::from(all.1), edges.0 / f64::from(edges.1))
 }

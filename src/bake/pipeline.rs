@@ -121,11 +121,14 @@ pub struct Baked {
     pub emitted: Vec<Rgb>,
     /// Per mesh: whether it bounds a solid (see [`solid_meshes`]).
     pub solid: Vec<bool>,
+    /// Per mesh: whether its surfels' intensity includes light sent from their back (see
+    /// [`back_sided_meshes`]).
+    pub back_sided: Vec<bool>,
     pub tree: SurfelTree,
     /// Radiant intensity I(ω) of every node (RGB).
     pub coded: CodedTree<Rgb>,
-    /// Projected area P(ω) of every node, on an 8 × 8 map: a node seen from afar subtends
-    /// P/d² and has radiance I/P (DESIGN.md §5.5).
+    /// Projected area P(ω) of every node, on the intensity's texel grid: a node seen from afar
+    /// subtends P/d² and has radiance I/P (DESIGN.md §5.5).
     pub projected: CodedTree<f32>,
     /// Seconds per stage, in order.
     pub timings: Vec<(&'static str, f64)>,
@@ -221,13 +224,14 @@ pub fn bake(scene: &Scene, settings: &BakeSettings, progress: Progress) -> Resul
     plan.map_levels = levels;
     plan.json["map_resolution"] = (1u32 << levels).into();
     let solid = solid_meshes(scene);
+    let back_sided = back_sided_meshes(scene, &solid);
     let leaf = |i: u32| {
         let s = &surfels[i as usize];
         intensity_map(s, &radiance[i as usize], levels, !solid[s.mesh as usize])
     };
     progress("coding", 0.0);
     let coded = encode(&tree, &leaf, eps, settings.tau);
-    let area_leaf = |i: u32| projected_area_map(&surfels[i as usize]);
+    let area_leaf = |i: u32| projected_area_map(&surfels[i as usize], levels);
     let projected = encode(&tree, &area_leaf, eps, settings.tau);
     progress("coding", 1.0);
     stage("coding", t);
@@ -239,6 +243,7 @@ pub fn bake(scene: &Scene, settings: &BakeSettings, progress: Progress) -> Resul
         radiance,
         emitted,
         solid,
+        back_sided,
         tree,
         coded,
         projected,
@@ -320,13 +325,31 @@ pub fn solid_meshes(scene: &Scene) -> Vec<bool> {
         .collect()
 }
 
+/// Per mesh: whether its surfels send light from their back as well as their front into the
+/// tree's intensity (thin sheets: two-sided BSDFs that bound no solid; see [`intensity_map`]).
+/// The other surfels' intensity is front-only, so a node of them has radiance I/P⁺ with P⁺
+/// its front projected area.
+pub fn back_sided_meshes(scene: &Scene, solid: &[bool]) -> Vec<bool> {
+    scene
+        .meshes
+        .iter()
+        .zip(solid)
+        .map(|(m, &solid)| {
+            !solid
+                && scene.materials[m.material]
+                    .bsdf_at(&scene.textures, glam::Vec2::ZERO)
+                    .is_two_sided()
+        })
+        .collect()
+}
+
 /// A surfel's radiant intensity A |n·ω| L(ω) as a map at `levels`; with `back` false, only
 /// towards the front hemisphere (see [`solid_meshes`]).
 pub fn intensity_map(s: &Surfel, r: &SurfelRadiance, levels: u32, back: bool) -> Haar2d<Rgb> {
     let (own, radiance): (u32, Vec<Rgb>) = match r {
-        // Diffuse radiance is constant, so its intensity is a cosine lobe: 8² resolves it as
-        // well as the tree's maps can.
-        SurfelRadiance::Rgb(c) => (3, vec![*c; 64]),
+        // Diffuse radiance is constant, its intensity a cosine lobe, sampled on the tree's grid
+        // as the projected area is: I/P of a node is then a mean of its surfels' radiance.
+        SurfelRadiance::Rgb(c) => (levels, vec![*c; 1 << (2 * levels)]),
         SurfelRadiance::Map(m) => (m.levels(), m.to_dense().inverse()),
     };
     let texels: Vec<Rgb> = radiance
@@ -345,16 +368,14 @@ pub fn intensity_map(s: &Surfel, r: &SurfelRadiance, levels: u32, back: bool) ->
     Haar2d::forward(&texels, 1 << own).refined_to(levels.max(own))
 }
 
-/// The resolution of projected-area maps: P(ω) is a sum of clamped cosines, smooth enough for
-/// 8 × 8.
-pub const PROJECTED_AREA_LEVELS: u32 = 3;
-
-/// A surfel's projected area A |n·ω| on the 8 × 8 map. Both sides count: a disc occludes from
-/// behind as from the front (its radiance there, I/P, is simply what it emits backwards).
-pub fn projected_area_map(s: &Surfel) -> Haar2d<f32> {
-    let texels: Vec<f32> = texel_directions(PROJECTED_AREA_LEVELS)
+/// A surfel's projected area A |n·ω| on the tree's `2^levels`-texel grid, the intensity maps'
+/// (a node's radiance is I/P texel by texel: on coarser P texels, a 16² glossy map's I/P
+/// strayed by 3 % in a closed room). Both sides count: a disc occludes from behind as from the
+/// front (its radiance there, I/P, is simply what it emits backwards).
+pub fn projected_area_map(s: &Surfel, levels: u32) -> Haar2d<f32> {
+    let texels: Vec<f32> = texel_directions(levels)
         .iter()
         .map(|w| s.area * w.dot(s.n).abs())
         .collect();
-    Haar2d::forward(&texels, 1 << PROJECTED_AREA_LEVELS)
+    Haar2d::forward(&texels, 1 << levels)
 }

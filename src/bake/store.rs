@@ -34,15 +34,19 @@ pub struct SurfelRecord {
     /// reflected light from emission, which the final render lights directly.
     pub emitted: [f32; 3],
     /// Bit 0 ([`SOLID`]): the surfel bounds a solid, whose inward light only the solid's own
-    /// surface sees (see [`crate::bake::pipeline::solid_meshes`]).
+    /// surface sees (see [`crate::bake::pipeline::solid_meshes`]). Bit 1 ([`BACK_SIDED`]).
     pub flags: u32,
 }
 
 /// [`SurfelRecord::flags`]: the surfel bounds a solid.
 pub const SOLID: u32 = 1;
 
+/// [`SurfelRecord::flags`]: the surfel's intensity includes what it sends from its back (see
+/// [`crate::bake::pipeline::back_sided_meshes`]).
+pub const BACK_SIDED: u32 = 2;
+
 /// The layout of the bake's sections; caches of another layout are refused (bake again).
-pub const BAKE_FORMAT: u32 = 2;
+pub const BAKE_FORMAT: u32 = 3;
 
 /// One tree node in the `nodes` section.
 #[repr(C)]
@@ -198,6 +202,10 @@ impl Sections {
                 emitted: e.to_array(),
                 flags: if baked.solid[s.mesh as usize] {
                     SOLID
+                } else {
+                    0
+                } | if baked.back_sided[s.mesh as usize] {
+                    BACK_SIDED
                 } else {
                     0
                 },

@@ -32,9 +32,9 @@
 //!   global norm wiped out the columns of dim incoming directions. Measured at tau = 1e-2
 //!   (tests/bsdf_operator.rs): V keeps 4 % of its coefficients at α = 0.02 (32²), 22 % at
 //!   0.1 (16²), 74 % at 0.5 (8²), and the product is within 1 % (L2) of the dense sum.
-//! - [`BsdfOperator::outgoing`] drops the negative values thresholding leaves and caps the
-//!   outgoing flux at what the albedo lets through, so thresholding loses energy but never
-//!   creates it (a stiff scene's bounces would otherwise diverge).
+//! - [`BsdfOperator::outgoing`] drops the negative values thresholding leaves and scales the
+//!   outgoing flux to what the albedo lets through, so thresholding neither creates energy (a
+//!   stiff scene's bounces would diverge) nor loses it (they would fall short).
 //! - RGB: V holds RGB coefficients (a conductor's Fresnel is coloured), and D[b] = Σ_a C[a] ⊙
 //!   V[b][a] channel by channel.
 
@@ -386,9 +386,11 @@ impl BsdfOperator {
 
     /// The outgoing radiance per texel for the incoming radiance per texel `radiance`: the
     /// [`BsdfOperator::product`], without the negative values thresholding leaves and, per
-    /// channel, scaled down where its flux exceeds what the BSDF's albedo lets out of the
-    /// incoming flux. Thresholding can only lose energy then, never create it, which the
-    /// bounces of a stiff scene (albedo near 1) need to converge.
+    /// channel, scaled so that its flux is what the BSDF's albedo lets out of the incoming
+    /// flux, as the unthresholded operator's is. Thresholding then moves light between
+    /// directions but neither creates nor loses it: a stiff scene's bounces (albedo near 1)
+    /// amplify any loss per bounce (a 0.17 % loss left a closed glossy room at ρ = 0.99 3 %
+    /// dark), and would diverge on any gain.
     pub fn outgoing(&self, radiance: &[Rgb], tau_c: f32) -> Vec<Rgb> {
         let (mut out, _) = self.product(radiance, tau_c);
         for v in out.iter_mut() {
@@ -401,7 +403,7 @@ impl BsdfOperator {
         };
         let allowed = flux(radiance, &|t| self.albedo[t] * self.cosines[t]);
         let sent = flux(&out, &|t| Rgb::splat(self.cosines[t]));
-        let scale = Rgb::select(sent.cmpgt(allowed), allowed / sent, Rgb::ONE);
+        let scale = Rgb::select(sent.cmpgt(Rgb::ZERO), allowed / sent, Rgb::ZERO);
         for v in out.iter_mut() {
             *v *= scale;
         }

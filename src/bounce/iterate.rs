@@ -20,6 +20,9 @@
 //! coverage ([`Microbuffer::close_gaps`]): the splats' coverage is right on average but not
 //! pixel by pixel, and a bounce that lost a few percent of coverage would pass that loss on
 //! to every further bounce (inside a closed room of radiance 1 the gather fell 3 % short).
+//! With that, the senders' exact radiance (see [`Senders::seen`]) and the operator's exact
+//! flux ([`BsdfOperator::outgoing`]), a closed room gathers π to 1e-4 and the white furnaces
+//! of tests/furnace.rs hold to 0.2 % (diffuse) and 1.2 % (conductor, ρ = 0.99).
 
 use super::bsdf_operator::BsdfOperator;
 use crate::accel::Accel;

@@ -103,6 +103,17 @@ pub fn splat_cut(
             }
             continue;
         }
+        // A node whose bounding sphere straddles a hemispherical receiver's plane is seen
+        // edge-on from one direction only where it is small: the receiver's own surface in it
+        // would be taken as a back face seen from below and darken the horizon. Its children
+        // are visited instead, and a flat node lying in the receiver's plane, facing its way,
+        // is that surface itself: it sends nothing towards the receiver and does not occlude.
+        if !mb.spherical && n.dot(v).abs() < node.radius {
+            if !node.holds_plane_of(p, n) {
+                stack.extend(node.children.into_iter().filter(|&c| c != NONE));
+            }
+            continue;
+        }
         // Against the largest pixel first: it rejects most nodes near the root without a
         // pixel lookup.
         let dir = v / d;

@@ -615,16 +615,16 @@ impl Microbuffer {
 
     /// Normalise every pixel for which `closed(pixel)` holds (something lies behind it) to
     /// exactly full coverage: its radiance becomes the coverage-weighted mean of the senders
-    /// that cover it. The splats' coverage is right on average but not pixel by pixel; in a
-    /// bake's bounces that error would be passed on to every further bounce.
+    /// that cover it, and its cosine the pixel's exact mean (the senders' own cosines, taken
+    /// at their centres, overstated a closed room's irradiance by 0.15 %). The splats'
+    /// coverage is right on average but not pixel by pixel; in a bake's bounces that error
+    /// would be passed on to every further bounce.
     pub fn close_gaps(&mut self, closed: impl Fn(usize) -> bool) {
         for k in 0..self.pixels.len() {
             let c = self.cover[k];
             if c > 0.0 && closed(k) {
-                self.radiance[k] /= c;
-                self.cos_radiance[k] /= c;
-                self.alpha[k] = 1.0;
-                self.cover[k] = 1.0;
+                let l = self.radiance[k] / c;
+                self.fill_pixel(k, l);
             }
         }
     }

@@ -12,9 +12,8 @@
 //! subtracted (emitting surfels still occlude).
 
 use super::microbuffer::Sender;
-use crate::bake::pipeline::PROJECTED_AREA_LEVELS;
 use crate::bake::pipeline::{intensity_map, SurfelRadiance};
-use crate::bake::store::{BakedCache, NodeRecord, SurfelRecord, NO_MAP, SOLID};
+use crate::bake::store::{BakedCache, NodeRecord, SurfelRecord, BACK_SIDED, NO_MAP, SOLID};
 use crate::bake::surfels::Surfel;
 use crate::bake::tree::NONE;
 use crate::cache::CacheError;
@@ -26,9 +25,6 @@ use rayon::prelude::*;
 /// Nodes whose normals lie within this angle (radians) of their axis are flat enough to
 /// have a plane, which tells the surface they lie on from occluders (30°).
 pub const FLAT_CONE: f32 = std::f32::consts::FRAC_PI_6;
-
-/// Texels per side of the projected-area maps.
-const PROJECTED_TEXELS: f32 = (1u32 << PROJECTED_AREA_LEVELS) as f32;
 
 /// One node of the tree, as traversal needs it.
 #[derive(Clone, Copy, Debug)]
@@ -56,13 +52,39 @@ pub struct SenderNode {
     /// Whether surfels of a solid (see [`SOLID`]) lie below: their inward light is not in
     /// the node's maps, so a receiver on a solid must reach them as leaves.
     pub solid: bool,
+    /// Whether surfels below send light from their back into the maps ([`BACK_SIDED`]).
+    pub back_sided: bool,
+    /// For a node whose normals agree to [`PLANAR_CONE`]: the range of `axis · x` over its
+    /// surfels' centres (a slab that may be a little wider than they are); otherwise
+    /// unbounded. A thin slab is a plane (see [`SenderNode::holds_plane_of`]).
+    pub slab: [f32; 2],
 }
 
 impl SenderNode {
     pub fn is_leaf(&self) -> bool {
         self.children[0] == NONE
     }
+
+    /// Whether every surfel below lies in the plane through `p` with normal `n`, facing its
+    /// way, to within [`PLANAR_SLAB`] of the node's radius: a receiver at `p` on that plane
+    /// sees the node edge-on (it sends nothing there and hides nothing).
+    pub fn holds_plane_of(&self, p: Vec3, n: Vec3) -> bool {
+        let tolerance = PLANAR_SLAB * self.radius;
+        let h = self.axis.dot(p);
+        self.cone_angle <= PLANAR_CONE
+            && self.axis.dot(n) > 0.0
+            && self.slab[1] - self.slab[0] <= tolerance
+            && h >= self.slab[0] - tolerance
+            && h <= self.slab[1] + tolerance
+    }
 }
+
+/// The widest normal cone (radians) of a node that may be planar: flat to rounding.
+pub const PLANAR_CONE: f32 = 1e-3;
+
+/// The thickest slab, in node radii, that counts as a plane (rounding; an emitter hung 1 cm
+/// under a ceiling is 1e-2 of a node of both 1 m wide, and must stay apart).
+pub const PLANAR_SLAB: f32 = 1e-3;
 
 /// The tree of senders.
 pub struct Senders {
@@ -117,6 +139,8 @@ impl Senders {
                 directional: 0.0,
                 radiance_normal: [Vec3::ZERO; 3],
                 solid: false,
+                back_sided: false,
+                slab: [f32::NEG_INFINITY, f32::INFINITY],
             })
             .collect();
         if nodes
@@ -129,6 +153,33 @@ impl Senders {
             });
         }
         let mut nodes = nodes;
+        // Slabs bottom-up: a child's extent along the parent's axis is its own, widened by
+        // how far its axis turns from the parent's over its radius.
+        for j in (0..nodes.len()).rev() {
+            let node = nodes[j];
+            if node.cone_angle > PLANAR_CONE {
+                continue;
+            }
+            nodes[j].slab = if node.is_leaf() {
+                let h = node
+                    .axis
+                    .dot(Vec3::from(cache.surfels[node.surfel as usize].p));
+                [h, h]
+            } else {
+                node.children
+                    .iter()
+                    .filter(|&&c| (c as usize) < nodes.len() && c as usize > j)
+                    .fold([f32::INFINITY, f32::NEG_INFINITY], |[lo, hi], &c| {
+                        let ch = &nodes[c as usize];
+                        let shift = node.axis.dot(ch.center) - ch.axis.dot(ch.center);
+                        let widen = (node.axis - ch.axis).length() * ch.radius;
+                        [
+                            lo.min(ch.slab[0] + shift - widen),
+                            hi.max(ch.slab[1] + shift + widen),
+                        ]
+                    })
+            };
+        }
         // Children come after their parents: sum Σ A n and the directional area bottom-up
         // (the latter kept as an area, then turned into a fraction).
         let mut directional_area = vec![0.0f32; nodes.len()];
@@ -167,13 +218,23 @@ impl Senders {
             };
         }
         for j in (0..nodes.len()).rev() {
-            nodes[j].solid = if nodes[j].is_leaf() {
-                cache.surfels[nodes[j].surfel as usize].flags & SOLID != 0
-            } else {
-                nodes[j].children.iter().any(|&c| {
-                    (c as usize) < nodes.len() && c as usize > j && nodes[c as usize].solid
-                })
+            let below = |flag: u32| {
+                if nodes[j].is_leaf() {
+                    cache.surfels[nodes[j].surfel as usize].flags & flag != 0
+                } else {
+                    nodes[j].children.iter().any(|&c| {
+                        let c = c as usize;
+                        c < nodes.len()
+                            && c > j
+                            && if flag == SOLID {
+                                nodes[c].solid
+                            } else {
+                                nodes[c].back_sided
+                            }
+                    })
+                }
             };
+            (nodes[j].solid, nodes[j].back_sided) = (below(SOLID), below(BACK_SIDED));
         }
         let mut solid_meshes = Vec::new();
         for s in &cache.surfels {
@@ -236,46 +297,60 @@ impl Senders {
                 projected: facing,
             };
         }
+        let levels = self.projected[j as usize].levels();
         let p = direction_to_square(w);
         let mapped = self.projected[j as usize].eval(p.x, p.y).max(0.0);
-        let mut i = self.intensity[j as usize].eval(p.x, p.y);
-        if let Some(e) = &self.emitted[j as usize] {
-            i -= e.eval(p.x, p.y);
-        }
         let projected = self.exact_projected(node, w).unwrap_or(mapped);
-        if node.directional == 0.0 {
-            // Diffuse surfels send light from their front only, so the radiance is I over the
-            // front projected area P⁺ = (P + N·ω)/2 (cos⁺ = (|cos| + cos)/2), taken at the
-            // 8 × 8 texel's centre as I and P are: I/P lost up to 8 % where the texel
-            // straddles an edge-on band (tests/furnace.rs). The node covers what faces the
-            // receiver, or its back where that is larger (a sheet seen from behind, whose
-            // back still occludes): for a solid the back lies behind the front.
-            let texel = (p * PROJECTED_TEXELS)
-                .floor()
-                .min(Vec2::splat(PROJECTED_TEXELS - 1.0));
-            let centre = square_to_direction((texel + 0.5) / PROJECTED_TEXELS);
-            let front_texel = 0.5 * (mapped + node.area_normal.dot(centre));
-            let n_dot = node.area_normal.dot(w);
-            let (front, back) = (0.5 * (projected + n_dot), 0.5 * (projected - n_dot));
-            // Near the edge-on band the texel's centre may see much less front than ω does;
-            // I/P⁺ there is ill-conditioned and falls back to I/P below.
-            if front >= back && front_texel > 0.0 && front_texel >= 0.5 * front {
+        let n_dot = node.area_normal.dot(w);
+        let (front, back) = (0.5 * (projected + n_dot), 0.5 * (projected - n_dot));
+        // I and P share the tree's texel grid, sampled at the texel centres; where the
+        // normals allow, P at the centre is exact.
+        let intensity = |p: Vec2| {
+            let mut i = self.intensity[j as usize].eval(p.x, p.y);
+            if let Some(e) = &self.emitted[j as usize] {
+                i -= e.eval(p.x, p.y);
+            }
+            i
+        };
+        let area_at = |p: Vec2, centre: Vec3| {
+            self.exact_projected(node, centre)
+                .unwrap_or_else(|| self.projected[j as usize].eval(p.x, p.y).max(0.0))
+        };
+        if !node.back_sided && front >= back {
+            // Surfels that send light from their front only (all but thin sheets): the
+            // radiance is I over the front projected area P⁺ = (P + N·ω)/2 (cos⁺ = (|cos| +
+            // cos)/2) at the texel's centre, where I was sampled (I/P lost up to 8 % where
+            // the texel straddles an edge-on band, tests/furnace.rs). Where the centre sees
+            // much less of the front than ω does (a flat node seen within a texel of edge-on,
+            // whose centre lies behind it), the texel tilted towards the front is read.
+            let centre = texel_centre(p, levels);
+            let front_at = |p: Vec2, c: Vec3| 0.5 * (area_at(p, c) + node.area_normal.dot(c));
+            let mut texel = (p, front_at(p, centre));
+            if !(texel.1 >= 0.5 * front) && node.axis.dot(w) > 0.0 && node.sin_cone < 1.0 {
+                let (q, c) = texel_on_side(w, node.axis, node.sin_cone, levels);
+                texel = (q, front_at(q, c));
+            }
+            let (q, front_texel) = texel;
+            if front_texel > 0.0 && front_texel >= 0.5 * front {
                 return Seen {
-                    radiance: (i / front_texel).max(Rgb::ZERO),
+                    radiance: (intensity(q) / front_texel).max(Rgb::ZERO),
                     projected: front.max(0.0),
                 };
             }
         }
-        // Radiance from the two maps at the same texel (their quantisation cancels), unless
-        // the texel straddles the node's edge-on band and its P is far below the exact one;
-        // the solid angle from the exact projected area where it is known.
-        let denominator = if mapped >= 0.5 * projected {
-            mapped
+        // The node covers what faces the receiver, or its back where that is larger (a sheet
+        // seen from behind, whose back still occludes; for a solid the back lies behind the
+        // front). Radiance from the two maps at the same texel (their quantisation cancels),
+        // unless the texel straddles the node's edge-on band and its P is far below the
+        // exact one; the solid angle from the exact projected area where it is known.
+        let at_centre = area_at(p, texel_centre(p, levels));
+        let denominator = if at_centre >= 0.5 * projected {
+            at_centre
         } else {
             projected
         };
         let radiance = if denominator > 0.0 {
-            (i / denominator).max(Rgb::ZERO)
+            (intensity(p) / denominator).max(Rgb::ZERO)
         } else {
             Rgb::ZERO
         };
@@ -377,7 +452,8 @@ impl Senders {
         };
         let total = match &self.maps[i as usize] {
             Some(m) => {
-                let p = direction_to_square(w);
+                let side = Vec3::from(s.n) * cos.signum();
+                let (p, _) = texel_on_side(w, side, 0.0, m.levels());
                 m.eval(p.x, p.y)
             }
             None if cos > 0.0 => Vec3::from(s.rgb),
@@ -385,6 +461,42 @@ impl Senders {
         };
         (total - emitted).max(Rgb::ZERO)
     }
+}
+
+/// The centre of the texel of the `2^levels`-texel sphere map that holds point `p` of its
+/// unit square.
+fn texel_centre(p: Vec2, levels: u32) -> Vec3 {
+    let texels = (1u32 << levels) as f32;
+    let texel = (p * texels).floor().min(Vec2::splat(texels - 1.0));
+    square_to_direction((texel + 0.5) / texels)
+}
+
+/// Where to read a sphere map of `levels` for direction `w` seen on the side `side` (a unit
+/// vector) of a surface, with the texel's centre: `w`'s own texel, unless its centre lies less
+/// than `min_cos` towards `side`. A texel straddling the horizon holds the value at its
+/// centre, which may be the other side's (nothing, for a one-sided surfel: 3 % of a closed
+/// glossy room's leaves were read as black there); then the texel reached by tilting `w`
+/// towards `side` by whole texel widths, as far as four.
+fn texel_on_side(w: Vec3, side: Vec3, min_cos: f32, levels: u32) -> (Vec2, Vec3) {
+    let p = direction_to_square(w);
+    let centre = texel_centre(p, levels);
+    if side.dot(centre) > min_cos {
+        return (p, centre);
+    }
+    // A texel's width in radians: √(4π) / 2^levels.
+    let step = 3.545 / (1u32 << levels) as f32;
+    let tangent = (w - side * side.dot(w)).normalize_or_zero();
+    let elevation = side.dot(w).clamp(-1.0, 1.0).asin();
+    for k in 1..=4 {
+        let e = (elevation + k as f32 * step).min(std::f32::consts::FRAC_PI_2);
+        let tilted = tangent * e.cos() + side * e.sin();
+        let q = direction_to_square(tilted);
+        let c = texel_centre(q, levels);
+        if side.dot(c) > min_cos {
+            return (q, c);
+        }
+    }
+    (p, centre)
 }
 
 /// Every inner node's G, from the stored G (at and above the split level) or from the
