@@ -10,6 +10,8 @@
 //!   scene.
 //! - Inside a closed room of uniform radiance, a bounce's microbuffers gather exactly π.
 
+mod common;
+
 use glam::Vec3;
 use wpbgi::bake::{bake, BakeSettings, Baked, SurfelRadiance};
 use wpbgi::bounce::BounceSettings;
@@ -210,16 +212,99 @@ fn conductor_furnace_matches_the_path_tracer() {
 #[test]
 fn closed_room_gathers_pi() {
     for scene in [furnace(0.5, 1.0), conductor_furnace(0.5, 1.0, 0.1)] {
-        let (mean, near_edges) = closed_room_irradiance(&scene);
+        let settings = BakeSettings {
+            points: 3000,
+            ..BakeSettings::from_quality(wpbgi::bake::Quality::Draft)
+        };
+        let (baked, gathered) = uniform_gather(&scene, &settings, 1);
+        let (mut all, mut edges) = ((0.0f64, 0u32), (0.0f64, 0u32));
+        for (s, e) in baked.surfels.iter().zip(&gathered) {
+            // The distance to the nearest other face of the room.
+            let edge = (0..3)
+                .filter(|&a| s.n[a].abs() < 0.5)
+                .map(|a| s.p[a].min(1.0 - s.p[a]))
+                .fold(f32::INFINITY, f32::min);
+            all = (all.0 + e, all.1 + 1);
+            if edge < 0.15 {
+                edges = (edges.0 + e, edges.1 + 1);
+            }
+        }
+        let (mean, near_edges) = (all.0 / f64::from(all.1), edges.0 / f64::from(edges.1));
         eprintln!("irradiance / π: mean {mean:.5}, within 0.15 of an edge {near_edges:.5}");
         assert!((mean - 1.0).abs() < 2e-3, "{mean}");
         assert!((near_edges - 1.0).abs() < 2e-3, "{near_edges}");
     }
 }
 
-/// The mean irradiance / π that the bounce's microbuffers gather in `scene`'s box with every
-/// surfel's radiance set to 1: over all surfels and over those within 0.15 of another face.
-fn closed_room_irradiance(scene: &Scene) -> (f64, f64) {
+/// In the open Cornell box (cbox-diffuse) with every surfel sending radiance 1, a surfel
+/// gathers π times the cosine-weighted fraction of its hemisphere whose rays hit the scene
+/// (1 024 rays each, for every tenth surfel not under a closed box, where it is dark
+/// anyway). Per mesh, the ratio is within 2 % of 1. Measured: 0.984–1.011. Before the
+/// back faces of the closed boxes were hidden from receivers outside them, the floor and the
+/// walls gathered 0.88–0.95: the back faces' black splats filled the gaps between the front
+/// faces'.
+#[test]
+fn open_room_gathers_what_its_rays_hit() {
+    let scene = Scene::load(&common::mitsuba_data("cbox-diffuse.gltf")).expect("scene");
+    let settings = BakeSettings::from_quality(wpbgi::bake::Quality::Draft);
+    let (baked, gathered) = uniform_gather(&scene, &settings, 10);
+    let boxes: Vec<Option<(Vec3, Vec3)>> = scene
+        .meshes
+        .iter()
+        .map(|m| {
+            m.is_closed().then(|| {
+                m.positions
+                    .iter()
+                    .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &p| {
+                        (lo.min(p), hi.max(p))
+                    })
+            })
+        })
+        .collect();
+    // Within the bounds of another closed mesh.
+    let inside = |p: Vec3, mesh: u32| {
+        boxes.iter().enumerate().any(|(m, b)| {
+            b.is_some_and(|(lo, hi)| {
+                m != mesh as usize && p.cmpge(lo - 1e-3).all() && p.cmple(hi + 1e-3).all()
+            })
+        })
+    };
+    let ctx = wpbgi::reference::RenderContext::new(&scene, &Default::default());
+    let mut per_mesh = vec![(0.0f64, 0.0f64); scene.meshes.len()];
+    for (i, (s, e)) in baked.surfels.iter().zip(&gathered).enumerate().step_by(10) {
+        if inside(s.p, s.mesh) {
+            continue;
+        }
+        let frame = wpbgi::geometry::frame::Frame::from_normal(s.n);
+        let mut sampler = wpbgi::sampler::Sampler::new(3, i as u64, 0);
+        let hits = (0..1024)
+            .filter(|_| {
+                let u = sampler.next_2d();
+                let w = frame.to_world(wpbgi::geometry::warp::square_to_cosine_hemisphere(u));
+                wpbgi::reference::intersect(&ctx, s.p + s.n * 1e-4, w).is_some()
+            })
+            .count();
+        let m = &mut per_mesh[s.mesh as usize];
+        *m = (m.0 + e, m.1 + hits as f64 / 1024.0);
+    }
+    for (mesh, (ours, rays)) in scene.meshes.iter().zip(per_mesh) {
+        if rays == 0.0 {
+            continue;
+        }
+        eprintln!("{}: gathered / hit {:.4}", mesh.name, ours / rays);
+        assert!(
+            (ours / rays - 1.0).abs() < 0.02,
+            "{}: {}",
+            mesh.name,
+            ours / rays
+        );
+    }
+}
+
+/// Bake `scene` with `settings`, set every surfel's radiance to 1 towards its front, and
+/// gather, for every `step`-th surfel (0 for the others), the irradiance / π that its
+/// microbuffer collects as a bounce builds it.
+fn uniform_gather(scene: &Scene, settings: &BakeSettings, step: usize) -> (Baked, Vec<f64>) {
     use wpbgi::bake::pipeline::intensity_map;
     use wpbgi::bake::store::BakedCache;
     use wpbgi::bounce::iterate::close_buffer;
@@ -229,9 +314,9 @@ fn closed_room_irradiance(scene: &Scene) -> (f64, f64) {
     use wpbgi::geometry::frame::Frame;
     use wpbgi::haar::{texel_directions, Haar2d, SparseHaar};
     let settings = BakeSettings {
-        points: 3000,
         light_samples: 4,
-        ..BakeSettings::from_quality(wpbgi::bake::Quality::Draft)
+        bounces: BounceSettings::exactly(0),
+        ..settings.clone()
     };
     let mut baked = bake(scene, &settings, &|_, _| {}).expect("bake");
     let levels = baked.plan.map_levels;
@@ -258,29 +343,26 @@ fn closed_room_irradiance(scene: &Scene) -> (f64, f64) {
     let senders = Senders::from_cache(&cache).expect("senders");
     let accel = wpbgi::accel::Accel::build(scene);
     let mut stack = Vec::new();
-    let (mut all, mut edges) = ((0.0f64, 0u32), (0.0f64, 0u32));
     let n = if levels > 3 { 1 << levels } else { 16 };
-    for s in &baked.surfels {
-        let mut mb = Microbuffer::new(n, false, Frame::from_normal(s.n));
-        splat_cut(&senders, s.p, s.mesh, &mut mb, &[0], &mut stack);
-        mb.resolve();
-        close_buffer(&senders, (&accel, scene), s, &mut mb);
-        let e = mb
-            .cos_radiance
-            .iter()
-            .zip(&mb.pixels)
-            .map(|(l, p)| f64::from(l.x * p.solid_angle))
-            .sum::<f64>()
-            / std::f64::consts::PI;
-        // The distance to the nearest other face of the room.
-        let edge = (0..3)
-            .filter(|&a| s.n[a].abs() < 0.5)
-            .map(|a| s.p[a].min(1.0 - s.p[a]))
-            .fold(f32::INFINITY, f32::min);
-        all = (all.0 + e, all.1 + 1);
-        if edge < 0.15 {
-            edges = (edges.0 + e, edges.1 + 1);
-        }
-    }
-    (all.0 / f64::from(all.1), edges.0 / f64::from(edges.1))
+    let gathered = baked
+        .surfels
+        .iter()
+        .enumerate()
+        .map(|(i, s)| {
+            if i % step != 0 {
+                return 0.0;
+            }
+            let mut mb = Microbuffer::new(n, false, Frame::from_normal(s.n));
+            splat_cut(&senders, s.p, s.mesh, &mut mb, &[0], &mut stack);
+            mb.resolve();
+            close_buffer(&senders, (&accel, scene), s, &mut mb);
+            mb.cos_radiance
+                .iter()
+                .zip(&mb.pixels)
+                .map(|(l, p)| f64::from(l.x * p.solid_angle))
+                .sum::<f64>()
+                / std::f64::consts::PI
+        })
+        .collect();
+    (baked, gathered)
 }

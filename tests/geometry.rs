@@ -269,3 +269,28 @@ fn furnace_is_exact_at_every_scene_scale() {
         }
     }
 }
+
+/// `Mesh::is_closed`: a subdivided octahedron is closed (also with its vertices duplicated
+/// per triangle, as exporters split them at seams); without one triangle, or with one
+/// triangle wound the other way, it is not.
+#[test]
+fn closed_meshes_are_recognised() {
+    let sphere = closed_sphere(2);
+    assert!(sphere.is_closed());
+    let mut split = sphere.clone();
+    split.positions = sphere
+        .triangles
+        .iter()
+        .flat_map(|t| t.map(|i| sphere.positions[i as usize]))
+        .collect();
+    split.triangles = (0..sphere.triangles.len() as u32)
+        .map(|t| [3 * t, 3 * t + 1, 3 * t + 2])
+        .collect();
+    assert!(split.is_closed());
+    let mut open = sphere.clone();
+    open.triangles.pop();
+    assert!(!open.is_closed());
+    let mut flipped = sphere.clone();
+    flipped.triangles[0].swap(1, 2);
+    assert!(!flipped.is_closed());
+}

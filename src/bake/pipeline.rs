@@ -124,6 +124,8 @@ pub struct Baked {
     /// Per mesh: whether its surfels' intensity includes light sent from their back (see
     /// [`back_sided_meshes`]).
     pub back_sided: Vec<bool>,
+    /// Per mesh: whether it is closed ([`crate::scene::Mesh::is_closed`]).
+    pub closed: Vec<bool>,
     pub tree: SurfelTree,
     /// Radiant intensity I(ω) of every node (RGB).
     pub coded: CodedTree<Rgb>,
@@ -225,6 +227,7 @@ pub fn bake(scene: &Scene, settings: &BakeSettings, progress: Progress) -> Resul
     plan.json["map_resolution"] = (1u32 << levels).into();
     let solid = solid_meshes(scene);
     let back_sided = back_sided_meshes(scene, &solid);
+    let closed = scene.meshes.iter().map(|m| m.is_closed()).collect();
     let leaf = |i: u32| {
         let s = &surfels[i as usize];
         intensity_map(s, &radiance[i as usize], levels, !solid[s.mesh as usize])
@@ -244,6 +247,7 @@ pub fn bake(scene: &Scene, settings: &BakeSettings, progress: Progress) -> Resul
         emitted,
         solid,
         back_sided,
+        closed,
         tree,
         coded,
         projected,

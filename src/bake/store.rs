@@ -34,7 +34,8 @@ pub struct SurfelRecord {
     /// reflected light from emission, which the final render lights directly.
     pub emitted: [f32; 3],
     /// Bit 0 ([`SOLID`]): the surfel bounds a solid, whose inward light only the solid's own
-    /// surface sees (see [`crate::bake::pipeline::solid_meshes`]). Bit 1 ([`BACK_SIDED`]).
+    /// surface sees (see [`crate::bake::pipeline::solid_meshes`]). Bit 1: [`BACK_SIDED`]; bit 2:
+    /// [`CLOSED`].
     pub flags: u32,
 }
 
@@ -44,6 +45,10 @@ pub const SOLID: u32 = 1;
 /// [`SurfelRecord::flags`]: the surfel's intensity includes what it sends from its back (see
 /// [`crate::bake::pipeline::back_sided_meshes`]).
 pub const BACK_SIDED: u32 = 2;
+
+/// [`SurfelRecord::flags`]: the surfel lies on a closed mesh, whose back faces a receiver
+/// outside it cannot see ([`crate::scene::Mesh::is_closed`]).
+pub const CLOSED: u32 = 4;
 
 /// The layout of the bake's sections; caches of another layout are refused (bake again).
 pub const BAKE_FORMAT: u32 = 3;
@@ -200,15 +205,14 @@ impl Sections {
                 rgb: rgb.to_array(),
                 map,
                 emitted: e.to_array(),
-                flags: if baked.solid[s.mesh as usize] {
-                    SOLID
-                } else {
-                    0
-                } | if baked.back_sided[s.mesh as usize] {
-                    BACK_SIDED
-                } else {
-                    0
-                },
+                flags: [
+                    (&baked.solid, SOLID),
+                    (&baked.back_sided, BACK_SIDED),
+                    (&baked.closed, CLOSED),
+                ]
+                .iter()
+                .filter(|(meshes, _)| meshes[s.mesh as usize])
+                .fold(0, |flags, (_, bit)| flags | bit),
             });
         }
         let plan = json!({

@@ -76,6 +76,11 @@ pub fn splat_cut(
         }
         let d2 = v.length_squared();
         let d = d2.sqrt();
+        // A closed mesh seen from outside shows only its front faces.
+        let back_hidden = senders.back_hidden(j, p, 0.0, mesh);
+        if back_hidden && senders.faces_away(j, p, 0.0) {
+            continue;
+        }
         if node.is_leaf() {
             // A surfel centred below a hemispherical receiver's horizon belongs to a surface
             // that passes under it (at a contact or an intersection): the part of its disc
@@ -94,7 +99,7 @@ pub fn splat_cut(
                 .unwrap_or(mb.pixel_solid_angle());
             if omega <= pixel && d > NEAR_RADII * disc {
                 if omega > 0.0 {
-                    let seen = senders.seen(j, -dir, mesh);
+                    let seen = senders.seen(j, -dir, mesh, back_hidden);
                     stats.splats += u64::from(mb.splat(&senders.sender(j, v, seen), omega));
                 }
             } else {
@@ -124,7 +129,7 @@ pub fn splat_cut(
                 .solid_angle_towards(dir)
                 .is_some_and(|pixel| pixel == base || fits_pixel(senders, j, d2, dir, pixel));
         if accept {
-            let seen = senders.seen(j, -dir, mesh);
+            let seen = senders.seen(j, -dir, mesh, back_hidden);
             stats.splats += u64::from(mb.splat(&senders.sender(j, v, seen), seen.projected / d2));
         } else {
             for c in node.children {

@@ -208,11 +208,16 @@ pub fn cluster_cut(
             near.push(j);
             continue;
         }
+        // A closed mesh seen from outside shows only its front faces (see splat_cut).
+        let back_hidden = senders.back_hidden(j, p, radius, mesh);
+        if back_hidden && senders.faces_away(j, p, radius) {
+            continue;
+        }
         let dir = v / d;
         let pixel = buffer.pixels[buffer.pixel_of(dir).unwrap_or(0)].solid_angle;
         let small = node.is_leaf() || fits_pixel(senders, j, d2, dir, pixel);
         if small {
-            let seen = senders.seen(j, -dir, mesh);
+            let seen = senders.seen(j, -dir, mesh, back_hidden);
             let omega = seen.projected / d2;
             if node.is_leaf() && omega > pixel {
                 near.push(j);

@@ -13,7 +13,7 @@
 
 use super::microbuffer::Sender;
 use crate::bake::pipeline::{intensity_map, SurfelRadiance};
-use crate::bake::store::{BakedCache, NodeRecord, SurfelRecord, BACK_SIDED, NO_MAP, SOLID};
+use crate::bake::store::{BakedCache, NodeRecord, SurfelRecord, BACK_SIDED, CLOSED, NO_MAP, SOLID};
 use crate::bake::surfels::Surfel;
 use crate::bake::tree::NONE;
 use crate::cache::CacheError;
@@ -54,6 +54,8 @@ pub struct SenderNode {
     pub solid: bool,
     /// Whether surfels below send light from their back into the maps ([`BACK_SIDED`]).
     pub back_sided: bool,
+    /// The closed mesh ([`CLOSED`]) every surfel below lies on, or [`NONE`].
+    pub closed_mesh: u32,
     /// For a node whose normals agree to [`PLANAR_CONE`]: the range of `axis · x` over its
     /// surfels' centres (a slab that may be a little wider than they are); otherwise
     /// unbounded. A thin slab is a plane (see [`SenderNode::holds_plane_of`]).
@@ -91,6 +93,8 @@ pub struct Senders {
     pub nodes: Vec<SenderNode>,
     /// Per mesh: whether it bounds a solid.
     solid_meshes: Vec<bool>,
+    /// Per closed mesh: the bounds of its surfels' discs.
+    closed_boxes: Vec<Option<[Vec3; 2]>>,
     pub surfels: Vec<SurfelRecord>,
     /// Per inner node: G of the radiant intensity and of the projected area (leaves: empty).
     intensity: Vec<SparseHaar<Rgb>>,
@@ -140,6 +144,7 @@ impl Senders {
                 radiance_normal: [Vec3::ZERO; 3],
                 solid: false,
                 back_sided: false,
+                closed_mesh: NONE,
                 slab: [f32::NEG_INFINITY, f32::INFINITY],
             })
             .collect();
@@ -235,14 +240,43 @@ impl Senders {
                 }
             };
             (nodes[j].solid, nodes[j].back_sided) = (below(SOLID), below(BACK_SIDED));
+            nodes[j].closed_mesh = if nodes[j].is_leaf() {
+                let s = &cache.surfels[nodes[j].surfel as usize];
+                if s.flags & CLOSED != 0 {
+                    s.mesh
+                } else {
+                    NONE
+                }
+            } else {
+                let mut below = nodes[j]
+                    .children
+                    .iter()
+                    .filter(|&&c| (c as usize) < nodes.len() && c as usize > j)
+                    .map(|&c| nodes[c as usize].closed_mesh);
+                let first = below.next().unwrap_or(NONE);
+                if below.all(|m| m == first) {
+                    first
+                } else {
+                    NONE
+                }
+            };
         }
         let mut solid_meshes = Vec::new();
+        let mut closed_boxes: Vec<Option<[Vec3; 2]>> = Vec::new();
         for s in &cache.surfels {
             let m = s.mesh as usize;
             if m >= solid_meshes.len() {
                 solid_meshes.resize(m + 1, false);
+                closed_boxes.resize(m + 1, None);
             }
             solid_meshes[m] |= s.flags & SOLID != 0;
+            if s.flags & CLOSED != 0 {
+                // The surfels' discs: their centres lie on the mesh, their rims around it.
+                let r = Vec3::splat((s.area / std::f32::consts::PI).sqrt());
+                let p = Vec3::from(s.p);
+                let [lo, hi] = closed_boxes[m].unwrap_or([p, p]);
+                closed_boxes[m] = Some([lo.min(p - r), hi.max(p + r)]);
+            }
         }
         for (n, (d, r)) in nodes.iter_mut().zip(directional_area.iter().zip(records)) {
             n.directional = if r.area > 0.0 {
@@ -265,6 +299,7 @@ impl Senders {
         let emitted = emitted_intensities(records, &nodes, &cache.surfels, &maps, levels);
         Ok(Senders {
             solid_meshes,
+            closed_boxes,
             nodes,
             surfels: cache.surfels.clone(),
             intensity,
@@ -275,12 +310,19 @@ impl Senders {
     }
 
     /// What a receiver on mesh `receiver_mesh` sees of node `j` along the unit direction `w`
-    /// from the node towards it.
-    pub fn seen(&self, j: u32, w: Vec3, receiver_mesh: u32) -> Seen {
+    /// from the node towards it; with `back_hidden` (see [`Senders::back_hidden`]), only the
+    /// node's front faces.
+    pub fn seen(&self, j: u32, w: Vec3, receiver_mesh: u32, back_hidden: bool) -> Seen {
         let node = &self.nodes[j as usize];
         if node.is_leaf() {
             let s = &self.surfels[node.surfel as usize];
             let cos = Vec3::from(s.n).dot(w);
+            if back_hidden && cos < 0.0 {
+                return Seen {
+                    radiance: Rgb::ZERO,
+                    projected: 0.0,
+                };
+            }
             return Seen {
                 radiance: self.surfel_radiance(node.surfel, w, cos, receiver_mesh),
                 projected: s.area * cos.abs(),
@@ -316,7 +358,13 @@ impl Senders {
             self.exact_projected(node, centre)
                 .unwrap_or_else(|| self.projected[j as usize].eval(p.x, p.y).max(0.0))
         };
-        if !node.back_sided && front >= back {
+        if back_hidden && !(front > 0.0) {
+            return Seen {
+                radiance: Rgb::ZERO,
+                projected: 0.0,
+            };
+        }
+        if !node.back_sided && (front >= back || back_hidden) {
             // Surfels that send light from their front only (all but thin sheets): the
             // radiance is I over the front projected area P⁺ = (P + N·ω)/2 (cos⁺ = (|cos| +
             // cos)/2) at the texel's centre, where I was sampled (I/P lost up to 8 % where
@@ -343,7 +391,21 @@ impl Senders {
         // front). Radiance from the two maps at the same texel (their quantisation cancels),
         // unless the texel straddles the node's edge-on band and its P is far below the
         // exact one; the solid angle from the exact projected area where it is known.
-        let at_centre = area_at(p, texel_centre(p, levels));
+        let centre = texel_centre(p, levels);
+        let at_centre = area_at(p, centre);
+        if back_hidden {
+            // Only the front shows: I over its area, at ω where the texel's is ill-conditioned.
+            let front_texel = 0.5 * (at_centre + node.area_normal.dot(centre));
+            let denominator = if front_texel >= 0.5 * front {
+                front_texel
+            } else {
+                front
+            };
+            return Seen {
+                radiance: (intensity(p) / denominator).max(Rgb::ZERO),
+                projected: front,
+            };
+        }
         let denominator = if at_centre >= 0.5 * projected {
             at_centre
         } else {
@@ -358,6 +420,39 @@ impl Senders {
             radiance,
             projected,
         }
+    }
+
+    /// Whether node `j`'s back faces are hidden from every receiver within `margin` of `p`
+    /// (not on `mesh`): all its surfels lie on one closed mesh, and the receivers lie outside
+    /// that mesh's bounds. A closed surface seen from outside shows only its front faces; its
+    /// back faces, drawn as black occluders, filled the gaps between the front faces' splats
+    /// and took 5–12 % of the light a Cornell box's walls gathered.
+    pub fn back_hidden(&self, j: u32, p: Vec3, margin: f32, mesh: u32) -> bool {
+        let node = &self.nodes[j as usize];
+        let m = node.closed_mesh;
+        if m == NONE || m == mesh || node.back_sided {
+            return false;
+        }
+        self.closed_boxes
+            .get(m as usize)
+            .copied()
+            .flatten()
+            .is_some_and(|[lo, hi]| {
+                (p + Vec3::splat(margin)).cmplt(lo).any()
+                    || (p - Vec3::splat(margin)).cmpgt(hi).any()
+            })
+    }
+
+    /// Whether every surfel of node `j` faces away from every point within `margin` of `p`:
+    /// for n within the cone of half-angle θ around the axis a, and x in the bounding sphere,
+    /// n·(x − p) ≥ (a·v) cos θ − |a × v| sin θ − r with v = centre − p.
+    pub fn faces_away(&self, j: u32, p: Vec3, margin: f32) -> bool {
+        let node = &self.nodes[j as usize];
+        let v = node.center - p;
+        node.cone_angle < std::f32::consts::FRAC_PI_2
+            && node.axis.dot(v) * node.cone_angle.cos()
+                - node.axis.cross(v).length() * node.sin_cone
+                > node.radius + margin
     }
 
     /// Whether a receiver on `mesh` must reach the surfels of a solid below node `j` one by

@@ -29,6 +29,45 @@ pub struct Mesh {
 }
 
 impl Mesh {
+    /// Whether the mesh is closed and consistently wound: with vertices welded by position,
+    /// every edge of a non-degenerate triangle is met once in each direction. Such a surface
+    /// bounds a volume, and from outside it its back faces lie behind its front faces.
+    pub fn is_closed(&self) -> bool {
+        use std::collections::HashMap;
+        let mut weld: HashMap<[u32; 3], u32> = HashMap::new();
+        let ids: Vec<u32> = self
+            .positions
+            .iter()
+            .map(|p| {
+                let next = weld.len() as u32;
+                *weld.entry(p.to_array().map(f32::to_bits)).or_insert(next)
+            })
+            .collect();
+        // Per undirected edge (low, high): how often it is met low → high and high → low.
+        let mut edges: HashMap<(u32, u32), (u32, u32)> = HashMap::new();
+        for t in &self.triangles {
+            let Some(v) = t
+                .iter()
+                .map(|&i| ids.get(i as usize).copied())
+                .collect::<Option<Vec<_>>>()
+            else {
+                return false;
+            };
+            if v[0] == v[1] || v[1] == v[2] || v[2] == v[0] {
+                continue;
+            }
+            for (a, b) in [(v[0], v[1]), (v[1], v[2]), (v[2], v[0])] {
+                let e = edges.entry((a.min(b), a.max(b))).or_default();
+                if a < b {
+                    e.0 += 1;
+                } else {
+                    e.1 += 1;
+                }
+            }
+        }
+        !edges.is_empty() && edges.values().all(|&c| c == (1, 1))
+    }
+
     /// The texture coordinate at barycentric weights `b` of triangle `tri` ((0, 0) without UVs).
     pub fn uv_at(&self, tri: u32, b: [f32; 3]) -> Vec2 {
         match &self.uvs {
