@@ -1,7 +1,8 @@
 //! Multi-bounce caches against Mitsuba 3's max_depth 8 references (256²), and our path tracer
-//! at equal time: bake (draft, `--bounces auto`) + render with the defaults, then the path
-//! tracer at max_depth 8 for the same wall time; the relMSE and MSE of both, the bounces and
-//! the time of each.
+//! at equal time: bake (draft, exactly 5 bounces: with the render's emission, direct light and
+//! gather, the paths of max_depth 8) + render with the defaults, then the path tracer at
+//! max_depth 8 for the same wall time; the relMSE and MSE of both, the bounces and the time of
+//! each; and the bounces' time without the view tree (every surfel traversing the whole tree).
 //!
 //! `cargo run --release --example bench_bounces [-- SCENE_NAME]` (cbox-diffuse, cbox-rough or
 //! cbox-glossy from tests/data/mitsuba; default: cbox-diffuse and cbox-rough).
@@ -28,7 +29,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let reference = read_exr(&data(&format!("{name}_d8_ref.exr")))?;
         let camera = scene.default_camera(256, 256)?;
         let settings = BakeSettings {
-            bounces: BounceSettings::auto(),
+            bounces: BounceSettings::exactly(5),
             ..BakeSettings::from_quality(Quality::Draft)
         };
         let (baked, cache, bake_s) =
@@ -46,16 +47,29 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let pt = common::path_tracer_for(&scene, &camera, 8, bake_s + render_s)?;
         let (pt_mse, pt_rel) = error_against(&pt.mean, &reference).ok_or("size")?;
         let report = baked.bounces.unwrap_or_default();
+        // The same bounces with every surfel traversing the whole tree (no view tree).
+        let alone = BakeSettings {
+            bounces: BounceSettings {
+                view_tree: false,
+                ..settings.bounces
+            },
+            ..settings.clone()
+        };
+        let (alone, _, _) = common::bake_cache(&scene, &alone, &format!("alone-{name}"))?;
+        let bounce_time = |r: &wpbgi::bounce::BounceReport| r.seconds.iter().sum::<f64>();
+        let alone_s = bounce_time(&alone.bounces.unwrap_or_default());
         println!(
             "{name}: bake {bake_s:.1} s ({} bounces, {:.1} s each on average) + render {render_s:.1} s: \
              relMSE {rel:.3e}, MSE {mse:.3e}; path tracer in {:.1} s ({} spp): relMSE {pt_rel:.3e}, \
-             MSE {pt_mse:.3e} ({:.2}× our relMSE, {:.2}× our MSE)",
+             MSE {pt_mse:.3e} ({:.2}× our relMSE, {:.2}× our MSE); bounces per surfel without the \
+             view tree: {alone_s:.1} s ({:.2}× the view tree's)",
             report.bounces,
             report.seconds.iter().sum::<f64>() / report.seconds.len().max(1) as f64,
             pt.seconds,
             pt.spp,
             pt_rel / rel,
-            pt_mse / mse
+            pt_mse / mse,
+            alone_s / bounce_time(&report)
         );
     }
     Ok(())

@@ -98,3 +98,50 @@ fn cbox_rough_with_bounces_shows_the_caustic() {
         r.window_ratio
     );
 }
+
+/// The view tree (receiver groups sharing their far senders) against every surfel traversing
+/// the whole tree, on cbox-rough (diffuse, conductor and dielectric surfels), one bounce: the
+/// bounce's light (area-weighted luminance, sphere maps by their mean) within 1 % on average
+/// and 5 % RMS per surfel. Measured: −0.23 % on average, 1.2 % RMS. The speed-up is a
+/// benchmark's (examples/bench_bounces.rs).
+#[test]
+fn view_tree_matches_per_surfel_traversal() {
+    use wpbgi::bake::{bake, SurfelRadiance};
+    let scene = Scene::load(&common::mitsuba_data("cbox-rough.gltf")).expect("scene");
+    let baked = |bounces: BounceSettings| {
+        let settings = BakeSettings {
+            bounces,
+            ..BakeSettings::from_quality(Quality::Draft)
+        };
+        bake(&scene, &settings, &|_, _| {}).expect("bake")
+    };
+    let direct = baked(BounceSettings::exactly(0));
+    let shared = baked(BounceSettings::exactly(1));
+    let alone = baked(BounceSettings {
+        view_tree: false,
+        ..BounceSettings::exactly(1)
+    });
+    let luminance = |r: &SurfelRadiance| {
+        f64::from(wpbgi::spectrum::luminance(match r {
+            SurfelRadiance::Rgb(c) => *c,
+            SurfelRadiance::Map(m) => m.mean(),
+        }))
+    };
+    let (mut a, mut b, mut d2, mut area) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    for (i, s) in direct.surfels.iter().enumerate() {
+        let w = f64::from(s.area);
+        let base = luminance(&direct.radiance[i]);
+        let (x, y) = (
+            luminance(&alone.radiance[i]) - base,
+            luminance(&shared.radiance[i]) - base,
+        );
+        (a, b, d2, area) = (a + w * x, b + w * y, d2 + w * (x - y) * (x - y), area + w);
+    }
+    let (mean_err, rms) = (b / a - 1.0, (d2 / area).sqrt() / (a / area));
+    eprintln!(
+        "view tree against per surfel: mean {:+.2} %, RMS {:.2} % per surfel",
+        100.0 * mean_err,
+        100.0 * rms
+    );
+    assert!(mean_err.abs() < 0.01 && rms < 0.05);
+}

@@ -15,8 +15,8 @@
 //! geometric tail Σ_{j≥1} rʲ of the last bounce is added at once (a stiff scene, albedo near
 //! 1, would need hundreds of bounces).
 //!
-//! This version traverses the tree per surfel; the view tree of spec §8.3 is not yet built.
-//! Every pixel of a bounce's microbuffer whose centre ray hits the scene is normalised to full
+//! Receivers gather per group of the view tree (spec §8.3, [`super::view_tree`]): nearby
+//! surfels share one cut of the far senders. Every pixel of a bounce's microbuffer whose centre ray hits the scene is normalised to full
 //! coverage ([`Microbuffer::close_gaps`]): the splats' coverage is right on average but not
 //! pixel by pixel, and a bounce that lost a few percent of coverage would pass that loss on
 //! to every further bounce (inside a closed room of radiance 1 the gather fell 3 % short).
@@ -25,6 +25,7 @@
 //! of tests/furnace.rs hold to 0.2 % (diffuse) and 1.2 % (conductor, ρ = 0.99).
 
 use super::bsdf_operator::BsdfOperator;
+use super::view_tree::{receiver_groups, ReceiverGroup, VIEW_EPS};
 use crate::accel::Accel;
 use crate::bake::coding::{encode, CodedTree};
 use crate::bake::pipeline::{intensity_map, surfel_bsdf, Baked, Progress, SurfelRadiance};
@@ -34,6 +35,7 @@ use crate::bake::surfels::Surfel;
 use crate::bsdf::Bsdf;
 use crate::error::Result;
 use crate::gather::cut::splat_cut;
+use crate::gather::fpbgi::{cluster_cut, member_buffer, ClusterReceivers};
 use crate::gather::microbuffer::Microbuffer;
 use crate::gather::senders::Senders;
 use crate::geometry::frame::Frame;
@@ -62,6 +64,9 @@ pub struct BounceSettings {
     pub tolerance: f32,
     /// The most of its L2 norm each column of a BSDF operator may lose to thresholding.
     pub operator_tau: f32,
+    /// Share the far part of the gather among nearby surfels (the view tree, see
+    /// [`super::view_tree`]); otherwise every surfel traverses the whole tree.
+    pub view_tree: bool,
 }
 
 impl BounceSettings {
@@ -71,6 +76,7 @@ impl BounceSettings {
             max: 30,
             tolerance: 1e-3,
             operator_tau: 1e-2,
+            view_tree: true,
         }
     }
 
@@ -203,7 +209,13 @@ pub fn add_bounces(
         let start = std::time::Instant::now();
         progress("bounces", (bounce - 1) as f32 / settings.max as f32);
         let senders = senders_of(baked, emit.take())?;
-        let light = gather_bounce((scene, &accel), &senders, baked, &bsdfs, &ops);
+        let light = gather_bounce(
+            (scene, &accel),
+            &senders,
+            baked,
+            (&bsdfs, &ops),
+            settings.view_tree,
+        );
         let e = energy(baked, &light);
         report.energies.push(e);
         if let Some(&prev) = report.energies.iter().rev().nth(1) {
@@ -291,19 +303,25 @@ fn senders_of(baked: &mut Baked, emit: Option<Vec<SurfelRadiance>>) -> Result<Se
     Ok(Senders::from_cache(&cache?)?)
 }
 
-/// What the ray through the centre of each pixel of `mb`, from surfel `s`, hits first: its
-/// distance, mesh and geometric normal.
+/// What the ray through the centre of each pixel `k` of `mb` for which `wanted(k)` holds,
+/// from surfel `s`, hits first: its distance, mesh and geometric normal (`None` for a miss
+/// or a pixel not wanted).
 pub fn pixel_hits(
     accel: &Accel,
     scene: &Scene,
     s: &Surfel,
     mb: &Microbuffer,
+    wanted: impl Fn(usize) -> bool,
 ) -> Vec<Option<PixelHit>> {
     let (p, err) = s.position_with_error(scene);
     let ng = Vec3A::from(s.n);
     mb.pixels
         .iter()
-        .map(|px| {
+        .enumerate()
+        .map(|(k, px)| {
+            if !wanted(k) {
+                return None;
+            }
             let w = mb.frame.to_world(px.dir);
             let origin = Vec3::from(offset_origin(p, err, ng, Vec3A::from(w)));
             accel.closest_hit(origin, w, 0.0, f32::INFINITY).map(|h| {
@@ -332,15 +350,20 @@ pub struct PixelHit {
 /// coverage, and those no splat reached (between the discs of a surface a few millimetres
 /// away, which leave holes there: a receiver 1 mm from a wall saw 112 of its 256 pixels
 /// empty) take the light of the surfel nearest the hit point, on the hit mesh and facing the
-/// same way.
+/// same way. Pixels the splats cover fully are closed without a ray (in a closed room, most:
+/// the rays were half a bounce's time).
 pub fn close_buffer(
     senders: &Senders,
     (accel, scene): (&Accel, &Scene),
     s: &Surfel,
     mb: &mut Microbuffer,
 ) {
-    let hits = pixel_hits(accel, scene, s, mb);
-    mb.close_gaps(|k| hits[k].is_some());
+    let covered = |alpha: f32| alpha >= 1.0;
+    let hits = pixel_hits(accel, scene, s, mb, |k| !covered(mb.alpha[k]));
+    let closed: Vec<bool> = (0..hits.len())
+        .map(|k| covered(mb.alpha[k]) || hits[k].is_some())
+        .collect();
+    mb.close_gaps(|k| closed[k]);
     for (k, hit) in hits.iter().enumerate() {
         let Some(h) = hit else { continue };
         if mb.alpha[k] > 0.0 {
@@ -357,42 +380,108 @@ pub fn close_buffer(
     }
 }
 
-/// One bounce: every surfel's outgoing radiance from the light `senders` send it.
+/// One bounce: every surfel's outgoing radiance from the light `senders` send it, per receiver
+/// group of the view tree or per surfel.
 fn gather_bounce(
     (scene, accel): (&Scene, &Accel),
     senders: &Senders,
     baked: &Baked,
-    bsdfs: &[Bsdf],
-    ops: &[Option<Arc<BsdfOperator>>],
+    (bsdfs, ops): (&[Bsdf], &[Option<Arc<BsdfOperator>>]),
+    view_tree: bool,
 ) -> Vec<SurfelRadiance> {
-    let root = [0u32];
-    baked
-        .surfels
+    let groups = if view_tree {
+        receiver_groups(&baked.tree, &baked.surfels)
+    } else {
+        (0..baked.surfels.len() as u32)
+            .map(|i| ReceiverGroup {
+                members: vec![i],
+                active: i,
+                radius: 0.0,
+                cone: 0.0,
+            })
+            .collect()
+    };
+    let side = |i: u32| ops[i as usize].as_ref().map_or(DIFFUSE_BUFFER, |op| op.n);
+    let gathered: Vec<Vec<(u32, SurfelRadiance)>> = groups
         .par_iter()
-        .enumerate()
-        .map_init(Vec::new, |stack, (i, s)| {
-            let bsdf = &bsdfs[i];
-            let frame = Frame::from_normal(s.n);
-            let n = ops[i].as_ref().map_or(DIFFUSE_BUFFER, |op| op.n);
-            let mut mb = Microbuffer::new(n, bsdf.is_two_sided(), frame);
-            splat_cut(senders, s.p, s.mesh, &mut mb, &root, stack);
-            mb.resolve();
-            close_buffer(senders, (accel, scene), s, &mut mb);
-            match &ops[i] {
-                None => SurfelRadiance::Rgb(mb.convolve(bsdf, Vec3::Z)),
-                Some(op) => {
-                    let local = op.outgoing(&mb.radiance, INCOMING_TAU);
-                    SurfelRadiance::Map(resample(
-                        &local,
-                        op,
-                        frame,
-                        map_levels(bsdf).unwrap_or(3),
-                        baked.settings.tau,
-                    ))
-                }
+        .map_init(Vec::new, |stack, group| {
+            let buffer = |i: u32| {
+                let s = &baked.surfels[i as usize];
+                let spherical = bsdfs[i as usize].is_two_sided();
+                Microbuffer::new(side(i), spherical, Frame::from_normal(s.n))
+            };
+            let outgoing = |i: u32, mb: &mut Microbuffer| {
+                let s = &baked.surfels[i as usize];
+                close_buffer(senders, (accel, scene), s, mb);
+                (
+                    i,
+                    surfel_outgoing(mb, &bsdfs[i as usize], &ops[i as usize], baked),
+                )
+            };
+            if let [i] = group.members[..] {
+                let s = &baked.surfels[i as usize];
+                let mut mb = buffer(i);
+                splat_cut(senders, s.p, s.mesh, &mut mb, &[0], stack);
+                mb.resolve();
+                return vec![outgoing(i, &mut mb)];
             }
+            let a = &baked.surfels[group.active as usize];
+            let spherical = bsdfs[group.active as usize].is_two_sided();
+            let receivers = ClusterReceivers {
+                p: a.p,
+                mesh: a.mesh,
+                frame: Frame::from_normal(a.n),
+                radius: group.radius,
+                plane_slope: (!spherical).then(|| group.cone.sin()),
+            };
+            let n = group
+                .members
+                .iter()
+                .map(|&i| side(i))
+                .max()
+                .unwrap_or(DIFFUSE_BUFFER);
+            let mut cut = cluster_cut(senders, &receivers, VIEW_EPS, n);
+
+            group
+                .members
+                .iter()
+                .map(|&i| {
+                    let s = &baked.surfels[i as usize];
+                    let mut mb = buffer(i);
+                    member_buffer(senders, &mut cut, s.p, s.mesh, &mut mb, stack);
+                    outgoing(i, &mut mb)
+                })
+                .collect()
         })
-        .collect()
+        .collect();
+    let mut light = vec![SurfelRadiance::Rgb(Rgb::ZERO); baked.surfels.len()];
+    for (i, l) in gathered.into_iter().flatten() {
+        light[i as usize] = l;
+    }
+    light
+}
+
+/// A surfel's outgoing radiance from its closed buffer: the cosine convolution for diffuse
+/// surfels (one RGB value), D = V·C resampled onto its sphere map for the others.
+fn surfel_outgoing(
+    mb: &Microbuffer,
+    bsdf: &Bsdf,
+    op: &Option<Arc<BsdfOperator>>,
+    baked: &Baked,
+) -> SurfelRadiance {
+    match op {
+        None => SurfelRadiance::Rgb(mb.convolve(bsdf, Vec3::Z)),
+        Some(op) => {
+            let local = op.outgoing(&mb.radiance, INCOMING_TAU);
+            SurfelRadiance::Map(resample(
+                &local,
+                op,
+                mb.frame,
+                map_levels(bsdf).unwrap_or(3),
+                baked.settings.tau,
+            ))
+        }
+    }
 }
 
 /// The surfel's global sphere map (2^levels texels per side) of its outgoing radiance on the

@@ -2,6 +2,7 @@
 
 pub mod bsdf_operator;
 pub mod iterate;
+pub mod view_tree;
 
 pub use bsdf_operator::BsdfOperator;
 pub use iterate::{add_bounces, BounceReport, BounceSettings};

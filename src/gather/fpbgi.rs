@@ -172,17 +172,36 @@ impl ClusterCut {
     }
 }
 
-/// The cluster cut from the active receiver at `p` on mesh `mesh` with frame `frame`, for a cluster of
-/// radius `radius`, with far threshold `far_eps` (spec §3.3).
+/// The receivers a cluster cut serves.
+#[derive(Clone, Copy, Debug)]
+pub struct ClusterReceivers {
+    /// The active receiver's position, mesh and frame.
+    pub p: Vec3,
+    pub mesh: u32,
+    pub frame: Frame,
+    /// The largest distance from the active receiver to a member.
+    pub radius: f32,
+    /// For members on one surface with hemispherical buffers: how far their planes may turn
+    /// from the active's (the sine of the angle; 0 for members in the active's plane). Far nodes whose bounding sphere comes that near the active's plane are opened
+    /// (see [`splat_cut`]'s nodes straddling a receiver's plane). `None`: no plane.
+    pub plane_slope: Option<f32>,
+}
+
+/// The cluster cut for `receivers`, with far threshold `far_eps`, into an `n × n` spherical
+/// buffer (spec §3.3).
 pub fn cluster_cut(
     senders: &Senders,
-    p: Vec3,
-    mesh: u32,
-    frame: Frame,
-    radius: f32,
+    receivers: &ClusterReceivers,
     far_eps: f32,
     n: u32,
 ) -> ClusterCut {
+    let ClusterReceivers {
+        p,
+        mesh,
+        frame,
+        radius,
+        plane_slope,
+    } = *receivers;
     let mut buffer = Microbuffer::new(n, true, frame);
     let mut near = Vec::new();
     let mut stats = CutStats::default();
@@ -206,6 +225,20 @@ pub fn cluster_cut(
         };
         if !(d > 0.0) || radius > eps * d || senders.needs_leaves(j, mesh) {
             near.push(j);
+            continue;
+        }
+        // A far node that comes near the members' planes is opened as a member's traversal
+        // would open it, and a planar one in the active's plane is their own surface.
+        // Members' planes turn at most `slope` from the active's, about points within
+        // `radius` of it: a member sees the node's centre that much higher or lower.
+        let straddles = plane_slope
+            .is_some_and(|slope| frame.n.dot(v).abs() < node.radius + slope * (d + radius));
+        if straddles {
+            if node.is_leaf() {
+                near.push(j);
+            } else if !node.holds_plane_of(p, frame.n) {
+                stack.extend(node.children.into_iter().filter(|&c| c != NONE));
+            }
             continue;
         }
         // A closed mesh seen from outside shows only its front faces (see splat_cut).
@@ -278,20 +311,28 @@ pub fn member_buffer(
                 1.0
             }
         };
-        let (l, cl, a) = if dr <= dc {
+        let (cover_r, cover_c) = (mb.coverage[k], shared.coverage[c]);
+        let (l, cl, a, cover) = if dr <= dc {
             let f = fill(1.0 - ar, ac);
             (
                 lr + lc * f,
                 mb.cos_radiance[k] + lc * (cos * f),
                 ar + ac * f,
+                cover_r + cover_c * f,
             )
         } else {
             let f = fill(1.0 - ac, ar);
-            (lc + lr * f, lc * cos + mb.cos_radiance[k] * f, ac + ar * f)
+            (
+                lc + lr * f,
+                lc * cos + mb.cos_radiance[k] * f,
+                ac + ar * f,
+                cover_c + cover_r * f,
+            )
         };
         mb.radiance[k] = l;
         mb.cos_radiance[k] = cl;
         mb.alpha[k] = a;
+        mb.coverage[k] = cover;
         mb.depth[k] = dr.min(dc);
     }
     stats

@@ -128,7 +128,7 @@ pub struct Microbuffer {
     pub alpha: Vec<f32>,
     /// After [`Microbuffer::resolve`]: per pixel, the coverage its radiance was summed over
     /// (up to [`MAX_LAYER_COVER`]; `alpha` is this clamped to 1).
-    cover: Vec<f32>,
+    pub coverage: Vec<f32>,
     pending: Vec<Splat>,
     /// Cells still to visit while splatting (kept to save allocations).
     scratch: Vec<u32>,
@@ -242,7 +242,7 @@ impl Microbuffer {
             cos_radiance: vec![Rgb::ZERO; count],
             depth: vec![f32::INFINITY; count],
             alpha: vec![0.0; count],
-            cover: vec![0.0; count],
+            coverage: vec![0.0; count],
             pending: Vec::new(),
             scratch: Vec::new(),
             order: Vec::new(),
@@ -265,7 +265,7 @@ impl Microbuffer {
             }
             self.depth.resize(count, f32::INFINITY);
             self.depth.truncate(count);
-            for v in [&mut self.alpha, &mut self.cover] {
+            for v in [&mut self.alpha, &mut self.coverage] {
                 v.resize(count, 0.0);
                 v.truncate(count);
             }
@@ -369,7 +369,7 @@ impl Microbuffer {
                 self.cos_radiance.push(Rgb::ZERO);
                 self.depth.push(f32::INFINITY);
                 self.alpha.push(0.0);
-                self.cover.push(0.0);
+                self.coverage.push(0.0);
             }
             self.cells.push(cell);
         }
@@ -518,7 +518,7 @@ impl Microbuffer {
         self.radiance.fill(Rgb::ZERO);
         self.cos_radiance.fill(Rgb::ZERO);
         self.alpha.fill(0.0);
-        self.cover.fill(0.0);
+        self.coverage.fill(0.0);
         self.depth.fill(f32::INFINITY);
         let splats = std::mem::take(&mut self.pending);
         let order = self.order_by_pixel_and_depth(&splats);
@@ -572,7 +572,7 @@ impl Microbuffer {
             self.radiance[k] = sum;
             self.cos_radiance[k] = cos_sum;
             self.alpha[k] = 1.0 - open;
-            self.cover[k] = covered;
+            self.coverage[k] = covered;
         }
         self.order = order;
         self.pending = splats;
@@ -621,7 +621,7 @@ impl Microbuffer {
     /// would be passed on to every further bounce.
     pub fn close_gaps(&mut self, closed: impl Fn(usize) -> bool) {
         for k in 0..self.pixels.len() {
-            let c = self.cover[k];
+            let c = self.coverage[k];
             if c > 0.0 && closed(k) {
                 let l = self.radiance[k] / c;
                 self.fill_pixel(k, l);
@@ -636,7 +636,7 @@ impl Microbuffer {
         self.radiance[k] = l;
         self.cos_radiance[k] = l * (px.dir.z.abs() * px.cos_weight);
         self.alpha[k] = 1.0;
-        self.cover[k] = 1.0;
+        self.coverage[k] = 1.0;
     }
 
     /// Set every pixel to a uniform, fully covering radiance `l` (a sky).

@@ -19,7 +19,7 @@ pub mod primary;
 
 use crate::bake::store::BakedCache;
 use crate::error::{Error, Result};
-use crate::gather::fpbgi::{cluster, cluster_cut, member_buffer};
+use crate::gather::fpbgi::{cluster, cluster_cut, member_buffer, ClusterReceivers};
 use crate::gather::{splat_cut, CutStats, Microbuffer, Senders};
 use crate::geometry::frame::Frame;
 use crate::image::Image;
@@ -435,15 +435,14 @@ fn gather_tile(
         stats.clusters = clusters.len() as u64;
         for c in &clusters {
             let active = clustered[c.active as usize];
-            let mut cut = cluster_cut(
-                senders,
-                active.p,
-                active.mesh,
-                active.frame,
-                c.radius,
-                settings.far_eps,
-                settings.mb_size,
-            );
+            let receivers = ClusterReceivers {
+                p: active.p,
+                mesh: active.mesh,
+                frame: active.frame,
+                radius: c.radius,
+                plane_slope: None,
+            };
+            let mut cut = cluster_cut(senders, &receivers, settings.far_eps, settings.mb_size);
             stats.cluster_cut += cut.stats;
             for &m in &c.members {
                 let r = clustered[m as usize];
