@@ -53,7 +53,7 @@ fn depth3() -> FinalSettings {
 }
 
 /// Measured at 128² (draft cache of 20 000 surfels, default settings), relMSE / MSE:
-/// cbox-diffuse 2.0e-4 / 4.6e-5, cbox-rough 3.2e-4 / 4.8e-5, cbox-glossy 5.7e-4 / 5.9e-5.
+/// cbox-diffuse 2.0e-4 / 4.6e-5, cbox-rough 3.4e-4 / 4.9e-5, cbox-glossy 7.1e-4 / 6.7e-5.
 /// The bounds leave 1.6–2× on the relMSE and 2× on the MSE, which a few edge pixels of the
 /// light (radiance 18 against 0) dominate: a leak of one pixel row of the ceiling above the
 /// emitter cost +60 % relMSE, and a jittered instead of a (0, 2) edge pattern 3× the MSE.

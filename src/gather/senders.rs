@@ -345,8 +345,8 @@ impl Senders {
         let projected = self.exact_projected(node, w).unwrap_or(mapped);
         let n_dot = node.area_normal.dot(w);
         let (front, back) = (0.5 * (projected + n_dot), 0.5 * (projected - n_dot));
-        // I and P share the tree's texel grid, sampled at the texel centres; where the
-        // normals allow, P at the centre is exact.
+        // I's cosine and P are sampled at the centres of P's texels (see `intensity_map`);
+        // where the normals allow, P at the centre is exact.
         let intensity = |p: Vec2| {
             let mut i = self.intensity[j as usize].eval(p.x, p.y);
             if let Some(e) = &self.emitted[j as usize] {
