@@ -8,16 +8,21 @@
 //! surfel tree instead of k-means as the clustering:
 //!
 //! - The receiver groups are the largest nodes of the surfel tree with at most
-//!   [`GROUP_SURFELS`] surfels, all on one mesh and with normals within [`GROUP_CONE`] of
-//!   their axis (a leaf is a group of one).
+//!   [`GROUP_SURFELS`] surfels, all on one mesh and flat (normals within [`GROUP_CONE`] of
+//!   their axis; a leaf is a group of one). Members then share one frame, and the shared
+//!   buffer's lookup along their pixels is built once per group: groups on curved surfaces
+//!   (normals within 10°) made cbox-glossy's bounces 1.2× slower than the per-surfel
+//!   traversal, every member on its glass sphere building its own.
 //! - A group shares one cut of the far senders, those whose view solid angle of the group is
 //!   small (r_V/d ≤ [`VIEW_EPS`], π r_V²/d² ≤ 0.031 sr), splatted into one spherical buffer
 //!   around its active member (the one nearest the node's centre), as the spec's "entry
 //!   list" of the receiver node. The thesis's 0.005 sr (ε = 0.04) shared almost nothing in a
 //!   Cornell box of 20 000 surfels (1.02×, every sender within 1.25 of a group of radius
-//!   0.05 is near); ε = 0.1, the final render's FPBGI threshold, gives 1.08–1.32× per bounce
-//!   at 20 000–80 000 surfels, the bounce light within 0.5 % of the per-surfel traversal's on
-//!   average (2–3 % RMS per surfel) and depth-8 renders unchanged to 0.2 % in relMSE.
+//!   0.05 is near); ε = 0.1, the final render's FPBGI threshold, keeps the bounce light
+//!   within 0.5 % of the per-surfel traversal's on average (1–3 % RMS per surfel) and
+//!   depth-8 renders within 0.2 % in relMSE. The speed-up is small here (1.0–1.15× per
+//!   bounce at 20 000 surfels, see docs/bounces.md): in a Cornell box the near field is most
+//!   of a surfel's splats.
 //! - Each member refines the near senders into its own buffer and composites the shared one
 //!   along its pixels' directions ([`member_buffer`]); senders that come near the members'
 //!   planes are left to the members, whose traversal opens them (see [`splat_cut`]).
@@ -31,8 +36,8 @@ use crate::bake::tree::{SurfelTree, NONE};
 /// The most surfels in one receiver group.
 pub const GROUP_SURFELS: u32 = 32;
 
-/// The widest normal cone (radians) of a receiver group: 10°.
-pub const GROUP_CONE: f32 = 0.1745;
+/// The widest normal cone (radians) of a receiver group: flat to rounding.
+pub const GROUP_CONE: f32 = 1e-3;
 
 /// The far threshold r_V/d of a receiver group's shared senders (see the module docs).
 pub const VIEW_EPS: f32 = 0.1;
