@@ -351,18 +351,21 @@ pub fn back_sided_meshes(scene: &Scene, solid: &[bool]) -> Vec<bool> {
 /// towards the front hemisphere (see [`solid_meshes`]).
 ///
 /// The cosine is taken at the centre of the projected-area map's texel
-/// ([`PROJECTED_AREA_LEVELS`]) that holds each texel, L at the texel's own centre. A node's radiance is I/P texel by
-/// texel, and with both on one cosine grid it is a mean of its surfels' radiance, exactly:
-/// a 16² glossy I over the 8² P strayed by 3 % in a closed room, and sampling P as finely as
-/// I tripled a glossy cache (P and the cosine lobes of diffuse nodes at 64²).
+/// ([`PROJECTED_AREA_LEVELS`]) that holds each texel, L at the texel's own centre. A node's
+/// radiance is I/P texel by texel, and with both on one cosine grid it is a mean of its
+/// surfels' radiance, exactly: a 16² glossy I over the 8² P strayed by 3 % in a closed room,
+/// and sampling P as finely as I tripled a glossy cache (P and the cosine lobes of diffuse
+/// nodes at 64²).
 pub fn intensity_map(s: &Surfel, r: &SurfelRadiance, levels: u32, back: bool) -> Haar2d<Rgb> {
-    let p_levels = PROJECTED_AREA_LEVELS;
     let (own, radiance): (u32, Vec<Rgb>) = match r {
         // Diffuse radiance is constant, so its intensity is a cosine lobe on P's grid.
-        SurfelRadiance::Rgb(c) => (p_levels, vec![*c; 1 << (2 * p_levels)]),
+        SurfelRadiance::Rgb(c) => (
+            PROJECTED_AREA_LEVELS,
+            vec![*c; 1 << (2 * PROJECTED_AREA_LEVELS)],
+        ),
         SurfelRadiance::Map(m) => (m.levels(), m.to_dense().inverse()),
     };
-    let coarse = own.min(p_levels);
+    let coarse = own.min(PROJECTED_AREA_LEVELS);
     let (side, shift) = (1usize << own, own - coarse);
     let centres = texel_directions(coarse);
     let texels: Vec<Rgb> = radiance
