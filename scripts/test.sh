@@ -13,4 +13,10 @@ if [ "$(id -u)" -ne 0 ] && command -v sudo >/dev/null 2>&1; then SUDO="sudo"; fi
 if ! command -v cc >/dev/null 2>&1; then
   $SUDO apt-get update -qq && $SUDO apt-get install -y -qq build-essential
 fi
+# Vulkan for the previewer's tests: the loader, lavapipe (Mesa's software Vulkan) and the
+# validation layer. Installed only when missing; the tests fail without them.
+VULKAN_PACKAGES="libvulkan1 mesa-vulkan-drivers vulkan-validationlayers"
+if ! dpkg -s $VULKAN_PACKAGES >/dev/null 2>&1; then
+  $SUDO apt-get update -qq && $SUDO apt-get install -y -qq $VULKAN_PACKAGES
+fi
 cargo test --release --workspace --all-targets "$@"

@@ -35,6 +35,7 @@ pub mod gather;
 pub mod geometry;
 pub mod haar;
 pub mod image;
+pub mod preview;
 pub mod reference;
 pub mod render;
 pub mod sampler;
