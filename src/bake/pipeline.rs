@@ -9,6 +9,7 @@ use super::coding::{encode, CodedTree};
 use super::direct::DirectLight;
 use super::lightcuts::LightTree;
 use super::plan::{map_levels, Plan};
+use super::store::{BACK_SIDED, CLOSED, SOLID};
 use super::surfels::{sample_surfels, Surfel};
 use super::tree::SurfelTree;
 use crate::accel::Accel;
@@ -97,6 +98,7 @@ impl BakeSettings {
                 "max": self.bounces.max,
                 "tolerance": self.bounces.tolerance,
                 "operator_tau": self.bounces.operator_tau,
+                "view_tree": self.bounces.view_tree,
             },
         })
     }
@@ -119,13 +121,8 @@ pub struct Baked {
     pub radiance: Vec<SurfelRadiance>,
     /// The emitted radiance (front face) included in each surfel's `radiance`.
     pub emitted: Vec<Rgb>,
-    /// Per mesh: whether it bounds a solid (see [`solid_meshes`]).
-    pub solid: Vec<bool>,
-    /// Per mesh: whether its surfels' intensity includes light sent from their back (see
-    /// [`back_sided_meshes`]).
-    pub back_sided: Vec<bool>,
-    /// Per mesh: whether it is closed ([`crate::scene::Mesh::is_closed`]).
-    pub closed: Vec<bool>,
+    /// Per mesh: its surfels' flags ([`mesh_flags`]).
+    pub mesh_flags: Vec<u32>,
     pub tree: SurfelTree,
     /// Radiant intensity I(ω) of every node (RGB).
     pub coded: CodedTree<Rgb>,
@@ -225,12 +222,11 @@ pub fn bake(scene: &Scene, settings: &BakeSettings, progress: Progress) -> Resul
         .fold(plan.map_levels, u32::max);
     plan.map_levels = levels;
     plan.json["map_resolution"] = (1u32 << levels).into();
-    let solid = solid_meshes(scene);
-    let back_sided = back_sided_meshes(scene, &solid);
-    let closed = scene.meshes.iter().map(|m| m.is_closed()).collect();
+    let mesh_flags = mesh_flags(scene);
     let leaf = |i: u32| {
         let s = &surfels[i as usize];
-        intensity_map(s, &radiance[i as usize], levels, !solid[s.mesh as usize])
+        let back = mesh_flags[s.mesh as usize] & SOLID == 0;
+        intensity_map(s, &radiance[i as usize], levels, back)
     };
     progress("coding", 0.0);
     let coded = encode(&tree, &leaf, eps, settings.tau);
@@ -245,9 +241,7 @@ pub fn bake(scene: &Scene, settings: &BakeSettings, progress: Progress) -> Resul
         surfels,
         radiance,
         emitted,
-        solid,
-        back_sided,
-        closed,
+        mesh_flags,
         tree,
         coded,
         projected,
@@ -312,43 +306,39 @@ fn surfel_radiance(
     (radiance, emitted)
 }
 
-/// Per mesh: whether it bounds a solid (a `roughdielectric`: Mitsuba's dielectric is the
-/// interface of a solid). Light a surfel of a solid sends into it can reach only the solid's
-/// own surface before it crosses the surface again, so the tree, which everyone sees, holds
-/// only what such surfels send outwards (their maps keep both sides for their own solid).
-pub fn solid_meshes(scene: &Scene) -> Vec<bool> {
+/// Per mesh, the flags of its surfels' records ([`super::store::SurfelRecord::flags`]), from
+/// its BSDF at texture coordinate (0, 0) and its geometry:
+/// - [`SOLID`]: it bounds a solid (a `roughdielectric`: Mitsuba's dielectric is the interface
+///   of a solid). Light a surfel of a solid sends into it can reach only the solid's own
+///   surface before it crosses the surface again, so the tree, which everyone sees, holds
+///   only what such surfels send outwards (their maps keep both sides for their own solid).
+/// - [`BACK_SIDED`]: its surfels send light from their back as well as their front into the
+///   tree's intensity (thin sheets: two-sided BSDFs that bound no solid; see
+///   [`intensity_map`]). The other surfels' intensity is front-only, so a node of them has
+///   radiance I/P⁺ with P⁺ its front projected area.
+/// - [`CLOSED`]: the mesh is closed ([`crate::scene::Mesh::is_closed`]).
+pub fn mesh_flags(scene: &Scene) -> Vec<u32> {
     scene
         .meshes
         .iter()
         .map(|m| {
-            matches!(
-                scene.materials[m.material].bsdf_at(&scene.textures, glam::Vec2::ZERO),
-                Bsdf::Dielectric(_)
-            )
-        })
-        .collect()
-}
-
-/// Per mesh: whether its surfels send light from their back as well as their front into the
-/// tree's intensity (thin sheets: two-sided BSDFs that bound no solid; see [`intensity_map`]).
-/// The other surfels' intensity is front-only, so a node of them has radiance I/P⁺ with P⁺
-/// its front projected area.
-pub fn back_sided_meshes(scene: &Scene, solid: &[bool]) -> Vec<bool> {
-    scene
-        .meshes
-        .iter()
-        .zip(solid)
-        .map(|(m, &solid)| {
-            !solid
-                && scene.materials[m.material]
-                    .bsdf_at(&scene.textures, glam::Vec2::ZERO)
-                    .is_two_sided()
+            let bsdf = scene.materials[m.material].bsdf_at(&scene.textures, glam::Vec2::ZERO);
+            let solid = matches!(bsdf, Bsdf::Dielectric(_));
+            let back_sided = !solid && bsdf.is_two_sided();
+            [
+                (solid, SOLID),
+                (back_sided, BACK_SIDED),
+                (m.is_closed(), CLOSED),
+            ]
+            .iter()
+            .filter(|(set, _)| *set)
+            .fold(0, |flags, (_, bit)| flags | bit)
         })
         .collect()
 }
 
 /// A surfel's radiant intensity A |n·ω| L(ω) as a map at `levels`; with `back` false, only
-/// towards the front hemisphere (see [`solid_meshes`]).
+/// towards the front hemisphere (see [`mesh_flags`]).
 ///
 /// The cosine is taken at the centre of the projected-area map's texel
 /// ([`PROJECTED_AREA_LEVELS`]) that holds each texel, L at the texel's own centre. A node's

@@ -41,8 +41,6 @@ pub struct Plan {
 }
 
 impl Plan {
-    /// Analyse `scene` (the materials its meshes use). Materials are classified by their BSDF at texture coordinate (0, 0);
-    /// each surfel then takes the resolution of its own BSDF, so textured roughness is honoured.
     /// Record the bounce settings: `bounces` 0 leaves indirect light out.
     pub fn note_bounces(&mut self, bounces: &crate::bounce::BounceSettings) {
         if bounces.max == 0 {
@@ -62,6 +60,9 @@ impl Plan {
         }
     }
 
+    /// Analyse `scene` (the materials its meshes use). Materials are classified by their BSDF
+    /// at texture coordinate (0, 0); each surfel then takes the resolution of its own BSDF, so
+    /// textured roughness is honoured.
     pub fn new(scene: &Scene) -> Plan {
         let mut finest = 3;
         let mut transmission = false;

@@ -34,7 +34,7 @@ pub struct SurfelRecord {
     /// reflected light from emission, which the final render lights directly.
     pub emitted: [f32; 3],
     /// Bit 0 ([`SOLID`]): the surfel bounds a solid, whose inward light only the solid's own
-    /// surface sees (see [`crate::bake::pipeline::solid_meshes`]). Bit 1: [`BACK_SIDED`]; bit 2:
+    /// surface sees (see [`crate::bake::pipeline::mesh_flags`]). Bit 1: [`BACK_SIDED`]; bit 2:
     /// [`CLOSED`].
     pub flags: u32,
 }
@@ -43,7 +43,7 @@ pub struct SurfelRecord {
 pub const SOLID: u32 = 1;
 
 /// [`SurfelRecord::flags`]: the surfel's intensity includes what it sends from its back (see
-/// [`crate::bake::pipeline::back_sided_meshes`]).
+/// [`crate::bake::pipeline::mesh_flags`]).
 pub const BACK_SIDED: u32 = 2;
 
 /// [`SurfelRecord::flags`]: the surfel lies on a closed mesh, whose back faces a receiver
@@ -205,14 +205,7 @@ impl Sections {
                 rgb: rgb.to_array(),
                 map,
                 emitted: e.to_array(),
-                flags: [
-                    (&baked.solid, SOLID),
-                    (&baked.back_sided, BACK_SIDED),
-                    (&baked.closed, CLOSED),
-                ]
-                .iter()
-                .filter(|(meshes, _)| meshes[s.mesh as usize])
-                .fold(0, |flags, (_, bit)| flags | bit),
+                flags: baked.mesh_flags[s.mesh as usize],
             });
         }
         let plan = json!({

@@ -16,8 +16,8 @@
 //! 1, would need hundreds of bounces).
 //!
 //! Receivers gather per group of the view tree (spec §8.3, [`super::view_tree`]): nearby
-//! surfels share one cut of the far senders. Every pixel of a bounce's microbuffer whose centre ray hits the scene is normalised to full
-//! coverage ([`Microbuffer::close_gaps`]): the splats' coverage is right on average but not
+//! surfels share one cut of the far senders. Every pixel of a bounce's microbuffer whose
+//! centre ray hits the scene is normalised to full coverage ([`Microbuffer::close_gaps`]): the splats' coverage is right on average but not
 //! pixel by pixel, and a bounce that lost a few percent of coverage would pass that loss on
 //! to every further bounce (inside a closed room of radiance 1 the gather fell 3 % short).
 //! With that, the senders' exact radiance (see [`Senders::seen`]) and the operator's exact
@@ -30,7 +30,7 @@ use crate::accel::Accel;
 use crate::bake::coding::{encode, CodedTree};
 use crate::bake::pipeline::{intensity_map, surfel_bsdf, Baked, Progress, SurfelRadiance};
 use crate::bake::plan::map_levels;
-use crate::bake::store::BakedCache;
+use crate::bake::store::{BakedCache, SOLID};
 use crate::bake::surfels::Surfel;
 use crate::bsdf::Bsdf;
 use crate::error::Result;
@@ -268,12 +268,8 @@ fn coded_for(baked: &Baked) -> CodedTree<Rgb> {
     let levels = baked.plan.map_levels;
     let leaf = |i: u32| {
         let s = &baked.surfels[i as usize];
-        intensity_map(
-            s,
-            &baked.radiance[i as usize],
-            levels,
-            !baked.solid[s.mesh as usize],
-        )
+        let back = baked.mesh_flags[s.mesh as usize] & SOLID == 0;
+        intensity_map(s, &baked.radiance[i as usize], levels, back)
     };
     encode(
         &baked.tree,
@@ -304,7 +300,7 @@ fn senders_of(baked: &mut Baked, emit: Option<Vec<SurfelRadiance>>) -> Result<Se
 }
 
 /// What the ray through the centre of each pixel `k` of `mb` for which `wanted(k)` holds,
-/// from surfel `s`, hits first: its distance, mesh and geometric normal (`None` for a miss
+/// from surfel `s`, hits first: the point, its mesh and geometric normal (`None` for a miss
 /// or a pixel not wanted).
 pub fn pixel_hits(
     accel: &Accel,
@@ -402,6 +398,7 @@ fn gather_bounce(
             .collect()
     };
     let side = |i: u32| ops[i as usize].as_ref().map_or(DIFFUSE_BUFFER, |op| op.n);
+    let tau = baked.settings.tau;
     let gathered: Vec<Vec<(u32, SurfelRadiance)>> = groups
         .par_iter()
         .map_init(Vec::new, |stack, group| {
@@ -410,12 +407,12 @@ fn gather_bounce(
                 let spherical = bsdfs[i as usize].is_two_sided();
                 Microbuffer::new(side(i), spherical, Frame::from_normal(s.n))
             };
-            let outgoing = |i: u32, mb: &mut Microbuffer| {
+            let outgoing = |i: u32, mut mb: Microbuffer| {
                 let s = &baked.surfels[i as usize];
-                close_buffer(senders, (accel, scene), s, mb);
+                close_buffer(senders, (accel, scene), s, &mut mb);
                 (
                     i,
-                    surfel_outgoing(mb, &bsdfs[i as usize], &ops[i as usize], baked),
+                    surfel_outgoing(&mb, &bsdfs[i as usize], &ops[i as usize], tau),
                 )
             };
             if let [i] = group.members[..] {
@@ -423,7 +420,7 @@ fn gather_bounce(
                 let mut mb = buffer(i);
                 splat_cut(senders, s.p, s.mesh, &mut mb, &[0], stack);
                 mb.resolve();
-                return vec![outgoing(i, &mut mb)];
+                return vec![outgoing(i, mb)];
             }
             let a = &baked.surfels[group.active as usize];
             let spherical = bsdfs[group.active as usize].is_two_sided();
@@ -449,7 +446,7 @@ fn gather_bounce(
                     let s = &baked.surfels[i as usize];
                     let mut mb = buffer(i);
                     member_buffer(senders, &mut cut, s.p, s.mesh, &mut mb, stack);
-                    outgoing(i, &mut mb)
+                    outgoing(i, mb)
                 })
                 .collect()
         })
@@ -467,7 +464,7 @@ fn surfel_outgoing(
     mb: &Microbuffer,
     bsdf: &Bsdf,
     op: &Option<Arc<BsdfOperator>>,
-    baked: &Baked,
+    tau: f32,
 ) -> SurfelRadiance {
     match op {
         None => SurfelRadiance::Rgb(mb.convolve(bsdf, Vec3::Z)),
@@ -478,7 +475,7 @@ fn surfel_outgoing(
                 op,
                 mb.frame,
                 map_levels(bsdf).unwrap_or(3),
-                baked.settings.tau,
+                tau,
             ))
         }
     }

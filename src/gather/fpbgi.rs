@@ -182,8 +182,9 @@ pub struct ClusterReceivers {
     /// The largest distance from the active receiver to a member.
     pub radius: f32,
     /// For members on one surface with hemispherical buffers: how far their planes may turn
-    /// from the active's (the sine of the angle; 0 for members in the active's plane). Far nodes whose bounding sphere comes that near the active's plane are opened
-    /// (see [`splat_cut`]'s nodes straddling a receiver's plane). `None`: no plane.
+    /// from the active's (the sine of the angle; 0 for members in the active's plane). Far
+    /// nodes whose bounding sphere comes that near the active's plane are opened (see
+    /// [`splat_cut`]'s nodes straddling a receiver's plane). `None`: no plane.
     pub plane_slope: Option<f32>,
 }
 

@@ -114,6 +114,85 @@ pub struct Seen {
     pub projected: f32,
 }
 
+/// What a node keeps of the surfels below it, summed bottom-up (see [`SenderNode`]).
+#[derive(Clone, Copy)]
+struct Below {
+    area_normal: Vec3,
+    directional_area: f32,
+    radiance_normal: [Vec3; 3],
+    solid: bool,
+    back_sided: bool,
+    closed_mesh: u32,
+    slab: [f32; 2],
+}
+
+impl Default for Below {
+    fn default() -> Self {
+        Below {
+            area_normal: Vec3::ZERO,
+            directional_area: 0.0,
+            radiance_normal: [Vec3::ZERO; 3],
+            solid: false,
+            back_sided: false,
+            closed_mesh: NONE,
+            slab: [f32::INFINITY, f32::NEG_INFINITY],
+        }
+    }
+}
+
+impl Below {
+    /// A leaf's surfel `s` (`leaf` its node).
+    fn of_surfel(s: &SurfelRecord, leaf: SenderNode) -> Below {
+        let area_normal = Vec3::from(s.n) * s.area;
+        let reflected = (Vec3::from(s.rgb) - Vec3::from(s.emitted)).max(Vec3::ZERO);
+        let h = leaf.axis.dot(Vec3::from(s.p));
+        Below {
+            area_normal,
+            directional_area: if s.map != NO_MAP { s.area } else { 0.0 },
+            radiance_normal: [reflected.x, reflected.y, reflected.z].map(|l| area_normal * l),
+            solid: s.flags & SOLID != 0,
+            back_sided: s.flags & BACK_SIDED != 0,
+            closed_mesh: if s.flags & CLOSED != 0 { s.mesh } else { NONE },
+            slab: [h, h],
+        }
+    }
+
+    /// Child `ch` (whose directional area is `directional_area`) as its `parent` sums it: its
+    /// slab along the parent's axis is its own, widened by how far its axis turns from the
+    /// parent's over its radius.
+    fn of_child(ch: &SenderNode, directional_area: f32, parent: SenderNode) -> Below {
+        let shift = parent.axis.dot(ch.center) - ch.axis.dot(ch.center);
+        let widen = (parent.axis - ch.axis).length() * ch.radius;
+        Below {
+            area_normal: ch.area_normal,
+            directional_area,
+            radiance_normal: ch.radiance_normal,
+            solid: ch.solid,
+            back_sided: ch.back_sided,
+            closed_mesh: ch.closed_mesh,
+            slab: [ch.slab[0] + shift - widen, ch.slab[1] + shift + widen],
+        }
+    }
+
+    fn join(a: Below, b: Below) -> Below {
+        let [ar, ag, ab] = a.radiance_normal;
+        let [br, bg, bb] = b.radiance_normal;
+        Below {
+            area_normal: a.area_normal + b.area_normal,
+            directional_area: a.directional_area + b.directional_area,
+            radiance_normal: [ar + br, ag + bg, ab + bb],
+            solid: a.solid || b.solid,
+            back_sided: a.back_sided || b.back_sided,
+            closed_mesh: if a.closed_mesh == b.closed_mesh {
+                a.closed_mesh
+            } else {
+                NONE
+            },
+            slab: [a.slab[0].min(b.slab[0]), a.slab[1].max(b.slab[1])],
+        }
+    }
+}
+
 impl Senders {
     /// Load the tree of `cache`, rebuilding every inner node's G.
     pub fn from_cache(cache: &BakedCache) -> Result<Senders, CacheError> {
@@ -158,108 +237,41 @@ impl Senders {
             });
         }
         let mut nodes = nodes;
-        // Slabs bottom-up: a child's extent along the parent's axis is its own, widened by
-        // how far its axis turns from the parent's over its radius.
+        // Children come after their parents: what a node keeps of the surfels below is summed
+        // bottom-up (the directional area as an area, turned into a fraction further down).
+        let mut directional_area = vec![0.0f32; nodes.len()];
         for j in (0..nodes.len()).rev() {
             let node = nodes[j];
-            if node.cone_angle > PLANAR_CONE {
-                continue;
-            }
-            nodes[j].slab = if node.is_leaf() {
-                let h = node
-                    .axis
-                    .dot(Vec3::from(cache.surfels[node.surfel as usize].p));
-                [h, h]
+            let below = if node.is_leaf() {
+                Below::of_surfel(&cache.surfels[node.surfel as usize], node)
             } else {
                 node.children
                     .iter()
                     .filter(|&&c| (c as usize) < nodes.len() && c as usize > j)
-                    .fold([f32::INFINITY, f32::NEG_INFINITY], |[lo, hi], &c| {
-                        let ch = &nodes[c as usize];
-                        let shift = node.axis.dot(ch.center) - ch.axis.dot(ch.center);
-                        let widen = (node.axis - ch.axis).length() * ch.radius;
-                        [
-                            lo.min(ch.slab[0] + shift - widen),
-                            hi.max(ch.slab[1] + shift + widen),
-                        ]
+                    .map(|&c| {
+                        Below::of_child(&nodes[c as usize], directional_area[c as usize], node)
                     })
+                    .reduce(Below::join)
+                    .unwrap_or_default()
             };
-        }
-        // Children come after their parents: sum Σ A n and the directional area bottom-up
-        // (the latter kept as an area, then turned into a fraction).
-        let mut directional_area = vec![0.0f32; nodes.len()];
-        for j in (0..nodes.len()).rev() {
-            let n = nodes[j];
+            let n = &mut nodes[j];
             (
-                nodes[j].area_normal,
-                directional_area[j],
-                nodes[j].radiance_normal,
-            ) = if n.is_leaf() {
-                let s = &cache.surfels[n.surfel as usize];
-                let d = if s.map != NO_MAP { s.area } else { 0.0 };
-                let an = Vec3::from(s.n) * s.area;
-                let reflected = (Vec3::from(s.rgb) - Vec3::from(s.emitted)).max(Vec3::ZERO);
-                (
-                    an,
-                    d,
-                    [an * reflected.x, an * reflected.y, an * reflected.z],
-                )
-            } else {
-                n.children
-                    .iter()
-                    .filter(|&&c| (c as usize) < nodes.len() && c as usize > j)
-                    .fold(
-                        (Vec3::ZERO, 0.0, [Vec3::ZERO; 3]),
-                        |(a, d, [r, g, b]), &c| {
-                            let ch = &nodes[c as usize];
-                            let [cr, cg, cb] = ch.radiance_normal;
-                            (
-                                a + ch.area_normal,
-                                d + directional_area[c as usize],
-                                [r + cr, g + cg, b + cb],
-                            )
-                        },
-                    )
-            };
-        }
-        for j in (0..nodes.len()).rev() {
-            let below = |flag: u32| {
-                if nodes[j].is_leaf() {
-                    cache.surfels[nodes[j].surfel as usize].flags & flag != 0
-                } else {
-                    nodes[j].children.iter().any(|&c| {
-                        let c = c as usize;
-                        c < nodes.len()
-                            && c > j
-                            && if flag == SOLID {
-                                nodes[c].solid
-                            } else {
-                                nodes[c].back_sided
-                            }
-                    })
-                }
-            };
-            (nodes[j].solid, nodes[j].back_sided) = (below(SOLID), below(BACK_SIDED));
-            nodes[j].closed_mesh = if nodes[j].is_leaf() {
-                let s = &cache.surfels[nodes[j].surfel as usize];
-                if s.flags & CLOSED != 0 {
-                    s.mesh
-                } else {
-                    NONE
-                }
-            } else {
-                let mut below = nodes[j]
-                    .children
-                    .iter()
-                    .filter(|&&c| (c as usize) < nodes.len() && c as usize > j)
-                    .map(|&c| nodes[c as usize].closed_mesh);
-                let first = below.next().unwrap_or(NONE);
-                if below.all(|m| m == first) {
-                    first
-                } else {
-                    NONE
-                }
-            };
+                n.area_normal,
+                n.radiance_normal,
+                n.solid,
+                n.back_sided,
+                n.closed_mesh,
+            ) = (
+                below.area_normal,
+                below.radiance_normal,
+                below.solid,
+                below.back_sided,
+                below.closed_mesh,
+            );
+            if node.cone_angle <= PLANAR_CONE {
+                n.slab = below.slab;
+            }
+            directional_area[j] = below.directional_area;
         }
         let mut solid_meshes = Vec::new();
         let mut closed_boxes: Vec<Option<[Vec3; 2]>> = Vec::new();
@@ -364,6 +376,7 @@ impl Senders {
                 projected: 0.0,
             };
         }
+        let centre = texel_centre(p, levels);
         if !node.back_sided && (front >= back || back_hidden) {
             // Surfels that send light from their front only (all but thin sheets): the
             // radiance is I over the front projected area P⁺ = (P + N·ω)/2 (cos⁺ = (|cos| +
@@ -371,7 +384,6 @@ impl Senders {
             // the texel straddles an edge-on band, tests/furnace.rs). Where the centre sees
             // much less of the front than ω does (a flat node seen within a texel of edge-on,
             // whose centre lies behind it), the texel tilted towards the front is read.
-            let centre = texel_centre(p, levels);
             let front_at = |p: Vec2, c: Vec3| 0.5 * (area_at(p, c) + node.area_normal.dot(c));
             let mut texel = (p, front_at(p, centre));
             if !(texel.1 >= 0.5 * front) && node.axis.dot(w) > 0.0 && node.sin_cone < 1.0 {
@@ -379,9 +391,17 @@ impl Senders {
                 texel = (q, front_at(q, c));
             }
             let (q, front_texel) = texel;
-            if front_texel > 0.0 && front_texel >= 0.5 * front {
+            let conditioned = front_texel > 0.0 && front_texel >= 0.5 * front;
+            // With the back hidden only the front shows, so where the texel's P⁺ is
+            // ill-conditioned the front area along ω itself divides I.
+            if conditioned || back_hidden {
+                let (q, denominator) = if conditioned {
+                    (q, front_texel)
+                } else {
+                    (p, front)
+                };
                 return Seen {
-                    radiance: (intensity(q) / front_texel).max(Rgb::ZERO),
+                    radiance: (intensity(q) / denominator).max(Rgb::ZERO),
                     projected: front.max(0.0),
                 };
             }
@@ -391,21 +411,7 @@ impl Senders {
         // front). Radiance from the two maps at the same texel (their quantisation cancels),
         // unless the texel straddles the node's edge-on band and its P is far below the
         // exact one; the solid angle from the exact projected area where it is known.
-        let centre = texel_centre(p, levels);
         let at_centre = area_at(p, centre);
-        if back_hidden {
-            // Only the front shows: I over its area, at ω where the texel's is ill-conditioned.
-            let front_texel = 0.5 * (at_centre + node.area_normal.dot(centre));
-            let denominator = if front_texel >= 0.5 * front {
-                front_texel
-            } else {
-                front
-            };
-            return Seen {
-                radiance: (intensity(p) / denominator).max(Rgb::ZERO),
-                projected: front,
-            };
-        }
         let denominator = if at_centre >= 0.5 * projected {
             at_centre
         } else {
@@ -449,8 +455,9 @@ impl Senders {
     pub fn faces_away(&self, j: u32, p: Vec3, margin: f32) -> bool {
         let node = &self.nodes[j as usize];
         let v = node.center - p;
+        // cos θ from sin θ: the cone is narrower than a hemisphere there.
         node.cone_angle < std::f32::consts::FRAC_PI_2
-            && node.axis.dot(v) * node.cone_angle.cos()
+            && node.axis.dot(v) * (1.0 - node.sin_cone * node.sin_cone).max(0.0).sqrt()
                 - node.axis.cross(v).length() * node.sin_cone
                 > node.radius + margin
     }

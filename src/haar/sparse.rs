@@ -120,12 +120,12 @@ impl<T: Coefficient> SparseHaar<T> {
         }
     }
 
-    /// The resolution (log2 of the map side).
     /// The mean of the function over the unit square (its scaling coefficient).
     pub fn mean(&self) -> T {
         self.scale
     }
 
+    /// The resolution (log2 of the map side).
     pub fn levels(&self) -> u32 {
         self.levels
     }
