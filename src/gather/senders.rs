@@ -540,6 +540,30 @@ impl Senders {
         (node.axis.dot(w).abs() > node.sin_cone).then(|| node.area_normal.dot(w).abs())
     }
 
+    /// Emitted radiance leaving node `j` along `w` (front faces only): a leaf's surfel's
+    /// emission, an inner node's emitted intensity over its projected area.
+    pub fn emitted_radiance(&self, j: u32, w: Vec3) -> Rgb {
+        let node = &self.nodes[j as usize];
+        if node.is_leaf() {
+            let s = &self.surfels[node.surfel as usize];
+            return if Vec3::from(s.n).dot(w) > 0.0 {
+                Vec3::from(s.emitted)
+            } else {
+                Rgb::ZERO
+            };
+        }
+        let Some(e) = &self.emitted[j as usize] else {
+            return Rgb::ZERO;
+        };
+        let area = self.projected_area(j, w);
+        if area > 0.0 {
+            let p = direction_to_square(w);
+            (e.eval(p.x, p.y) / area).max(Rgb::ZERO)
+        } else {
+            Rgb::ZERO
+        }
+    }
+
     /// Reflected radiance leaving surfel `i` along `w` (`cos` = n·w) towards a receiver on
     /// mesh `receiver_mesh` (a solid's inward light reaches only its own surface).
     pub fn surfel_radiance(&self, i: u32, w: Vec3, cos: f32, receiver_mesh: u32) -> Rgb {

@@ -45,7 +45,7 @@ pub enum VulkanError {
 const VALIDATION_LAYER: &CStr = c"VK_LAYER_KHRONOS_validation";
 
 /// A Vulkan call's result with the call's name on failure.
-fn check<T>(call: &'static str, r: Result<T, vk::Result>) -> Result<T, VulkanError> {
+pub(super) fn check<T>(call: &'static str, r: Result<T, vk::Result>) -> Result<T, VulkanError> {
     r.map_err(|result| VulkanError::Call { call, result })
 }
 

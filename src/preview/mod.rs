@@ -1,4 +1,188 @@
-//! The Vulkan previewer (DESIGN.md §8, spec §9): splatting the cache with ash, headless and in a
-//! window. Built so far: the device ([`device`]).
+//! The Vulkan previewer (DESIGN.md §8, spec §9): the cache splatted with ash, headless and in
+//! a window.
+//!
+//! - [`device`]: the Vulkan device (lavapipe where there is no GPU).
+//! - [`cut`]: the view-dependent cut of the surfel tree, and each node's radiance towards the
+//!   eye.
+//! - [`view`]: the camera as the shaders see it.
+//! - [`renderer`]: the G-buffer, splat and resolve passes.
+//!
+//! [`Preview`] ties them together: a cache (and optionally its scene) on a device, a frame per
+//! camera.
 
+pub mod cut;
 pub mod device;
+mod objects;
+pub mod renderer;
+pub mod view;
+
+use crate::bake::store::BakedCache;
+use crate::cache::CacheError;
+use crate::gather::senders::Senders;
+use crate::image::Image;
+use crate::scene::{Camera, Scene};
+use cut::{splats, view_cut, Colouring, Footprint, Splat};
+use device::{Gpu, VulkanError};
+use glam::Vec3;
+use renderer::{FrameSettings, Renderer};
+use std::sync::Arc;
+use view::View;
+
+/// What went wrong previewing a cache.
+#[derive(Debug, thiserror::Error)]
+pub enum PreviewError {
+    #[error(transparent)]
+    Vulkan(#[from] VulkanError),
+    #[error(transparent)]
+    Cache(#[from] CacheError),
+}
+
+/// What a preview frame shows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Show {
+    /// Emitters, and the light the surfaces reflect splatted from the cache.
+    Total,
+    /// The reflected light only: everything the cache holds but emission. The cache does not
+    /// keep the first bounce apart from the others, so direct light that surfaces reflect is
+    /// part of it.
+    Indirect,
+    /// The emitters only, as the eye sees them.
+    Direct,
+    /// The surfels (cut nodes) as depth-tested discs of their outgoing radiance.
+    Surfels,
+    /// Each cut node in its own colour.
+    Cut,
+}
+
+/// The default screen-space bound of the cut: nodes spanning at most this many pixels.
+pub const DEFAULT_CUT_PIXELS: f32 = 2.0;
+
+/// One drawn frame.
+pub struct Frame {
+    pub image: Image,
+    /// Nodes in the cut (splats drawn).
+    pub cut_size: usize,
+    /// Seconds spent on the cut and its radiance (CPU), and drawing (GPU, with the readback).
+    pub cut_seconds: f64,
+    pub draw_seconds: f64,
+}
+
+/// A cache on a device, ready to draw frames.
+pub struct Preview {
+    senders: Senders,
+    renderer: Renderer,
+    has_scene: bool,
+    bounds: (Vec3, Vec3),
+}
+
+impl Preview {
+    /// Load `cache` (and `scene`'s meshes, whose G-buffer the splats land on; without them,
+    /// the point-cloud view) onto `gpu` for frames of `size`.
+    pub fn new(
+        gpu: Arc<Gpu>,
+        cache: &BakedCache,
+        scene: Option<&Scene>,
+        size: (u32, u32),
+    ) -> Result<Preview, PreviewError> {
+        let senders = Senders::from_cache(cache)?;
+        let bounds = match scene {
+            Some(s) => s.bounds(),
+            None => cache
+                .surfels
+                .iter()
+                .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), s| {
+                    (lo.min(s.p.into()), hi.max(s.p.into()))
+                }),
+        };
+        Ok(Preview {
+            senders,
+            renderer: Renderer::new(gpu, size, scene)?,
+            has_scene: scene.is_some(),
+            bounds,
+        })
+    }
+
+    /// A camera that frames the cache's surfels.
+    pub fn framing_camera(&self, width: u32, height: u32) -> Option<Camera> {
+        let (lo, hi) = self.bounds;
+        (lo.cmple(hi).all()).then_some(())?;
+        Camera::framing(0.5 * (lo + hi), 0.5 * (hi - lo).length(), width, height)
+    }
+
+    /// The splats and pass settings of a frame: the cut for `camera` at `cut_pixels`, each
+    /// node coloured for `show`.
+    pub fn prepare(
+        &self,
+        camera: &Camera,
+        show: Show,
+        cut_pixels: f32,
+    ) -> (View, Vec<Splat>, FrameSettings) {
+        let view = View::new(camera.clone(), self.bounds);
+        // The cut shows as discs: splats would blend neighbouring nodes' colours.
+        let discs = !self.has_scene || matches!(show, Show::Surfels | Show::Cut);
+        let (colouring, emission, splatted) = match (show, discs) {
+            (Show::Direct, true) => (Colouring::Emitted, 0.0, 1.0),
+            (Show::Direct, false) => (Colouring::Reflected, 1.0, 0.0),
+            (Show::Indirect, _) => (Colouring::Reflected, 0.0, 1.0),
+            (Show::Cut, _) => (Colouring::NodeId, 0.0, 1.0),
+            (_, true) => (Colouring::Outgoing, 0.0, 1.0),
+            (_, false) => (Colouring::Reflected, 1.0, 1.0),
+        };
+        let cut = if splatted > 0.0 {
+            view_cut(&self.senders, &view, cut_pixels)
+        } else {
+            vec![]
+        };
+        let footprint = if discs {
+            Footprint::Disc
+        } else {
+            Footprint::Splat
+        };
+        let splats = splats(&self.senders, &view, &cut, colouring, footprint);
+        let settings = FrameSettings {
+            emission,
+            splats: splatted,
+            discs,
+        };
+        (view, splats, settings)
+    }
+
+    /// Draw prepared splats.
+    pub fn draw(
+        &mut self,
+        view: &View,
+        splats: &[Splat],
+        settings: FrameSettings,
+    ) -> Result<Image, VulkanError> {
+        self.renderer.render(view, splats, settings)
+    }
+
+    /// Prepare and draw one frame.
+    pub fn frame(
+        &mut self,
+        camera: &Camera,
+        show: Show,
+        cut_pixels: f32,
+    ) -> Result<Frame, VulkanError> {
+        let t = std::time::Instant::now();
+        let (view, splats, settings) = self.prepare(camera, show, cut_pixels);
+        let cut_seconds = t.elapsed().as_secs_f64();
+        let t = std::time::Instant::now();
+        let image = self.draw(&view, &splats, settings)?;
+        Ok(Frame {
+            image,
+            cut_size: splats.len(),
+            cut_seconds,
+            draw_seconds: t.elapsed().as_secs_f64(),
+        })
+    }
+
+    /// The last frame's G-buffer (see [`Renderer::gbuffer`]).
+    pub fn gbuffer(&mut self) -> Result<[Vec<[f32; 4]>; 3], VulkanError> {
+        self.renderer.gbuffer()
+    }
+
+    pub fn gpu(&self) -> &Gpu {
+        self.renderer.gpu()
+    }
+}

@@ -54,6 +54,16 @@ impl Camera {
         })
     }
 
+    /// A camera on +Z of a sphere (`center`, `radius`), looking at it, that frames it whole
+    /// (40° vertical field of view).
+    pub fn framing(center: Vec3, radius: f32, width: u32, height: u32) -> Option<Self> {
+        let radius = radius.max(1e-6);
+        let yfov = 40f32.to_radians();
+        let aspect = (width as f32 / height as f32).min(1.0);
+        let dist = 1.1 * radius / ((0.5 * yfov).tan() * aspect).atan().sin();
+        Camera::look_at("auto", center + Vec3::Z * dist, center, yfov, width, height)
+    }
+
     /// The same camera rendering at another resolution.
     pub fn with_size(mut self, width: u32, height: u32) -> Self {
         self.width = width;

@@ -208,16 +208,11 @@ impl Scene {
                 path: self.path.clone(),
             });
         }
-        let center = 0.5 * (lo + hi);
-        let radius = (0.5 * (hi - lo).length()).max(1e-6);
-        let yfov = 40f32.to_radians();
-        let aspect = (width as f32 / height as f32).min(1.0);
-        let dist = 1.1 * radius / ((0.5 * yfov).tan() * aspect).atan().sin();
-        Camera::look_at("auto", center + Vec3::Z * dist, center, yfov, width, height).ok_or_else(
-            || Error::Camera {
+        Camera::framing(0.5 * (lo + hi), 0.5 * (hi - lo).length(), width, height).ok_or_else(|| {
+            Error::Camera {
                 path: self.path.clone(),
                 reason: "cannot frame the scene automatically".into(),
-            },
-        )
+            }
+        })
     }
 }

@@ -2,6 +2,7 @@
 //! and turns every error into one sentence and a non-zero exit code.
 
 mod bake_cmd;
+mod preview_cmd;
 mod render_cmd;
 
 use anyhow::{bail, Context, Result};
@@ -50,6 +51,10 @@ enum Command {
     /// default), glossy receivers through BSDF-refined buffers, mirrors and clear glass by
     /// following their chains. Writes an EXR with optional AOV layers.
     Render(render_cmd::RenderArgs),
+    /// Look at a cache with Vulkan (lavapipe or any GPU): its nodes splatted onto the scene's
+    /// surfaces with radiance cache splatting, a view-dependent cut of the tree per frame.
+    /// Headless to a PNG or EXR, or in a window with an orbit camera.
+    Preview(preview_cmd::PreviewArgs),
 }
 
 #[derive(Args)]
@@ -186,16 +191,32 @@ fn run_render(scene: &Scene, camera: &Camera, settings: &RenderSettings) -> Resu
     Ok(out)
 }
 
-pub(crate) fn pick_camera(scene: &Scene, args: &CameraArgs) -> Result<Camera> {
-    let (w, h) = args.size;
-    if let (Some(eye), Some(target)) = (args.eye, args.target) {
-        if !(args.fov > 0.0 && args.fov < 180.0) {
+impl CameraArgs {
+    /// The camera of --eye, --target and --fov, if given.
+    pub(crate) fn eye_camera(&self) -> Result<Option<Camera>> {
+        let (w, h) = self.size;
+        let (Some(eye), Some(target)) = (self.eye, self.target) else {
+            return Ok(None);
+        };
+        if !(self.fov > 0.0 && self.fov < 180.0) {
             bail!("--fov must be between 0 and 180 degrees");
         }
-        return Camera::look_at("command line", eye, target, args.fov.to_radians(), w, h)
-            .context("--eye and --target must be different points");
+        Camera::look_at("command line", eye, target, self.fov.to_radians(), w, h)
+            .context("--eye and --target must be different points")
+            .map(Some)
     }
-    Ok(scene.camera(args.camera.as_deref(), w, h)?)
+
+    pub(crate) fn camera_name(&self) -> Option<&str> {
+        self.camera.as_deref()
+    }
+}
+
+pub(crate) fn pick_camera(scene: &Scene, args: &CameraArgs) -> Result<Camera> {
+    if let Some(c) = args.eye_camera()? {
+        return Ok(c);
+    }
+    let (w, h) = args.size;
+    Ok(scene.camera(args.camera_name(), w, h)?)
 }
 
 pub(crate) fn warn(scene: &Scene) {
@@ -308,6 +329,7 @@ fn main() {
         Command::Bake(a) => bake_cmd::bake_command(a),
         Command::Inspect(a) => bake_cmd::inspect_command(a),
         Command::Render(a) => render_cmd::render_command(a),
+        Command::Preview(a) => preview_cmd::preview_command(a),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");

@@ -1,0 +1,126 @@
+//! `wpbgi preview`: the cache splatted with Vulkan, headless to an image (or in a window).
+
+use crate::render_cmd::open_fresh_cache;
+use crate::CameraArgs;
+use anyhow::{bail, Context, Result};
+use clap::{Args, ValueEnum};
+use std::path::PathBuf;
+use std::sync::Arc;
+use wpbgi::bake::store::BakedCache;
+use wpbgi::image::{write_exr, write_png};
+use wpbgi::preview::device::Gpu;
+use wpbgi::preview::{Preview, Show, DEFAULT_CUT_PIXELS};
+use wpbgi::scene::{Camera, Scene};
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ShowArg {
+    /// Emitters and the reflected light splatted from the cache.
+    Total,
+    /// The reflected light only (all bounces the cache holds, without emission).
+    Indirect,
+    /// The emitters only.
+    Direct,
+    /// The cut's nodes as depth-tested discs (the point-cloud view).
+    Surfels,
+    /// Each node of the cut in its own colour.
+    Cut,
+}
+
+impl From<ShowArg> for Show {
+    fn from(s: ShowArg) -> Show {
+        match s {
+            ShowArg::Total => Show::Total,
+            ShowArg::Indirect => Show::Indirect,
+            ShowArg::Direct => Show::Direct,
+            ShowArg::Surfels => Show::Surfels,
+            ShowArg::Cut => Show::Cut,
+        }
+    }
+}
+
+#[derive(Args)]
+pub struct PreviewArgs {
+    /// The cache (.wpc).
+    pub cache: PathBuf,
+    /// The scene the cache was baked from: its meshes receive the splats and its emitters are
+    /// drawn. Without it, the cache's surfels are drawn as discs (point-cloud view).
+    #[arg(long)]
+    pub scene: Option<PathBuf>,
+    /// Render one frame to --output and exit, without a window.
+    #[arg(long)]
+    pub headless: bool,
+    /// The headless frame: PNG (sRGB) or OpenEXR (linear float), by extension.
+    #[arg(short, long, required_if_eq("headless", "true"))]
+    pub output: Option<PathBuf>,
+    /// What to show.
+    #[arg(long, value_enum, default_value = "total")]
+    pub show: ShowArg,
+    /// The cut's screen-space bound: nodes whose bounding spheres span at most this many
+    /// pixels are drawn whole (smaller: sharper and slower).
+    #[arg(long, default_value_t = DEFAULT_CUT_PIXELS)]
+    pub cut_pixels: f32,
+    #[command(flatten)]
+    pub camera: CameraArgs,
+}
+
+pub fn preview_command(a: PreviewArgs) -> Result<()> {
+    if !(a.cut_pixels.is_finite() && a.cut_pixels > 0.0) {
+        bail!("--cut-pixels must be a positive number");
+    }
+    let scene = a
+        .scene
+        .as_ref()
+        .map(|p| -> Result<Scene> {
+            let s = Scene::load(p)?;
+            crate::warn(&s);
+            Ok(s)
+        })
+        .transpose()?;
+    let cache = match &scene {
+        Some(s) => open_fresh_cache(s, &a.cache)?,
+        None => BakedCache::read(&a.cache, None)?,
+    };
+    let gpu = Arc::new(Gpu::from_env()?);
+    let (w, h) = a.camera.size;
+    let mut preview = Preview::new(gpu.clone(), &cache, scene.as_ref(), (w, h))?;
+    let camera = match &scene {
+        Some(s) => crate::pick_camera(s, &a.camera)?,
+        None => pick_camera_without_scene(&preview, &a.camera)?,
+    };
+    if !a.headless {
+        bail!("the windowed preview is not built yet; use --headless -o frame.png");
+    }
+    let output = a.output.context("--headless needs --output")?;
+    let frame = preview.frame(&camera, a.show.into(), a.cut_pixels)?;
+    match output.extension().and_then(|e| e.to_str()) {
+        Some(e) if e.eq_ignore_ascii_case("exr") => write_exr(&output, &frame.image)?,
+        Some(e) if e.eq_ignore_ascii_case("png") => write_png(&output, &frame.image)?,
+        _ => bail!("{}: the output must end in .png or .exr", output.display()),
+    }
+    eprintln!(
+        "wrote {} ({w}x{h} on {}): cut of {} nodes in {:.1} ms, drawn in {:.1} ms",
+        output.display(),
+        gpu.name,
+        frame.cut_size,
+        1e3 * frame.cut_seconds,
+        1e3 * frame.draw_seconds
+    );
+    for m in gpu.validation_messages() {
+        eprintln!("validation: {m}");
+    }
+    Ok(())
+}
+
+/// The --eye camera, or one that frames the cache.
+fn pick_camera_without_scene(preview: &Preview, args: &CameraArgs) -> Result<Camera> {
+    if args.camera_name().is_some() {
+        bail!("--camera names a scene camera and needs --scene");
+    }
+    let (w, h) = args.size;
+    match args.eye_camera()? {
+        Some(c) => Ok(c),
+        None => preview
+            .framing_camera(w, h)
+            .context("the cache holds no surfels to frame"),
+    }
+}

@@ -1,0 +1,143 @@
+//! The view-dependent cut (DESIGN.md §8): instead of the thesis's one tree level (spec §9),
+//! every frame takes the coarsest nodes whose bounding spheres cover at most a given number of
+//! pixels on screen, so that zooming in does not alias and far nodes cost little; the nodes
+//! wholly outside the view are left out. Each cut node becomes one [`Splat`].
+//!
+//! A node's radiance towards the eye is evaluated here, on the CPU, from its wavelets along
+//! the direction from its centre to the eye (spec §9's cheaper option), with the same
+//! [`Senders::seen`] the final render's gather uses. The cut is built on the CPU anyway, and
+//! this keeps the coefficient trees off the GPU: a splat carries three floats of radiance.
+
+use super::view::View;
+use crate::bake::tree::NONE;
+use crate::gather::senders::{Senders, FLAT_CONE};
+use bytemuck::{Pod, Zeroable};
+use glam::Vec3;
+use rayon::prelude::*;
+
+/// A splat's footprint radius in node radii. A surfel's disc has its share of the surface's
+/// area, and discs of the surface's total area leave gaps between them (a tenth of the plane
+/// in a hexagonal packing, more for Poisson disks): at twice the radius, neighbours overlap
+/// and the weights blend them.
+pub const SPLAT_SPREAD: f32 = 2.0;
+
+/// One cut node as the splat and disc shaders read it (`splat.vert`, `disk.vert`).
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
+pub struct Splat {
+    /// Centre and footprint radius.
+    pub sphere: [f32; 4],
+    /// Normal; w: 0 none (a curved node), 1 one-sided, 2 two-sided (surfels that send light
+    /// from their backs too).
+    pub normal: [f32; 4],
+    /// Radiance towards the eye (w unused).
+    pub radiance: [f32; 4],
+}
+
+/// What a splat's radiance shows.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Colouring {
+    /// The light the node reflects (what a gather sees: the cache less its emission).
+    Reflected,
+    /// Reflected and emitted.
+    Outgoing,
+    /// Emitted only.
+    Emitted,
+    /// A colour per node, to show the cut.
+    NodeId,
+}
+
+/// How a node is drawn.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Footprint {
+    /// Splatted onto the G-buffer with radiance cache splatting's weight, over
+    /// [`SPLAT_SPREAD`] radii.
+    Splat,
+    /// A depth-tested disc of the node's radius in its plane (a curved node's disc faces the
+    /// eye): the point-cloud view.
+    Disc,
+}
+
+/// The nodes of the cut for `view`: the coarsest whose bounding spheres span at most
+/// `max_pixels` on screen (leaves whatever their size), depth-first, left to right.
+pub fn view_cut(senders: &Senders, view: &View, max_pixels: f32) -> Vec<u32> {
+    let mut cut = Vec::new();
+    let mut stack = if senders.nodes.is_empty() {
+        vec![]
+    } else {
+        vec![0u32]
+    };
+    while let Some(j) = stack.pop() {
+        let node = &senders.nodes[j as usize];
+        if view.culls(node.center, SPLAT_SPREAD * node.radius) {
+            continue;
+        }
+        if node.is_leaf() || view.pixels_across(node.center, node.radius) <= max_pixels {
+            cut.push(j);
+            continue;
+        }
+        let [a, b] = node.children;
+        stack.extend([b, a].into_iter().filter(|&c| c != NONE));
+    }
+    cut
+}
+
+/// The splats of `cut` as `view` sees them.
+pub fn splats(
+    senders: &Senders,
+    view: &View,
+    cut: &[u32],
+    colouring: Colouring,
+    footprint: Footprint,
+) -> Vec<Splat> {
+    cut.par_iter()
+        .map(|&j| {
+            let node = &senders.nodes[j as usize];
+            let w = view.towards_eye(node.center);
+            let radiance = match colouring {
+                Colouring::Reflected => senders.seen(j, w, NONE, false).radiance,
+                Colouring::Outgoing => {
+                    senders.seen(j, w, NONE, false).radiance + senders.emitted_radiance(j, w)
+                }
+                Colouring::Emitted => senders.emitted_radiance(j, w),
+                Colouring::NodeId => node_colour(j),
+            };
+            let (mut normal, flat) = if node.is_leaf() {
+                (Vec3::from(senders.surfels[node.surfel as usize].n), true)
+            } else {
+                (node.axis, node.cone_angle < FLAT_CONE)
+            };
+            let sides = if !flat {
+                0.0
+            } else if node.back_sided {
+                2.0
+            } else {
+                1.0
+            };
+            let radius = match footprint {
+                Footprint::Splat => SPLAT_SPREAD * node.radius,
+                Footprint::Disc => node.radius,
+            };
+            if footprint == Footprint::Disc && !flat {
+                normal = w;
+            }
+            Splat {
+                sphere: node.center.extend(radius).to_array(),
+                normal: normal.extend(sides).to_array(),
+                radiance: radiance.max(Vec3::ZERO).extend(0.0).to_array(),
+            }
+        })
+        .collect()
+}
+
+/// A bright colour that tells node `j` from its neighbours (a hash of its index).
+fn node_colour(j: u32) -> Vec3 {
+    let h = j.wrapping_mul(0x9e37_79b9) ^ (j >> 16);
+    let h = h.wrapping_mul(0x85eb_ca6b);
+    let c = Vec3::new(
+        (h & 0xff) as f32,
+        ((h >> 8) & 0xff) as f32,
+        ((h >> 16) & 0xff) as f32,
+    ) / 255.0;
+    0.2 + 0.8 * c
+}
