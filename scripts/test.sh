@@ -14,9 +14,10 @@ if ! command -v cc >/dev/null 2>&1; then
   $SUDO apt-get update -qq && $SUDO apt-get install -y -qq build-essential
 fi
 # Vulkan for the previewer's tests: the loader, lavapipe (Mesa's software Vulkan) and the
-# validation layer. Installed only when missing; the tests fail without them.
-VULKAN_PACKAGES="libvulkan1 mesa-vulkan-drivers vulkan-validationlayers"
-if ! dpkg -s $VULKAN_PACKAGES >/dev/null 2>&1; then
-  $SUDO apt-get update -qq && $SUDO apt-get install -y -qq $VULKAN_PACKAGES
+# validation layer; Xvfb (with xauth, which xvfb-run needs) for the windowed mode. Installed
+# only when missing; the tests fail without them.
+PREVIEW_PACKAGES="libvulkan1 mesa-vulkan-drivers vulkan-validationlayers xvfb xauth"
+if ! dpkg -s $PREVIEW_PACKAGES >/dev/null 2>&1; then
+  $SUDO apt-get update -qq && $SUDO apt-get install -y -qq $PREVIEW_PACKAGES
 fi
 cargo test --release --workspace --all-targets "$@"

@@ -142,12 +142,17 @@ pub fn write_png(path: &Path, img: &Image) -> Result<()> {
     for p in &img.pixels {
         buf.extend_from_slice(&[to8(p.x), to8(p.y), to8(p.z)]);
     }
+    write_png_rgb8(path, img.width, img.height, &buf)
+}
+
+/// Write 8-bit sRGB pixels (R, G, B per pixel, rows from the top) as a PNG.
+pub fn write_png_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<()> {
     write_atomically(path, |tmp| {
         image::save_buffer_with_format(
             tmp,
-            &buf,
-            img.width,
-            img.height,
+            rgb,
+            width,
+            height,
             image::ExtendedColorType::Rgb8,
             image::ImageFormat::Png,
         )

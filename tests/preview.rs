@@ -49,9 +49,10 @@ fn cpu_frame(
     emission: f32,
     splatted: f32,
     size: (u32, u32),
-) -> Image {
+) -> (Image, usize) {
     let [positions, normals, emitted] = gbuffer;
     let mut out = Image::new(size.0, size.1);
+    let mut holes = 0;
     for (i, px) in out.pixels.iter_mut().enumerate() {
         let p = positions[i];
         let e = Vec3::from_slice(&emitted[i][..3]);
@@ -79,6 +80,7 @@ fn cpu_frame(
                 }
             }
         }
+        holes += (p[3] != 0.0 && sum[3] == 0.0) as usize;
         let splat = if sum[3] > 0.0 {
             Vec3::new(sum[0], sum[1], sum[2]) / sum[3]
         } else {
@@ -86,7 +88,7 @@ fn cpu_frame(
         };
         *px = emission * e + splatted * splat;
     }
-    out
+    (out, holes)
 }
 
 /// A headless frame equals the CPU implementation of the same maths, per pixel, to 1e-4
@@ -100,7 +102,7 @@ fn cpu_frame(
 fn headless_frame_matches_cpu_oracle_under_validation() {
     let scene = bundled();
     let cache = cache(&scene, 3000);
-    let size = (64, 48);
+    let size = (160, 120);
     let gpu = validated_gpu();
     let mut preview = Preview::new(gpu.clone(), &cache, Some(&scene), size).expect("preview");
     let camera = scene.default_camera(size.0, size.1).expect("camera");
@@ -113,7 +115,8 @@ fn headless_frame_matches_cpu_oracle_under_validation() {
         );
         let gpu_image = preview.draw(&view, &splats, settings).expect("frame");
         let gbuffer = preview.gbuffer().expect("G-buffer");
-        let cpu_image = cpu_frame(&gbuffer, &splats, settings.emission, settings.splats, size);
+        let (cpu_image, holes) =
+            cpu_frame(&gbuffer, &splats, settings.emission, settings.splats, size);
         let mut worst = 0.0f32;
         let mut lit = 0;
         for (g, c) in gpu_image.pixels.iter().zip(&cpu_image.pixels) {
@@ -131,9 +134,14 @@ fn headless_frame_matches_cpu_oracle_under_validation() {
             "{show:?}: only {lit} lit pixels"
         );
         eprintln!(
-            "{show:?}: {} splats, worst relative difference {worst:.2e}",
+            "{show:?}: {} splats, worst relative difference {worst:.2e}, {holes} holes",
             splats.len()
         );
+        // Holes: covered pixels no splat reaches. They lie where a coarse cache is sparse:
+        // along a mesh's edges, where the neighbouring face's splats have the wrong normal,
+        // and on the sphere, whose 3000-surfel discs turn 20° or more apart (measured: 7 of
+        // 19 200 pixels).
+        assert!(holes * 1000 < gpu_image.pixels.len(), "{holes} holes");
     }
     let messages = gpu.validation_messages();
     assert!(messages.is_empty(), "validation: {messages:#?}");

@@ -15,11 +15,13 @@ use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use rayon::prelude::*;
 
-/// A splat's footprint radius in node radii. A surfel's disc has its share of the surface's
-/// area, and discs of the surface's total area leave gaps between them (a tenth of the plane
-/// in a hexagonal packing, more for Poisson disks): at twice the radius, neighbours overlap
-/// and the weights blend them.
-pub const SPLAT_SPREAD: f32 = 2.0;
+/// How far a splat's footprint reaches beyond its node's bounding sphere, in radii of the
+/// node's surfels' discs. A surfel's disc has its share of the surface's area, so discs leave
+/// gaps between them (a tenth of the plane in a hexagonal packing, more for Poisson disks); a
+/// point of the surface lies within about 1.5 disc radii of a surfel's centre, which lies in
+/// its cut node's sphere. A leaf's footprint is then twice its disc; an inner node's barely
+/// more than its sphere, so that coarse cuts do not pay for overlapping splats.
+pub const SPLAT_RIM: f32 = 1.0;
 
 /// One cut node as the splat and disc shaders read it (`splat.vert`, `disk.vert`).
 #[repr(C)]
@@ -69,7 +71,9 @@ pub fn view_cut(senders: &Senders, view: &View, max_pixels: f32) -> Vec<u32> {
     };
     while let Some(j) = stack.pop() {
         let node = &senders.nodes[j as usize];
-        if view.culls(node.center, SPLAT_SPREAD * node.radius) {
+        // A footprint lies within twice its node's radius (see `SPLAT_RIM`: a leaf's radius
+        // is its disc's, an inner node's at least its surfels').
+        if view.culls(node.center, 2.0 * node.radius) {
             continue;
         }
         if node.is_leaf() || view.pixels_across(node.center, node.radius) <= max_pixels {
@@ -82,13 +86,15 @@ pub fn view_cut(senders: &Senders, view: &View, max_pixels: f32) -> Vec<u32> {
     cut
 }
 
-/// The splats of `cut` as `view` sees them.
+/// The splats of `cut` as `view` sees them; `disc_radius` holds per node the mean disc
+/// radius of its surfels.
 pub fn splats(
     senders: &Senders,
     view: &View,
     cut: &[u32],
     colouring: Colouring,
     footprint: Footprint,
+    disc_radius: &[f32],
 ) -> Vec<Splat> {
     cut.par_iter()
         .map(|&j| {
@@ -115,7 +121,7 @@ pub fn splats(
                 1.0
             };
             let radius = match footprint {
-                Footprint::Splat => SPLAT_SPREAD * node.radius,
+                Footprint::Splat => node.radius + SPLAT_RIM * disc_radius[j as usize],
                 Footprint::Disc => node.radius,
             };
             if footprint == Footprint::Disc && !flat {

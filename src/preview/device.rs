@@ -12,7 +12,7 @@
 //!   sentence that says what to install.
 
 use ash::vk;
-use std::ffi::{c_void, CStr, CString};
+use std::ffi::{c_char, c_void, CStr, CString};
 use std::sync::Mutex;
 use thiserror::Error;
 
@@ -112,6 +112,32 @@ impl Gpu {
     /// Set up Vulkan: instance, the preferred device, one graphics queue; with `validate`, the
     /// validation layer and its messenger.
     pub fn new(validate: bool) -> Result<Gpu, VulkanError> {
+        Gpu::with_extensions(validate, &[], &[])
+    }
+
+    /// [`Gpu::new`] for a window: the instance extensions of its display's surfaces and the
+    /// device's `VK_KHR_swapchain`.
+    pub fn for_window(
+        validate: bool,
+        display: raw_window_handle::RawDisplayHandle,
+    ) -> Result<Gpu, VulkanError> {
+        let surface = check(
+            "vkEnumerateInstanceExtensionProperties (surface extensions)",
+            ash_window::enumerate_required_extensions(display),
+        )?;
+        Gpu::with_extensions(validate, surface, &[ash::khr::swapchain::NAME.as_ptr()])
+    }
+
+    /// The loader's entry points.
+    pub(super) fn entry(&self) -> &ash::Entry {
+        &self._entry
+    }
+
+    fn with_extensions(
+        validate: bool,
+        instance_extensions: &[*const c_char],
+        device_extensions: &[*const c_char],
+    ) -> Result<Gpu, VulkanError> {
         // SAFETY: loading the system's Vulkan loader runs its initialisation; nothing else of
         // ours runs meanwhile.
         let entry =
@@ -132,16 +158,15 @@ impl Gpu {
         let debug_utils = extensions
             .iter()
             .any(|e| e.extension_name_as_c_str() == Ok(ash::ext::debug_utils::NAME));
-        let layer_names: Vec<*const i8> = if validate {
+        let layer_names: Vec<*const c_char> = if validate {
             vec![VALIDATION_LAYER.as_ptr()]
         } else {
             vec![]
         };
-        let extension_names: Vec<*const i8> = if debug_utils {
-            vec![ash::ext::debug_utils::NAME.as_ptr()]
-        } else {
-            vec![]
-        };
+        let mut extension_names: Vec<*const c_char> = instance_extensions.to_vec();
+        if debug_utils {
+            extension_names.push(ash::ext::debug_utils::NAME.as_ptr());
+        }
         let app = vk::ApplicationInfo::default()
             .application_name(c"wpbgi preview")
             .engine_name(c"wpbgi")
@@ -218,8 +243,9 @@ impl Gpu {
         let queue_info = vk::DeviceQueueCreateInfo::default()
             .queue_family_index(queue_family)
             .queue_priorities(&priorities);
-        let device_info =
-            vk::DeviceCreateInfo::default().queue_create_infos(std::slice::from_ref(&queue_info));
+        let device_info = vk::DeviceCreateInfo::default()
+            .queue_create_infos(std::slice::from_ref(&queue_info))
+            .enabled_extension_names(device_extensions);
         // SAFETY: the physical device and queue family come from this instance.
         let device = match unsafe { instance.create_device(physical, &device_info, None) } {
             Ok(d) => d,

@@ -6,6 +6,7 @@
 //!   eye.
 //! - [`view`]: the camera as the shaders see it.
 //! - [`renderer`]: the G-buffer, splat and resolve passes.
+//! - [`window`]: the windowed mode (winit, ash-window) with an orbit camera.
 //!
 //! [`Preview`] ties them together: a cache (and optionally its scene) on a device, a frame per
 //! camera.
@@ -14,7 +15,9 @@ pub mod cut;
 pub mod device;
 mod objects;
 pub mod renderer;
+mod swapchain;
 pub mod view;
+pub mod window;
 
 use crate::bake::store::BakedCache;
 use crate::cache::CacheError;
@@ -35,6 +38,8 @@ pub enum PreviewError {
     Vulkan(#[from] VulkanError),
     #[error(transparent)]
     Cache(#[from] CacheError),
+    #[error("the preview window failed: {0}")]
+    Window(String),
 }
 
 /// What a preview frame shows.
@@ -57,6 +62,26 @@ pub enum Show {
 /// The default screen-space bound of the cut: nodes spanning at most this many pixels.
 pub const DEFAULT_CUT_PIXELS: f32 = 2.0;
 
+/// The box a preview looks into: the scene's, or without one the cache's surfels'.
+pub fn bounds(cache: &BakedCache, scene: Option<&Scene>) -> (Vec3, Vec3) {
+    match scene {
+        Some(s) => s.bounds(),
+        None => cache
+            .surfels
+            .iter()
+            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), s| {
+                (lo.min(s.p.into()), hi.max(s.p.into()))
+            }),
+    }
+}
+
+/// A camera that frames `bounds` (none for an empty box).
+pub fn framing_camera(bounds: (Vec3, Vec3), width: u32, height: u32) -> Option<Camera> {
+    let (lo, hi) = bounds;
+    lo.cmple(hi).all().then_some(())?;
+    Camera::framing(0.5 * (lo + hi), 0.5 * (hi - lo).length(), width, height)
+}
+
 /// One drawn frame.
 pub struct Frame {
     pub image: Image,
@@ -70,6 +95,8 @@ pub struct Frame {
 /// A cache on a device, ready to draw frames.
 pub struct Preview {
     senders: Senders,
+    /// Per node: the mean disc radius of the surfels below.
+    disc_radius: Vec<f32>,
     renderer: Renderer,
     has_scene: bool,
     bounds: (Vec3, Vec3),
@@ -85,28 +112,19 @@ impl Preview {
         size: (u32, u32),
     ) -> Result<Preview, PreviewError> {
         let senders = Senders::from_cache(cache)?;
-        let bounds = match scene {
-            Some(s) => s.bounds(),
-            None => cache
-                .surfels
-                .iter()
-                .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), s| {
-                    (lo.min(s.p.into()), hi.max(s.p.into()))
-                }),
-        };
+        let bounds = bounds(cache, scene);
+        let disc_radius = cache
+            .nodes
+            .iter()
+            .map(|n| (n.area / (n.count.max(1) as f32 * std::f32::consts::PI)).sqrt())
+            .collect();
         Ok(Preview {
             senders,
+            disc_radius,
             renderer: Renderer::new(gpu, size, scene)?,
             has_scene: scene.is_some(),
             bounds,
         })
-    }
-
-    /// A camera that frames the cache's surfels.
-    pub fn framing_camera(&self, width: u32, height: u32) -> Option<Camera> {
-        let (lo, hi) = self.bounds;
-        (lo.cmple(hi).all()).then_some(())?;
-        Camera::framing(0.5 * (lo + hi), 0.5 * (hi - lo).length(), width, height)
     }
 
     /// The splats and pass settings of a frame: the cut for `camera` at `cut_pixels`, each
@@ -138,7 +156,14 @@ impl Preview {
         } else {
             Footprint::Splat
         };
-        let splats = splats(&self.senders, &view, &cut, colouring, footprint);
+        let splats = splats(
+            &self.senders,
+            &view,
+            &cut,
+            colouring,
+            footprint,
+            &self.disc_radius,
+        );
         let settings = FrameSettings {
             emission,
             splats: splatted,
@@ -184,5 +209,23 @@ impl Preview {
 
     pub fn gpu(&self) -> &Gpu {
         self.renderer.gpu()
+    }
+
+    /// Draw prepared splats into a window's swapchain image (see [`Renderer::present`]).
+    pub fn present(
+        &mut self,
+        view: &View,
+        splats: &[Splat],
+        settings: FrameSettings,
+        target: &renderer::PresentTarget,
+    ) -> Result<Option<Vec<u8>>, VulkanError> {
+        self.renderer.present(view, splats, settings, target)
+    }
+
+    /// Draw frames of another size from now on.
+    pub fn resize(&mut self, size: (u32, u32), scene: Option<&Scene>) -> Result<(), VulkanError> {
+        let gpu = self.renderer.gpu_arc();
+        self.renderer = Renderer::new(gpu, size, scene)?;
+        Ok(())
     }
 }

@@ -24,7 +24,6 @@ enum Owned {
     Pipeline(vk::Pipeline),
     CommandPool(vk::CommandPool),
     Fence(vk::Fence),
-    Semaphore(vk::Semaphore),
 }
 
 /// A host-visible, coherent buffer, mapped for its lifetime.
@@ -343,14 +342,6 @@ owned_creator!(
     create_fence,
     "vkCreateFence"
 );
-owned_creator!(
-    semaphore,
-    vk::SemaphoreCreateInfo<'_>,
-    vk::Semaphore,
-    Semaphore,
-    create_semaphore,
-    "vkCreateSemaphore"
-);
 
 impl Objects {
     /// A graphics pipeline.
@@ -411,7 +402,6 @@ unsafe fn destroy(device: &ash::Device, o: Owned) {
             Owned::Pipeline(h) => device.destroy_pipeline(h, None),
             Owned::CommandPool(h) => device.destroy_command_pool(h, None),
             Owned::Fence(h) => device.destroy_fence(h, None),
-            Owned::Semaphore(h) => device.destroy_semaphore(h, None),
         }
     }
 }

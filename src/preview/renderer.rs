@@ -246,6 +246,10 @@ impl Renderer {
         &self.objects.gpu
     }
 
+    pub fn gpu_arc(&self) -> Arc<Gpu> {
+        self.objects.gpu.clone()
+    }
+
     /// Draw one frame of `splats` seen from `view` and return it (linear float RGB).
     pub fn render(
         &mut self,
@@ -253,6 +257,58 @@ impl Renderer {
         splats: &[Splat],
         settings: FrameSettings,
     ) -> Result<RgbImage, VulkanError> {
+        self.upload(view, splats, settings)?;
+        let cmd = self.command;
+        self.submit(
+            |r, d| {
+                r.record_passes(d, cmd, splats.len() as u32, settings);
+                r.record_copy(d, cmd, r.targets.output.handle, None);
+            },
+            None,
+        )?;
+        Ok(RgbImage {
+            width: self.size.0,
+            height: self.size.1,
+            pixels: self.read_pixels(|p| Vec3::new(p[0], p[1], p[2])),
+        })
+    }
+
+    /// Draw one frame into a window's swapchain image (blitted from the float output, which
+    /// converts it to the image's format). With `target.screenshot`, the swapchain image is
+    /// also read back: its bytes, 4 per pixel in its format, row-major from the top.
+    pub fn present(
+        &mut self,
+        view: &View,
+        splats: &[Splat],
+        settings: FrameSettings,
+        target: &PresentTarget,
+    ) -> Result<Option<Vec<u8>>, VulkanError> {
+        self.upload(view, splats, settings)?;
+        let cmd = self.command;
+        self.submit(
+            |r, d| {
+                r.record_passes(d, cmd, splats.len() as u32, settings);
+                r.record_blit(d, cmd, target);
+            },
+            Some((target.acquired, target.rendered)),
+        )?;
+        Ok(target.screenshot.then(|| {
+            let n = self.size.0 as usize * self.size.1 as usize;
+            self.readback
+                .read::<[u8; 4]>(n)
+                .into_iter()
+                .flatten()
+                .collect()
+        }))
+    }
+
+    /// Write the frame's uniforms and splats.
+    fn upload(
+        &mut self,
+        view: &View,
+        splats: &[Splat],
+        settings: FrameSettings,
+    ) -> Result<(), VulkanError> {
         self.uniforms.write(std::slice::from_ref(
             &view.uniforms(settings.emission, settings.splats),
         ));
@@ -267,16 +323,7 @@ impl Renderer {
             )?;
         }
         self.instances.write(splats);
-        let cmd = self.command;
-        self.submit(|r, d| {
-            r.record_passes(d, cmd, splats.len() as u32, settings);
-            r.record_copy(d, cmd, r.targets.output.handle, None);
-        })?;
-        Ok(RgbImage {
-            width: self.size.0,
-            height: self.size.1,
-            pixels: self.read_pixels(|p| Vec3::new(p[0], p[1], p[2])),
-        })
+        Ok(())
     }
 
     /// The G-buffer of the last frame, row-major from the top: positions (w = 1 where a mesh
@@ -287,14 +334,8 @@ impl Renderer {
         for i in 0..3 {
             let image = self.targets.gbuffer[i].handle;
             let cmd = self.command;
-            self.submit(|r, d| {
-                r.record_copy(
-                    d,
-                    cmd,
-                    image,
-                    Some(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL),
-                )
-            })?;
+            let layout = Some(vk::ImageLayout::SHADER_READ_ONLY_OPTIMAL);
+            self.submit(|r, d| r.record_copy(d, cmd, image, layout), None)?;
             out.push(self.read_pixels(|p| p));
         }
         let emission = out.pop().unwrap_or_default();
@@ -313,8 +354,13 @@ impl Renderer {
             .collect()
     }
 
-    /// Record with `record`, submit, and wait for the GPU.
-    fn submit(&self, record: impl FnOnce(&Self, &ash::Device)) -> Result<(), VulkanError> {
+    /// Record with `record`, submit (waiting for and signalling `semaphores`' first and
+    /// second, if given), and wait for the GPU.
+    fn submit(
+        &self,
+        record: impl FnOnce(&Self, &ash::Device),
+        semaphores: Option<(vk::Semaphore, vk::Semaphore)>,
+    ) -> Result<(), VulkanError> {
         let d = self.objects.device();
         let cmd = self.command;
         // SAFETY: the command buffer is ours and not pending (every submit waits); the queue
@@ -334,7 +380,14 @@ impl Renderer {
             )?;
             record(self, d);
             check("vkEndCommandBuffer", d.end_command_buffer(cmd))?;
-            let submit = vk::SubmitInfo::default().command_buffers(std::slice::from_ref(&cmd));
+            let waits: Vec<vk::Semaphore> = semaphores.iter().map(|s| s.0).collect();
+            let signals: Vec<vk::Semaphore> = semaphores.iter().map(|s| s.1).collect();
+            let stages = vec![vk::PipelineStageFlags::TRANSFER; waits.len()];
+            let submit = vk::SubmitInfo::default()
+                .command_buffers(std::slice::from_ref(&cmd))
+                .wait_semaphores(&waits)
+                .wait_dst_stage_mask(&stages)
+                .signal_semaphores(&signals);
             check(
                 "vkQueueSubmit",
                 d.queue_submit(self.objects.gpu.queue, &[submit], self.fence),
@@ -988,4 +1041,103 @@ fn upload_geometry(o: &mut Objects, scene: &Scene) -> Result<Geometry, VulkanErr
         indices: ib,
         draws,
     })
+}
+
+impl Renderer {
+    /// Blit the output into `target`'s swapchain image (and read it back for a screenshot),
+    /// leaving it ready to present.
+    fn record_blit(&self, d: &ash::Device, cmd: vk::CommandBuffer, target: &PresentTarget) {
+        let (w, h) = self.size;
+        let image = target.image;
+        let barrier = |from, to, src_access, dst_access| {
+            vk::ImageMemoryBarrier::default()
+                .old_layout(from)
+                .new_layout(to)
+                .src_access_mask(src_access)
+                .dst_access_mask(dst_access)
+                .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                .image(image)
+                .subresource_range(whole(COLOR))
+        };
+        let transfer = vk::PipelineStageFlags::TRANSFER;
+        let layers = vk::ImageSubresourceLayers {
+            aspect_mask: COLOR,
+            mip_level: 0,
+            base_array_layer: 0,
+            layer_count: 1,
+        };
+        let corner = vk::Offset3D {
+            x: w as i32,
+            y: h as i32,
+            z: 1,
+        };
+        let blit = vk::ImageBlit {
+            src_subresource: layers,
+            src_offsets: [vk::Offset3D::default(), corner],
+            dst_subresource: layers,
+            dst_offsets: [vk::Offset3D::default(), corner],
+        };
+        let (dst, src, present) = (
+            vk::ImageLayout::TRANSFER_DST_OPTIMAL,
+            vk::ImageLayout::TRANSFER_SRC_OPTIMAL,
+            vk::ImageLayout::PRESENT_SRC_KHR,
+        );
+        let none = vk::AccessFlags::empty();
+        let flags = vk::DependencyFlags::empty();
+        let write = vk::AccessFlags::TRANSFER_WRITE;
+        // SAFETY: recording into our command buffer; the swapchain image was acquired (the
+        // submit waits for it at the transfer stage) and has the output's size.
+        unsafe {
+            let to_dst = barrier(vk::ImageLayout::UNDEFINED, dst, none, write);
+            d.cmd_pipeline_barrier(cmd, transfer, transfer, flags, &[], &[], &[to_dst]);
+            d.cmd_blit_image(
+                cmd,
+                self.targets.output.handle,
+                src,
+                image,
+                dst,
+                &[blit],
+                vk::Filter::NEAREST,
+            );
+            let mut last = (dst, write);
+            if target.screenshot {
+                let read = vk::AccessFlags::TRANSFER_READ;
+                let to_src = barrier(dst, src, write, read);
+                d.cmd_pipeline_barrier(cmd, transfer, transfer, flags, &[], &[], &[to_src]);
+                let region = vk::BufferImageCopy::default()
+                    .image_subresource(layers)
+                    .image_extent(vk::Extent3D {
+                        width: w,
+                        height: h,
+                        depth: 1,
+                    });
+                d.cmd_copy_image_to_buffer(cmd, image, src, self.readback.handle, &[region]);
+                let to_host = vk::BufferMemoryBarrier::default()
+                    .src_access_mask(write)
+                    .dst_access_mask(vk::AccessFlags::HOST_READ)
+                    .src_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                    .dst_queue_family_index(vk::QUEUE_FAMILY_IGNORED)
+                    .buffer(self.readback.handle)
+                    .size(vk::WHOLE_SIZE);
+                let host = vk::PipelineStageFlags::HOST;
+                d.cmd_pipeline_barrier(cmd, transfer, host, flags, &[], &[to_host], &[]);
+                last = (src, read);
+            }
+            let to_present = barrier(last.0, present, last.1, none);
+            let bottom = vk::PipelineStageFlags::BOTTOM_OF_PIPE;
+            d.cmd_pipeline_barrier(cmd, transfer, bottom, flags, &[], &[], &[to_present]);
+        }
+    }
+}
+
+/// A swapchain image to draw a frame into.
+pub struct PresentTarget {
+    pub image: vk::Image,
+    /// Signalled when the image is acquired; the frame waits for it.
+    pub acquired: vk::Semaphore,
+    /// Signalled when the frame is drawn; presentation waits for it.
+    pub rendered: vk::Semaphore,
+    /// Read the image back after drawing.
+    pub screenshot: bool,
 }

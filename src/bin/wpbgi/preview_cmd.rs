@@ -9,7 +9,8 @@ use std::sync::Arc;
 use wpbgi::bake::store::BakedCache;
 use wpbgi::image::{write_exr, write_png};
 use wpbgi::preview::device::Gpu;
-use wpbgi::preview::{Preview, Show, DEFAULT_CUT_PIXELS};
+use wpbgi::preview::window::{run_window, WindowSettings};
+use wpbgi::preview::{bounds, framing_camera, Preview, Show, DEFAULT_CUT_PIXELS};
 use wpbgi::scene::{Camera, Scene};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -52,6 +53,13 @@ pub struct PreviewArgs {
     /// The headless frame: PNG (sRGB) or OpenEXR (linear float), by extension.
     #[arg(short, long, required_if_eq("headless", "true"))]
     pub output: Option<PathBuf>,
+    /// Windowed: draw this many frames with a scripted camera (a full orbit that ends where
+    /// it started), refine the cut, then exit. For tests and demos.
+    #[arg(long, conflicts_with = "headless")]
+    pub frames: Option<u32>,
+    /// Windowed: read the last frame back from the window's swapchain into this PNG.
+    #[arg(long, conflicts_with = "headless")]
+    pub screenshot: Option<PathBuf>,
     /// What to show.
     #[arg(long, value_enum, default_value = "total")]
     pub show: ShowArg,
@@ -80,16 +88,16 @@ pub fn preview_command(a: PreviewArgs) -> Result<()> {
         Some(s) => open_fresh_cache(s, &a.cache)?,
         None => BakedCache::read(&a.cache, None)?,
     };
-    let gpu = Arc::new(Gpu::from_env()?);
     let (w, h) = a.camera.size;
-    let mut preview = Preview::new(gpu.clone(), &cache, scene.as_ref(), (w, h))?;
     let camera = match &scene {
         Some(s) => crate::pick_camera(s, &a.camera)?,
-        None => pick_camera_without_scene(&preview, &a.camera)?,
+        None => pick_camera_without_scene(&cache, &a.camera)?,
     };
     if !a.headless {
-        bail!("the windowed preview is not built yet; use --headless -o frame.png");
+        return windowed(&a, &cache, scene.as_ref(), camera);
     }
+    let gpu = Arc::new(Gpu::from_env()?);
+    let mut preview = Preview::new(gpu.clone(), &cache, scene.as_ref(), (w, h))?;
     let output = a.output.context("--headless needs --output")?;
     let frame = preview.frame(&camera, a.show.into(), a.cut_pixels)?;
     match output.extension().and_then(|e| e.to_str()) {
@@ -112,15 +120,48 @@ pub fn preview_command(a: PreviewArgs) -> Result<()> {
 }
 
 /// The --eye camera, or one that frames the cache.
-fn pick_camera_without_scene(preview: &Preview, args: &CameraArgs) -> Result<Camera> {
+fn pick_camera_without_scene(cache: &BakedCache, args: &CameraArgs) -> Result<Camera> {
     if args.camera_name().is_some() {
         bail!("--camera names a scene camera and needs --scene");
     }
     let (w, h) = args.size;
     match args.eye_camera()? {
         Some(c) => Ok(c),
-        None => preview
-            .framing_camera(w, h)
-            .context("the cache holds no surfels to frame"),
+        None => {
+            framing_camera(bounds(cache, None), w, h).context("the cache holds no surfels to frame")
+        }
     }
+}
+
+/// The windowed preview: an orbit camera (left drag: orbit, right or middle drag: pan, wheel:
+/// zoom; keys 1–5 or t, i, d, s, c: what to show; r: back to the start; Esc or q: quit).
+fn windowed(
+    a: &PreviewArgs,
+    cache: &BakedCache,
+    scene: Option<&Scene>,
+    camera: Camera,
+) -> Result<()> {
+    let settings = WindowSettings {
+        show: a.show.into(),
+        cut_pixels: a.cut_pixels,
+        frames: a.frames,
+        screenshot: a.screenshot.clone(),
+        validate: std::env::var("WPBGI_VALIDATE").is_ok_and(|v| v == "1"),
+    };
+    let report = run_window(cache, scene, camera, &settings)?;
+    eprintln!(
+        "{} frames on {}; the last: cut of {} nodes in {:.1} ms, drawn in {:.1} ms",
+        report.frames,
+        report.device,
+        report.last_cut_size,
+        1e3 * report.last_cut_seconds,
+        1e3 * report.last_draw_seconds
+    );
+    for m in &report.validation {
+        eprintln!("validation: {m}");
+    }
+    if let Some(p) = &a.screenshot {
+        eprintln!("wrote {}", p.display());
+    }
+    Ok(())
 }
