@@ -14,8 +14,10 @@
 pub mod cut;
 pub mod device;
 mod objects;
+mod pipelines;
 pub mod renderer;
 mod swapchain;
+mod transfer;
 pub mod view;
 pub mod window;
 
