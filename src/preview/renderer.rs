@@ -442,19 +442,19 @@ impl Renderer {
                 d.cmd_set_scissor(cmd, 0, &[area]);
             }
         };
+        let bind = |pipeline| {
+            // SAFETY: recording into our command buffer with our objects.
+            unsafe {
+                d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, pipeline);
+                let graphics = vk::PipelineBindPoint::GRAPHICS;
+                d.cmd_bind_descriptor_sets(cmd, graphics, self.layout, 0, &[self.set], &[]);
+            }
+        };
         // SAFETY: as above; every bound object lives as long as the renderer.
         unsafe {
             begin(0, &[zero, zero, zero, far]);
             if let Some(g) = &self.geometry {
-                d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.pipelines.gbuffer);
-                d.cmd_bind_descriptor_sets(
-                    cmd,
-                    vk::PipelineBindPoint::GRAPHICS,
-                    self.layout,
-                    0,
-                    &[self.set],
-                    &[],
-                );
+                bind(self.pipelines.gbuffer);
                 d.cmd_bind_vertex_buffers(cmd, 0, &[g.vertices.handle], &[0]);
                 d.cmd_bind_index_buffer(cmd, g.indices.handle, 0, vk::IndexType::UINT32);
                 for (first, count, emission) in &g.draws {
@@ -476,29 +476,13 @@ impl Renderer {
                 } else {
                     self.pipelines.splat
                 };
-                d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, p);
-                d.cmd_bind_descriptor_sets(
-                    cmd,
-                    vk::PipelineBindPoint::GRAPHICS,
-                    self.layout,
-                    0,
-                    &[self.set],
-                    &[],
-                );
+                bind(p);
                 d.cmd_bind_vertex_buffers(cmd, 0, &[self.instances.handle], &[0]);
                 d.cmd_draw(cmd, 4, splats, 0, 0);
             }
             d.cmd_end_render_pass(cmd);
             begin(2, &[zero]);
-            d.cmd_bind_pipeline(cmd, vk::PipelineBindPoint::GRAPHICS, self.pipelines.resolve);
-            d.cmd_bind_descriptor_sets(
-                cmd,
-                vk::PipelineBindPoint::GRAPHICS,
-                self.layout,
-                0,
-                &[self.set],
-                &[],
-            );
+            bind(self.pipelines.resolve);
             d.cmd_draw(cmd, 3, 1, 0, 0);
             d.cmd_end_render_pass(cmd);
         }
