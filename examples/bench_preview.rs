@@ -12,7 +12,8 @@ use std::time::Instant;
 use wpbgi::bake::store::BakedCache;
 use wpbgi::bake::{bake, BakeSettings, Quality};
 use wpbgi::preview::device::Gpu;
-use wpbgi::preview::{Preview, Show};
+use wpbgi::preview::window::MOVING_COARSENESS;
+use wpbgi::preview::{Preview, Show, DEFAULT_CUT_PIXELS};
 use wpbgi::scene::Scene;
 
 type Result<T> = std::result::Result<T, Box<dyn std::error::Error>>;
@@ -71,18 +72,30 @@ fn main() -> Result<()> {
         );
         println!("  a frame without splats (G-buffer, resolve, readback): {fixed:.1} ms");
         println!("  cut px | nodes   | cut ms | GPU ms | frame ms | fps");
-        for cut_pixels in [1.0, 2.0, 4.0, 8.0, 16.0, 32.0] {
-            preview.frame(&camera, Show::Total, cut_pixels)?;
+        // Full-size frames at several cut bounds, then the windowed mode's first frame after
+        // a move: half the size, the default cut made 8× coarser (8 pixels at that size).
+        let (rw, rh) = preview.reduced_size();
+        let moving = camera.clone().with_size(rw, rh);
+        let runs = [1.0, 2.0, 4.0, 8.0, 16.0, 32.0]
+            .map(|p| (&camera, p, ""))
+            .into_iter()
+            .chain([(
+                &moving,
+                0.5 * MOVING_COARSENESS * DEFAULT_CUT_PIXELS,
+                " (moving, half size)",
+            )]);
+        for (camera, cut_pixels, label) in runs {
+            preview.frame(camera, Show::Total, cut_pixels)?;
             let (mut cut, mut draw, mut nodes) = (vec![], vec![], 0);
             for _ in 0..5 {
-                let f = preview.frame(&camera, Show::Total, cut_pixels)?;
+                let f = preview.frame(camera, Show::Total, cut_pixels)?;
                 cut.push(1e3 * f.cut_seconds);
                 draw.push(1e3 * f.draw_seconds);
                 nodes = f.cut_size;
             }
             let (c, d) = (median(cut), median(draw));
             println!(
-                "  {cut_pixels:>6} | {nodes:>7} | {c:>6.1} | {d:>6.1} | {:>8.1} | {:>4.1}",
+                "  {cut_pixels:>6} | {nodes:>7} | {c:>6.1} | {d:>6.1} | {:>8.1} | {:>4.1}{label}",
                 c + d,
                 1e3 / (c + d)
             );

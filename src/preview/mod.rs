@@ -100,6 +100,8 @@ pub struct Preview {
     /// Per node: the mean disc radius of the surfels below.
     disc_radius: Vec<f32>,
     renderer: Renderer,
+    /// The same at half the size, for frames while the camera moves.
+    reduced: Renderer,
     has_scene: bool,
     bounds: (Vec3, Vec3),
 }
@@ -123,6 +125,7 @@ impl Preview {
         Ok(Preview {
             senders,
             disc_radius,
+            reduced: Renderer::new(gpu.clone(), reduced_size(size), scene)?,
             renderer: Renderer::new(gpu, size, scene)?,
             has_scene: scene.is_some(),
             bounds,
@@ -174,14 +177,30 @@ impl Preview {
         (view, splats, settings)
     }
 
-    /// Draw prepared splats.
+    /// Draw prepared splats, at the reduced size if `view`'s camera has it (see
+    /// [`Preview::reduced_size`]).
     pub fn draw(
         &mut self,
         view: &View,
         splats: &[Splat],
         settings: FrameSettings,
     ) -> Result<Image, VulkanError> {
-        self.renderer.render(view, splats, settings)
+        self.renderer_for(view).render(view, splats, settings)
+    }
+
+    /// The size of frames drawn while the camera moves: half the size in each direction, a
+    /// quarter of the fragments (lavapipe's cost is in the fragments, see docs/preview.md).
+    pub fn reduced_size(&self) -> (u32, u32) {
+        self.reduced.size()
+    }
+
+    fn renderer_for(&mut self, view: &View) -> &mut Renderer {
+        let size = (view.camera.width, view.camera.height);
+        if size == self.reduced.size() && size != self.renderer.size() {
+            &mut self.reduced
+        } else {
+            &mut self.renderer
+        }
     }
 
     /// Prepare and draw one frame.
@@ -213,7 +232,8 @@ impl Preview {
         self.renderer.gpu()
     }
 
-    /// Draw prepared splats into a window's swapchain image (see [`Renderer::present`]).
+    /// Draw prepared splats into a window's swapchain image (see [`Renderer::present`]), at
+    /// the reduced size if `view`'s camera has it (scaled up by the blit).
     pub fn present(
         &mut self,
         view: &View,
@@ -221,13 +241,20 @@ impl Preview {
         settings: FrameSettings,
         target: &renderer::PresentTarget,
     ) -> Result<Option<Vec<u8>>, VulkanError> {
-        self.renderer.present(view, splats, settings, target)
+        self.renderer_for(view)
+            .present(view, splats, settings, target)
     }
 
     /// Draw frames of another size from now on.
     pub fn resize(&mut self, size: (u32, u32), scene: Option<&Scene>) -> Result<(), VulkanError> {
         let gpu = self.renderer.gpu_arc();
+        self.reduced = Renderer::new(gpu.clone(), reduced_size(size), scene)?;
         self.renderer = Renderer::new(gpu, size, scene)?;
         Ok(())
     }
+}
+
+/// Half of `size`, rounded up.
+fn reduced_size((w, h): (u32, u32)) -> (u32, u32) {
+    (w.div_ceil(2), h.div_ceil(2))
 }

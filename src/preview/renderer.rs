@@ -70,6 +70,8 @@ pub struct Renderer {
     uniforms: Buffer,
     instances: Buffer,
     readback: Buffer,
+    /// Whether the float output can be blitted with linear filtering (to scale it up).
+    blit_linear: bool,
     geometry: Option<Geometry>,
     command: vk::CommandBuffer,
     fence: vk::Fence,
@@ -205,6 +207,7 @@ impl Renderer {
         })?[0];
         o.name(command, "frame commands")?;
         let fence = o.fence("frame fence", &vk::FenceCreateInfo::default())?;
+        let blit_linear = linear_blit(&o);
         Ok(Renderer {
             objects: o,
             size,
@@ -218,6 +221,7 @@ impl Renderer {
             uniforms,
             instances,
             readback,
+            blit_linear,
             geometry,
             command,
             fence,
@@ -226,6 +230,11 @@ impl Renderer {
 
     pub fn gpu(&self) -> &Gpu {
         &self.objects.gpu
+    }
+
+    /// The size of its frames.
+    pub fn size(&self) -> (u32, u32) {
+        self.size
     }
 
     pub fn gpu_arc(&self) -> Arc<Gpu> {
@@ -274,15 +283,20 @@ impl Renderer {
             |r, d| {
                 r.record_passes(d, cmd, splats.len() as u32, settings);
                 let output = (r.output, r.size);
-                let screenshot = target.screenshot.then_some(r.readback.handle);
+                // A screenshot needs the frame at the image's size, which the readback
+                // buffer holds.
+                let screenshot =
+                    (target.screenshot && target.size == r.size).then_some(r.readback.handle);
+                let linear = r.blit_linear;
+                let image = (target.image, target.size);
                 // SAFETY: the submit waits for the image's acquisition at the transfer stage;
-                // the swapchain has the renderer's size, 4 bytes a pixel (the readback buffer
-                // holds 16).
-                unsafe { transfer::record_present(d, cmd, output, target.image, screenshot) };
+                // a screenshot's image has the renderer's size, 4 bytes a pixel (the readback
+                // buffer holds 16).
+                unsafe { transfer::record_present(d, cmd, output, image, screenshot, linear) };
             },
             Some((target.acquired, target.rendered)),
         )?;
-        Ok(target.screenshot.then(|| {
+        Ok((target.screenshot && target.size == self.size).then(|| {
             let n = self.size.0 as usize * self.size.1 as usize;
             self.readback
                 .read::<[u8; 4]>(n)
@@ -539,6 +553,21 @@ pub struct PresentTarget {
     pub acquired: vk::Semaphore,
     /// Signalled when the frame is drawn; presentation waits for it.
     pub rendered: vk::Semaphore,
-    /// Read the image back after drawing.
+    /// Its size (the blit scales the frame up to it).
+    pub size: (u32, u32),
+    /// Read the image back after drawing (only when the frame has the image's size).
     pub screenshot: bool,
+}
+
+/// Whether the device filters RGBA32F linearly in blits.
+fn linear_blit(o: &Objects) -> bool {
+    // SAFETY: a plain query of the physical device.
+    let props = unsafe {
+        o.gpu
+            .instance
+            .get_physical_device_format_properties(o.gpu.physical, FLOAT4)
+    };
+    props
+        .optimal_tiling_features
+        .contains(vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR)
 }

@@ -103,29 +103,36 @@ pub unsafe fn record_readback(
 }
 
 /// Record the blit of `output` (of `size`, in TRANSFER_SRC_OPTIMAL) into the acquired
-/// swapchain image `target` (which converts it to the image's format), leaving the image ready
-/// to present; with `screenshot`, also read it back into `buffer`.
+/// swapchain image `target` (of `target_size`; the blit scales the frame to it, filtering
+/// linearly where `linear`, and converts it to the image's format), leaving the image ready to
+/// present; with `screenshot`, also read it back into that buffer.
 ///
 /// # Safety
 /// `cmd` is recording; the submission waits for `target`'s acquisition at the transfer stage;
-/// `target` has `size` and, with `screenshot`, can be read and fits in `buffer`.
+/// with `screenshot`, `target` can be read and fits in the buffer.
 pub unsafe fn record_present(
     d: &ash::Device,
     cmd: vk::CommandBuffer,
     (output, size): (vk::Image, (u32, u32)),
-    target: vk::Image,
+    (target, target_size): (vk::Image, (u32, u32)),
     screenshot: Option<vk::Buffer>,
+    linear: bool,
 ) {
-    let corner = vk::Offset3D {
-        x: size.0 as i32,
-        y: size.1 as i32,
+    let corner = |(w, h): (u32, u32)| vk::Offset3D {
+        x: w as i32,
+        y: h as i32,
         z: 1,
     };
     let blit = vk::ImageBlit {
         src_subresource: colour_layers(),
-        src_offsets: [vk::Offset3D::default(), corner],
+        src_offsets: [vk::Offset3D::default(), corner(size)],
         dst_subresource: colour_layers(),
-        dst_offsets: [vk::Offset3D::default(), corner],
+        dst_offsets: [vk::Offset3D::default(), corner(target_size)],
+    };
+    let filter = if linear && size != target_size {
+        vk::Filter::LINEAR
+    } else {
+        vk::Filter::NEAREST
     };
     let transfer = vk::PipelineStageFlags::TRANSFER;
     let none = vk::AccessFlags::empty();
@@ -146,15 +153,7 @@ pub unsafe fn record_present(
             (transfer, transfer),
             layout_barrier(target, undefined, dst),
         );
-        d.cmd_blit_image(
-            cmd,
-            output,
-            src.0,
-            target,
-            dst.0,
-            &[blit],
-            vk::Filter::NEAREST,
-        );
+        d.cmd_blit_image(cmd, output, src.0, target, dst.0, &[blit], filter);
         let mut last = dst;
         if let Some(buffer) = screenshot {
             barrier(
@@ -163,7 +162,7 @@ pub unsafe fn record_present(
                 (transfer, transfer),
                 layout_barrier(target, dst, src),
             );
-            record_readback(d, cmd, (target, size), buffer, None);
+            record_readback(d, cmd, (target, target_size), buffer, None);
             last = src;
         }
         let present = (vk::ImageLayout::PRESENT_SRC_KHR, none);

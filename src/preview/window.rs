@@ -4,8 +4,9 @@
 //! - Left drag orbits the camera around its target, right or middle drag pans, the wheel
 //!   zooms; keys 1–5 (or t, i, d, s, c) switch what is shown, r returns to the start, Esc or
 //!   q quits.
-//! - While the camera moves the cut is [`MOVING_COARSENESS`] times coarser than asked; at
-//!   rest it halves every frame down to the asked bound.
+//! - The first frame after the camera moves is drawn at half the size (scaled up by the
+//!   blit) with a cut [`MOVING_COARSENESS`] times coarser than asked; at rest the frames are
+//!   full size and the cut halves every frame down to the asked bound.
 //! - The title shows what is shown, the frame time and the cut's size.
 //! - A scripted run (`frames`) orbits once around the target and ends where it started, then
 //!   refines, optionally reads the swapchain image back as a screenshot, and exits: what the
@@ -174,7 +175,17 @@ impl App<'_> {
             return Ok(false);
         };
         let t = std::time::Instant::now();
-        let (view, splats, settings) = r.preview.prepare(&self.camera, self.show, self.cut_now);
+        // The first frame after a move is drawn at half the size (a quarter of the fragments)
+        // with a cut as coarse on screen; refining frames at full size.
+        let moving = self.cut_now >= MOVING_COARSENESS * self.settings.cut_pixels;
+        let (camera, cut) = if moving {
+            let (w, h) = r.preview.reduced_size();
+            let scale = h as f32 / self.camera.height as f32;
+            (self.camera.clone().with_size(w, h), self.cut_now * scale)
+        } else {
+            (self.camera.clone(), self.cut_now)
+        };
+        let (view, splats, settings) = r.preview.prepare(&camera, self.show, cut);
         let cut_seconds = t.elapsed().as_secs_f64();
         let t = std::time::Instant::now();
         let Some(index) = r.swapchain.acquire()? else {
@@ -185,6 +196,7 @@ impl App<'_> {
             image: r.swapchain.images[index as usize],
             acquired: r.swapchain.acquired,
             rendered: r.swapchain.rendered[index as usize],
+            size: r.swapchain.extent,
             screenshot,
         };
         let pixels = r.preview.present(&view, &splats, settings, &target)?;
@@ -195,11 +207,12 @@ impl App<'_> {
         self.report.last_cut_seconds = cut_seconds;
         self.report.last_draw_seconds = draw_seconds;
         r.window.set_title(&format!(
-            "wpbgi preview: {:?}, {:.0} ms, cut of {} nodes ({} px)",
+            "wpbgi preview: {:?}, {:.0} ms, cut of {} nodes ({} px{})",
             self.show,
             1e3 * (cut_seconds + draw_seconds),
             splats.len(),
-            self.cut_now
+            self.cut_now,
+            if moving { ", half size" } else { "" }
         ));
         if let (Some(bytes), Some(path)) = (pixels, &self.settings.screenshot) {
             let bgr = matches!(
