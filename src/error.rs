@@ -44,7 +44,19 @@ pub enum Error {
         reason: String,
     },
 
-    #[error("{path}: unsupported scene format (expected .gltf or .glb)")]
+    #[error("{path}: {reason}")]
+    Usd { path: PathBuf, reason: String },
+
+    #[error("{path}: prim {prim}: {reason}")]
+    UsdPrim {
+        path: PathBuf,
+        prim: String,
+        reason: String,
+    },
+
+    #[error(
+        "{path}: unsupported scene format (expected .gltf, .glb, .usd, .usda, .usdc or .usdz)"
+    )]
     UnsupportedFormat { path: PathBuf },
 
     #[error("{path}: the scene has no emitter (no emissive material and no light), so it would render black")]

@@ -60,17 +60,7 @@ pub(super) fn import(path: &Path, bytes: &[u8]) -> Result<Scene> {
     let default_material = scene.materials.len();
     scene.materials.push(Material {
         name: "(default)".into(),
-        scattering: Scattering::Pbr(PbrParams {
-            base_color: Rgb::ONE,
-            base_color_texture: None,
-            metallic: 1.0,
-            roughness: 1.0,
-            metallic_roughness_texture: None,
-            transmission: 0.0,
-            transmission_texture: None,
-            ior: 1.5,
-            thin_walled: false,
-        }),
+        scattering: Scattering::Pbr(PbrParams::constant(Rgb::ONE, 1.0, 1.0)),
         emission: None,
     });
 
@@ -595,21 +585,11 @@ fn convert_primitive(
             t.swap(1, 2);
         }
     }
-    let before = tris.len();
-    tris.retain(|t| {
-        let (a, b, c) = (
-            positions[t[0] as usize],
-            positions[t[1] as usize],
-            positions[t[2] as usize],
-        );
-        let area2 = (b - a).cross(c - a).length();
-        area2 > 0.0 && area2.is_finite()
-    });
-    if tris.len() < before {
+    let dropped = super::drop_degenerate(&positions, &mut tris);
+    if dropped > 0 {
         warnings.push(Warning(format!(
-            "mesh \"{mesh_name}\" primitive {}: dropped {} degenerate (zero-area) triangles",
+            "mesh \"{mesh_name}\" primitive {}: dropped {dropped} degenerate (zero-area) triangles",
             prim.index(),
-            before - tris.len()
         )));
     }
     if tris.is_empty() {

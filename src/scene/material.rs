@@ -33,6 +33,23 @@ pub struct PbrParams {
     pub thin_walled: bool,
 }
 
+impl PbrParams {
+    /// Untextured, opaque parameters.
+    pub fn constant(base_color: Rgb, metallic: f32, roughness: f32) -> PbrParams {
+        PbrParams {
+            base_color,
+            base_color_texture: None,
+            metallic,
+            roughness,
+            metallic_roughness_texture: None,
+            transmission: 0.0,
+            transmission_texture: None,
+            ior: 1.5,
+            thin_walled: false,
+        }
+    }
+}
+
 /// What scatters light at a surface.
 #[derive(Clone, Debug)]
 pub enum Scattering {

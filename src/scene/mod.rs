@@ -6,6 +6,8 @@ mod gltf;
 pub mod light;
 pub mod material;
 pub mod texture;
+#[cfg(feature = "usd")]
+mod usd;
 
 pub use camera::{Camera, Projection};
 pub use light::{LightKind, PunctualLight};
@@ -84,6 +86,22 @@ impl Mesh {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Warning(pub String);
 
+/// Remove the zero-area (and non-finite) triangles of `triangles` over `positions`; returns
+/// how many were removed.
+pub(crate) fn drop_degenerate(positions: &[Vec3], triangles: &mut Vec<[u32; 3]>) -> usize {
+    let before = triangles.len();
+    triangles.retain(|t| {
+        let (a, b, c) = (
+            positions[t[0] as usize],
+            positions[t[1] as usize],
+            positions[t[2] as usize],
+        );
+        let area2 = (b - a).cross(c - a).length();
+        area2 > 0.0 && area2.is_finite()
+    });
+    before - triangles.len()
+}
+
 #[derive(Clone, Debug, Default)]
 pub struct Scene {
     /// The file the scene came from (named in every error).
@@ -97,13 +115,16 @@ pub struct Scene {
 }
 
 impl Scene {
-    /// Load a `.gltf` or `.glb` file.
+    /// Load a `.gltf` or `.glb` file, or (with the `usd` feature) a `.usd`, `.usda`, `.usdc`
+    /// or `.usdz` stage.
     pub fn load(path: &Path) -> Result<Scene> {
         let ext = path
             .extension()
             .and_then(|e| e.to_str())
             .map(str::to_ascii_lowercase);
         match ext.as_deref() {
+            #[cfg(feature = "usd")]
+            Some("usd") | Some("usda") | Some("usdc") | Some("usdz") => usd::import(path),
             Some("gltf") | Some("glb") => {
                 let bytes = std::fs::read(path).map_err(|source| Error::Io {
                     path: path.to_path_buf(),

@@ -25,7 +25,7 @@ pub enum QualityArg {
 
 #[derive(Args)]
 pub struct BakeArgs {
-    /// The scene (.gltf or .glb).
+    /// The scene (.gltf, .glb, .usd, .usda, .usdc or .usdz).
     scene: PathBuf,
     /// The cache to write (.wpc). Written atomically: an interrupted bake leaves the previous
     /// file untouched.

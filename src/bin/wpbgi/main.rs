@@ -22,7 +22,7 @@ const DEMO_SCENE: &[u8] = include_bytes!("../../../scenes/cbox-rough.gltf");
 const DEMO_REFERENCE: &[u8] = include_bytes!("../../../scenes/cbox-rough_d3_ref.exr");
 
 #[derive(Parser)]
-#[command(name = "wpbgi", version, about = "Noise-free global illumination for glTF scenes with Mitsuba's diffuse, roughconductor and roughdielectric materials.", long_about = None)]
+#[command(name = "wpbgi", version, about = "Noise-free global illumination for glTF and USD scenes with Mitsuba's diffuse, roughconductor and roughdielectric materials.", long_about = None)]
 struct Cli {
     /// Worker threads (default: all cores). Results are identical for any count.
     #[arg(long, global = true)]
@@ -78,7 +78,7 @@ pub(crate) struct CameraArgs {
 
 #[derive(Args)]
 struct ReferenceArgs {
-    /// The scene (.gltf or .glb).
+    /// The scene (.gltf, .glb, .usd, .usda, .usdc or .usdz).
     scene: PathBuf,
     /// Output image (OpenEXR, float32 RGB).
     #[arg(short, long)]

@@ -37,7 +37,7 @@ pub enum Aov {
 
 #[derive(Args)]
 pub struct RenderArgs {
-    /// The scene the cache was baked from (.gltf or .glb).
+    /// The scene the cache was baked from (.gltf, .glb, .usd, .usda, .usdc or .usdz).
     pub scene: PathBuf,
     /// The cache (.wpc); refused if the scene or its bake settings changed since.
     #[arg(long)]

@@ -1,0 +1,664 @@
+//! USD import (`.usda`, `.usdc`, `.usdz`) through `openusd` 0.6 into the same scene IR as
+//! glTF (DESIGN.md §3–§4).
+//!
+//! - The stage is composed by openusd (sublayers, references, instancing); every active,
+//!   loaded, defined `Mesh` that is visible and not of `proxy` or `guide` purpose becomes a
+//!   mesh, with instance proxies expanded.
+//! - World transforms compose each prim's `xformOpOrder` (row vectors, USD's convention) up to
+//!   the root, stopping at `!resetXformStack!`. The stage's `upAxis` and `metersPerUnit` are
+//!   folded in: the IR is Y-up in metres, so a Z-up stage in centimetres renders as its Y-up
+//!   metre twin.
+//! - Polygons are fanned into triangles; `orientation = "leftHanded"` and mirroring
+//!   transforms flip the winding so that front faces stay counter-clockwise.
+//! - Materials come from `compute_bound_material`, mapped from `UsdPreviewSurface` as glTF's
+//!   metallic-roughness is (`roughness` → α = roughness², `metallic`, `opacity` < 1 →
+//!   transmission with `ior`, `emissiveColor` → emission), unless explicit `mitsuba:*`
+//!   attributes on the material say otherwise.
+//! - Cameras: the focal length and vertical aperture give the vertical field of view.
+//!
+//! Attributes are read at their default value, or where they only have time samples, at the
+//! stage's start time code.
+
+use super::camera::{Camera, Projection};
+use super::material::{Emission, Material, PbrParams, Scattering};
+use super::{drop_degenerate, Mesh, Scene, Warning};
+use crate::error::{Error, Result};
+use crate::spectrum::Rgb;
+use glam::{DMat4, DVec3, Vec3};
+use openusd::gf;
+use openusd::schemas::geom::{
+    self as ug, Gprim, Imageable, PointBased, Purpose, Visibility, Xformable,
+};
+use openusd::schemas::shade::{read_preview_surface, Channel, MaterialBindingAPI};
+use openusd::sdf;
+use openusd::usd::{PrimPredicate, Stage, TimeCode};
+use std::collections::HashMap;
+use std::path::Path;
+
+/// Import the USD stage at `path`.
+pub fn import(path: &Path) -> Result<Scene> {
+    let file = path.to_string_lossy().into_owned();
+    let usd_err = |what: String| Error::Usd {
+        path: path.to_path_buf(),
+        reason: what,
+    };
+    if !path.exists() {
+        return Err(Error::Io {
+            path: path.to_path_buf(),
+            source: std::io::Error::new(std::io::ErrorKind::NotFound, "no such file"),
+        });
+    }
+    let stage = Stage::open(&file).map_err(|e| usd_err(format!("cannot open the stage: {e:#}")))?;
+    let warnings = Vec::new();
+    let mut importer = Importer {
+        path,
+        stage: &stage,
+        time: TimeCode::new(stage.start_time_code()),
+        to_ir: stage_to_ir(&stage),
+        scene: Scene {
+            path: path.to_path_buf(),
+            warnings,
+            ..Default::default()
+        },
+        materials: HashMap::new(),
+        world: HashMap::new(),
+    };
+    let mut prims = Vec::new();
+    stage
+        .traverse(PrimPredicate::DEFAULT_PROXIES, |p| prims.push(p.clone()))
+        .map_err(|e| usd_err(format!("cannot traverse the stage: {e:#}")))?;
+    for p in prims {
+        let prim = stage.prim(p.clone());
+        let ty = prim
+            .type_name()
+            .map_err(|e| usd_err(format!("prim {}: {e:#}", p.as_str())))?;
+        match ty.as_ref().map(|t| t.as_str()) {
+            Some("Mesh") => importer.mesh(&p)?,
+            Some("Camera") => importer.camera(&p)?,
+            _ => {}
+        }
+    }
+    // A layer or reference that cannot be read leaves the scene incomplete: an error. (Prims
+    // compose lazily, so the errors are known once the stage has been traversed.)
+    if let Some(e) = stage.composition_errors().first() {
+        return Err(usd_err(format!("cannot compose the stage: {e}")));
+    }
+    Ok(importer.scene)
+}
+
+struct Importer<'a> {
+    path: &'a Path,
+    stage: &'a Stage,
+    time: TimeCode,
+    /// Stage units and up axis to the IR's metres, Y up (column vectors).
+    to_ir: DMat4,
+    scene: Scene,
+    /// Material prim path (or "" for the default material) to its index.
+    materials: HashMap<String, usize>,
+    /// Local-to-world matrices (column vectors, stage units) by prim path.
+    world: HashMap<String, DMat4>,
+}
+
+impl Importer<'_> {
+    fn prim_err(&self, prim: &sdf::Path, reason: impl std::fmt::Display) -> Error {
+        Error::UsdPrim {
+            path: self.path.to_path_buf(),
+            prim: prim.as_str().to_string(),
+            reason: reason.to_string(),
+        }
+    }
+
+    /// The local-to-world matrix of `prim` (column vectors, stage units).
+    fn world(&mut self, prim: &sdf::Path) -> Result<DMat4> {
+        if let Some(m) = self.world.get(prim.as_str()) {
+            return Ok(*m);
+        }
+        let p = self.stage.prim(prim.clone());
+        let (local, resets) = match ug::Xform::get(self.stage, prim.clone()) {
+            // Every xformable prim's ops are read through the Xformable interface of an
+            // Xform view of it (the ops are plain attributes).
+            Ok(Some(x)) => (
+                x.local_to_parent_transform(self.time)
+                    .map_err(|e| self.prim_err(prim, format!("{e:#}")))?,
+                x.resets_xform_stack()
+                    .map_err(|e| self.prim_err(prim, format!("{e:#}")))?,
+            ),
+            _ => xformable_of(&p, self.time).map_err(|e| self.prim_err(prim, format!("{e:#}")))?,
+        };
+        let local = column_matrix(&local);
+        let parent = prim.parent();
+        let m = match parent {
+            Some(parent) if !resets && parent != sdf::Path::abs_root() => {
+                self.world(&parent)? * local
+            }
+            _ => local,
+        };
+        self.world.insert(prim.as_str().to_string(), m);
+        Ok(m)
+    }
+
+    fn mesh(&mut self, prim: &sdf::Path) -> Result<()> {
+        let stage = self.stage;
+        let Some(mesh) = ug::Mesh::get(stage, prim.clone()).map_err(|e| self.prim_err(prim, e))?
+        else {
+            return Ok(());
+        };
+        let visible = mesh
+            .compute_visibility()
+            .map_err(|e| self.prim_err(prim, e))?;
+        let purpose = mesh.compute_purpose().map_err(|e| self.prim_err(prim, e))?;
+        if visible == Visibility::Invisible || matches!(purpose, Purpose::Proxy | Purpose::Guide) {
+            return Ok(());
+        }
+        let read_err = |what: &str, e: anyhow::Error| self.prim_err(prim, format!("{what}: {e:#}"));
+        let points: Vec<gf::Vec3f> = sample(&mesh.points_attr(), self.time)
+            .and_then(|v| {
+                v.map(|v| v.cast::<Vec<gf::Vec3f>>())
+                    .transpose()
+                    .map_err(Into::into)
+            })
+            .map_err(|e| read_err("points", e))?
+            .unwrap_or_default();
+        let ints = |attr, what: &str| -> Result<Vec<i32>> {
+            match sample(&attr, self.time).map_err(|e| read_err(what, e))? {
+                None => Ok(vec![]),
+                Some(sdf::Value::IntVec(v)) => Ok(v),
+                Some(other) => {
+                    Err(self.prim_err(prim, format!("{what} is {other:?}, not an array of ints")))
+                }
+            }
+        };
+        let counts = ints(mesh.face_vertex_counts_attr(), "faceVertexCounts")?;
+        let indices = ints(mesh.face_vertex_indices_attr(), "faceVertexIndices")?;
+        let holes = ints(mesh.hole_indices_attr(), "holeIndices")?;
+        if !holes.is_empty() {
+            self.scene.warnings.push(Warning(format!(
+                "mesh {}: {} hole faces are drawn filled (holes are not supported)",
+                prim.as_str(),
+                holes.len()
+            )));
+        }
+        let world = self.to_ir * self.world(prim)?;
+        let positions: Vec<Vec3> = points
+            .iter()
+            .map(|p| {
+                world
+                    .transform_point3(DVec3::new(p.x as f64, p.y as f64, p.z as f64))
+                    .as_vec3()
+            })
+            .collect();
+        if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
+            return Err(self.prim_err(prim, format!("point {i} is NaN or infinite")));
+        }
+        let n = positions.len();
+        // Every face's vertices, validated, in face order.
+        let mut faces: Vec<&[i32]> = Vec::with_capacity(counts.len());
+        let mut at = 0usize;
+        for (face, &c) in counts.iter().enumerate() {
+            if c < 0 || at + c as usize > indices.len() {
+                return Err(self.prim_err(
+                    prim,
+                    format!(
+                        "face {face} has {c} vertices, past the {} face-vertex indices",
+                        indices.len()
+                    ),
+                ));
+            }
+            let f = &indices[at..at + c as usize];
+            if let Some(&bad) = f.iter().find(|&&i| i < 0 || i as usize >= n) {
+                return Err(self.prim_err(
+                    prim,
+                    format!("face {face} has vertex index {bad}, out of range (the mesh has {n} points)"),
+                ));
+            }
+            faces.push(f);
+            at += c as usize;
+        }
+        let normal_matrix = glam::DMat3::from_mat4(world).inverse().transpose();
+        let normals = self
+            .primvar3(&mesh.normals_attr(), prim, at, n)?
+            .map(|(v, fv)| {
+                let v = v
+                    .iter()
+                    .map(|p| {
+                        let d = DVec3::new(p.x as f64, p.y as f64, p.z as f64);
+                        (normal_matrix * d)
+                            .as_vec3()
+                            .try_normalize()
+                            .unwrap_or(Vec3::ZERO)
+                    })
+                    .collect::<Vec<_>>();
+                (v, fv)
+            });
+        let uvs = self.primvar2(
+            &openusd::usd::SchemaBase::prim(&mesh).attribute("primvars:st"),
+            prim,
+            at,
+            n,
+        )?;
+        // Face-varying primvars get one vertex per face corner; otherwise points are shared.
+        let face_varying =
+            normals.as_ref().is_some_and(|x| x.1) || uvs.as_ref().is_some_and(|x| x.1);
+        let corner_points: Vec<u32> = faces
+            .iter()
+            .flat_map(|f| f.iter().map(|&i| i as u32))
+            .collect();
+        let (positions, normals, uvs) = if face_varying {
+            (
+                spread(positions, false, &corner_points),
+                normals.map(|(v, fv)| spread(v, fv, &corner_points)),
+                uvs.map(|(v, fv)| spread(v, fv, &corner_points)),
+            )
+        } else {
+            (positions, normals.map(|x| x.0), uvs.map(|x| x.0))
+        };
+        let mut triangles = Vec::new();
+        let mut corner = 0u32;
+        for f in &faces {
+            let id = |k: usize| {
+                if face_varying {
+                    corner + k as u32
+                } else {
+                    f[k] as u32
+                }
+            };
+            for k in 2..f.len() {
+                triangles.push([id(0), id(k - 1), id(k)]);
+            }
+            corner += f.len() as u32;
+        }
+        let left_handed = mesh
+            .orientation_attr()
+            .cast::<String>()
+            .ok()
+            .flatten()
+            .is_some_and(|o| o == "leftHanded");
+        if left_handed != (world.determinant() < 0.0) {
+            for t in &mut triangles {
+                t.swap(1, 2);
+            }
+        }
+        let dropped = drop_degenerate(&positions, &mut triangles);
+        if dropped > 0 {
+            self.scene.warnings.push(Warning(format!(
+                "mesh {}: dropped {dropped} degenerate (zero-area) triangles",
+                prim.as_str()
+            )));
+        }
+        if triangles.is_empty() {
+            return Ok(());
+        }
+        let double_sided = mesh
+            .double_sided_attr()
+            .get::<bool>()
+            .ok()
+            .flatten()
+            .unwrap_or(false);
+        let material = self.material_of(prim, double_sided)?;
+        self.scene.meshes.push(Mesh {
+            name: prim.as_str().to_string(),
+            positions,
+            normals: normals.filter(|n| n.iter().all(|v| *v != Vec3::ZERO)),
+            uvs,
+            triangles,
+            material,
+        });
+        Ok(())
+    }
+
+    /// A primvar's values and whether they are face-varying (one per face corner, of which
+    /// the mesh has `corners`), or per point (`points` of them); `None` where it is absent or
+    /// constant or uniform (left out).
+    fn primvar<T>(
+        &self,
+        attr: &openusd::usd::Attribute,
+        prim: &sdf::Path,
+        (corners, points): (usize, usize),
+        read: impl Fn(sdf::Value) -> Option<Vec<T>>,
+    ) -> Result<Option<(Vec<T>, bool)>> {
+        let name = attr
+            .path()
+            .as_str()
+            .rsplit('.')
+            .next()
+            .unwrap_or("primvar")
+            .to_string();
+        let Some(value) =
+            sample(attr, self.time).map_err(|e| self.prim_err(prim, format!("{name}: {e:#}")))?
+        else {
+            return Ok(None);
+        };
+        let values = read(value)
+            .ok_or_else(|| self.prim_err(prim, format!("{name} has an unexpected type")))?;
+        let interpolation = attr
+            .get_metadata::<sdf::Value>("interpolation")
+            .ok()
+            .flatten()
+            .and_then(|v| v.cast::<String>().ok())
+            .unwrap_or_else(|| "vertex".into());
+        let (expected, face_varying) = match interpolation.as_str() {
+            "faceVarying" => (corners, true),
+            "vertex" | "varying" => (points, false),
+            _ => return Ok(None),
+        };
+        if values.len() != expected {
+            return Err(self.prim_err(
+                prim,
+                format!(
+                    "{name} ({interpolation}) has {} values where the mesh needs {expected}",
+                    values.len()
+                ),
+            ));
+        }
+        Ok(Some((values, face_varying)))
+    }
+
+    fn primvar3(
+        &self,
+        attr: &openusd::usd::Attribute,
+        prim: &sdf::Path,
+        corners: usize,
+        points: usize,
+    ) -> Result<Option<(Vec<gf::Vec3f>, bool)>> {
+        self.primvar(attr, prim, (corners, points), |v| {
+            v.cast::<Vec<gf::Vec3f>>().ok()
+        })
+    }
+
+    fn primvar2(
+        &self,
+        attr: &openusd::usd::Attribute,
+        prim: &sdf::Path,
+        corners: usize,
+        points: usize,
+    ) -> Result<Option<(Vec<glam::Vec2>, bool)>> {
+        self.primvar(attr, prim, (corners, points), |v| match v {
+            sdf::Value::Vec2fVec(v) => Some(v.iter().map(|p| glam::Vec2::new(p.x, p.y)).collect()),
+            _ => None,
+        })
+    }
+
+    /// The index of the material bound to `prim` (imported on first use).
+    fn material_of(&mut self, prim: &sdf::Path, double_sided: bool) -> Result<usize> {
+        let bound = match MaterialBindingAPI::get(self.stage, prim.clone()) {
+            Ok(Some(api)) => api
+                .compute_bound_material("")
+                .map_err(|e| self.prim_err(prim, format!("material binding: {e:#}")))?,
+            _ => None,
+        };
+        let key = format!(
+            "{}{}",
+            bound.as_ref().map_or("", |p| p.as_str()),
+            if double_sided { " (double-sided)" } else { "" }
+        );
+        if let Some(&i) = self.materials.get(&key) {
+            return Ok(i);
+        }
+        let material = match &bound {
+            Some(m) => self.preview_material(m, double_sided)?,
+            None => default_material(),
+        };
+        self.scene.materials.push(material);
+        let i = self.scene.materials.len() - 1;
+        self.materials.insert(key, i);
+        Ok(i)
+    }
+
+    /// The explicit Mitsuba BSDF of material prim `m` (its `mitsuba:*` attributes), if any.
+    fn explicit_bsdf(&self, m: &sdf::Path) -> Result<Option<crate::bsdf::Bsdf>> {
+        let prim = self.stage.prim(m.clone());
+        let names = prim
+            .property_names()
+            .map_err(|e| self.prim_err(m, format!("{e:#}")))?;
+        let mut desc = serde_json::Map::new();
+        for name in names
+            .iter()
+            .filter_map(|n| n.as_str().strip_prefix("mitsuba:"))
+        {
+            let attr = prim.attribute(format!("mitsuba:{name}"));
+            let Some(value) = attr
+                .get::<sdf::Value>()
+                .map_err(|e| self.prim_err(m, format!("mitsuba:{name}: {e:#}")))?
+            else {
+                continue;
+            };
+            let json = if let Ok(x) = value.clone().cast::<f64>() {
+                serde_json::json!(x)
+            } else if let Ok(v) = value.clone().cast::<gf::Vec3f>() {
+                serde_json::json!([v.x, v.y, v.z])
+            } else if let Ok(t) = value.clone().cast::<String>() {
+                serde_json::json!(t)
+            } else if let Ok(b) = value.clone().cast::<bool>() {
+                serde_json::json!(b)
+            } else {
+                return Err(self.prim_err(
+                    m,
+                    format!("mitsuba:{name} must be a number, a colour, a string or a bool"),
+                ));
+            };
+            desc.insert(name.to_string(), json);
+        }
+        if desc.is_empty() {
+            return Ok(None);
+        }
+        crate::bsdf::mitsuba::parse_bsdf(&serde_json::Value::Object(desc))
+            .map(Some)
+            .map_err(|e| self.prim_err(m, e))
+    }
+
+    /// A material from the `UsdPreviewSurface` of material prim `m`; explicit `mitsuba:*`
+    /// attributes on it win over the surface's scattering.
+    fn preview_material(&mut self, m: &sdf::Path, double_sided: bool) -> Result<Material> {
+        let explicit = self.explicit_bsdf(m)?;
+        let surface = read_preview_surface(self.stage, m)
+            .map_err(|e| self.prim_err(m, format!("UsdPreviewSurface: {e:#}")))?;
+        let Some(s) = surface else {
+            if explicit.is_none() {
+                self.scene.warnings.push(Warning(format!(
+                    "material {}: no UsdPreviewSurface; grey diffuse used",
+                    m.as_str()
+                )));
+            }
+            return Ok(Material {
+                name: m.as_str().to_string(),
+                scattering: explicit.map_or(default_material().scattering, Scattering::Explicit),
+                emission: None,
+            });
+        };
+        let textured = [
+            ("diffuseColor", s.diffuse_color.texture()),
+            ("emissiveColor", s.emissive_color.texture()),
+            ("metallic", s.metallic.texture()),
+            ("roughness", s.roughness.texture()),
+            ("opacity", s.opacity.texture()),
+        ];
+        for (name, t) in textured {
+            if let Some(t) = t {
+                self.scene.warnings.push(Warning(format!(
+                    "material {}: the {name} texture {t} is not read yet; its constant is used",
+                    m.as_str()
+                )));
+            }
+        }
+        let rgb = |c: &Channel<gf::Vec3f>, default: Rgb| {
+            c.value().map_or(default, |v| Rgb::new(v.x, v.y, v.z))
+        };
+        let scalar = |c: &Channel<f32>, default: f32| c.value().copied().unwrap_or(default);
+        let opacity = scalar(&s.opacity, 1.0).clamp(0.0, 1.0);
+        let emission = rgb(&s.emissive_color, Rgb::ZERO);
+        if !emission.is_finite() || emission.min_element() < 0.0 {
+            return Err(self.prim_err(
+                m,
+                format!("emissiveColor {emission} must be finite and non-negative"),
+            ));
+        }
+        Ok(Material {
+            name: m.as_str().to_string(),
+            scattering: match explicit {
+                Some(b) => Scattering::Explicit(b),
+                // UsdPreviewSurface's defaults: diffuse 0.18, metallic 0, roughness 0.5,
+                // ior 1.5.
+                None => Scattering::Pbr(PbrParams {
+                    transmission: 1.0 - opacity,
+                    ior: scalar(&s.ior, 1.5),
+                    ..PbrParams::constant(
+                        rgb(&s.diffuse_color, Rgb::splat(0.18)),
+                        scalar(&s.metallic, 0.0),
+                        scalar(&s.roughness, 0.5),
+                    )
+                }),
+            },
+            emission: (emission.max_element() > 0.0).then_some(Emission {
+                radiance: emission,
+                texture: None,
+                two_sided: double_sided,
+            }),
+        })
+    }
+
+    fn camera(&mut self, prim: &sdf::Path) -> Result<()> {
+        let Some(cam) =
+            ug::Camera::get(self.stage, prim.clone()).map_err(|e| self.prim_err(prim, e))?
+        else {
+            return Ok(());
+        };
+        let f = |a: openusd::usd::Attribute, default: f32| -> f32 {
+            a.cast::<f32>().ok().flatten().unwrap_or(default)
+        };
+        let focal = f(cam.focal_length_attr(), 50.0);
+        let vertical = f(cam.vertical_aperture_attr(), 15.2908);
+        if !(focal > 0.0 && vertical > 0.0) {
+            return Err(self.prim_err(
+                prim,
+                format!("focal length {focal} and vertical aperture {vertical} must be positive"),
+            ));
+        }
+        let world = self.to_ir * self.world(prim)?;
+        let position = world.transform_point3(DVec3::ZERO).as_vec3();
+        let axis = |v: DVec3| world.transform_vector3(v).as_vec3().try_normalize();
+        let (Some(right), Some(up), Some(forward)) =
+            (axis(DVec3::X), axis(DVec3::Y), axis(DVec3::NEG_Z))
+        else {
+            return Err(self.prim_err(prim, "the camera's transform is singular"));
+        };
+        let ortho = cam
+            .projection_attr()
+            .cast::<String>()
+            .ok()
+            .flatten()
+            .is_some_and(|p| p == "orthographic");
+        let projection = if ortho {
+            // Apertures are in tenths of a scene unit for orthographic cameras.
+            let horizontal = f(cam.horizontal_aperture_attr(), 20.955);
+            let scale = 0.05 * meters_per_unit(self.stage) as f32;
+            Projection::Orthographic {
+                xmag: horizontal * scale,
+                ymag: vertical * scale,
+            }
+        } else {
+            Projection::Perspective {
+                yfov: 2.0 * (0.5 * vertical / focal).atan(),
+            }
+        };
+        self.scene.cameras.push(Camera {
+            name: prim.as_str().to_string(),
+            position,
+            right,
+            up,
+            forward,
+            projection,
+            width: 512,
+            height: 512,
+        });
+        Ok(())
+    }
+}
+
+/// Per-point `values` spread to one per face corner (`corner_points`), or face-varying ones
+/// (`face_varying`) as they are.
+fn spread<T: Copy>(values: Vec<T>, face_varying: bool, corner_points: &[u32]) -> Vec<T> {
+    if face_varying {
+        values
+    } else {
+        corner_points.iter().map(|&i| values[i as usize]).collect()
+    }
+}
+
+/// A grey (0.18) diffuse material, for meshes without a binding.
+fn default_material() -> Material {
+    Material {
+        name: "default".into(),
+        scattering: Scattering::Pbr(PbrParams::constant(Rgb::splat(0.18), 0.0, 1.0)),
+        emission: None,
+    }
+}
+
+/// An attribute's default value, or its value at `time` where it has only time samples.
+fn sample(attr: &openusd::usd::Attribute, time: TimeCode) -> anyhow::Result<Option<sdf::Value>> {
+    match attr.get::<sdf::Value>()? {
+        Some(v) => Ok(Some(v)),
+        None => attr.get_at::<sdf::Value>(time),
+    }
+}
+
+/// A prim's local transform and whether it resets the transform stack, for any xformable
+/// prim type (the ops are read through an Xform view of the prim).
+fn xformable_of(prim: &openusd::usd::Prim, time: TimeCode) -> anyhow::Result<(gf::Matrix4d, bool)> {
+    let view = XformableView(prim.clone());
+    Ok((
+        view.local_to_parent_transform(time)?,
+        view.resets_xform_stack()?,
+    ))
+}
+
+/// Any prim, seen as xformable.
+struct XformableView(openusd::usd::Prim);
+
+impl openusd::usd::SchemaBase for XformableView {
+    const KIND: openusd::usd::SchemaKind = openusd::usd::SchemaKind::AbstractTyped;
+    fn prim(&self) -> &openusd::usd::Prim {
+        &self.0
+    }
+}
+
+impl Imageable for XformableView {}
+impl Xformable for XformableView {}
+
+/// A USD matrix (row vectors, row-major) as a column-vector matrix.
+fn column_matrix(m: &gf::Matrix4d) -> DMat4 {
+    // Row-major storage of the row-vector matrix M is column-major storage of Mᵀ, the
+    // column-vector matrix.
+    DMat4::from_cols_array(&m.0)
+}
+
+fn meters_per_unit(stage: &Stage) -> f64 {
+    stage
+        .stage_metadata("metersPerUnit")
+        .ok()
+        .flatten()
+        .and_then(|v| v.cast::<f64>().ok())
+        .filter(|m| m.is_finite() && *m > 0.0)
+        .unwrap_or(0.01)
+}
+
+/// Stage coordinates to the IR's: scaled to metres, and a Z-up stage turned Y-up
+/// ((x, y, z) → (x, z, −y)).
+fn stage_to_ir(stage: &Stage) -> DMat4 {
+    let z_up = stage
+        .stage_metadata("upAxis")
+        .ok()
+        .flatten()
+        .and_then(|v| v.cast::<String>().ok())
+        .is_some_and(|a| a == "Z");
+    let axes = if z_up {
+        DMat4::from_cols(
+            glam::DVec4::X,
+            glam::DVec4::new(0.0, 0.0, -1.0, 0.0),
+            glam::DVec4::Y,
+            glam::DVec4::W,
+        )
+    } else {
+        DMat4::IDENTITY
+    };
+    DMat4::from_scale(DVec3::splat(meters_per_unit(stage))) * axes
+}

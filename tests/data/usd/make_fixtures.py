@@ -1,0 +1,151 @@
+#!/usr/bin/env python3
+"""Author the USD test fixtures with Pixar's usd-core (`pip install usd-core`; run by hand, not
+by CI; the outputs are committed next to this script).
+
+- cbox-diffuse.usda / .usdc / .usdz: tests/data/mitsuba/cbox-diffuse.gltf as a Y-up stage in
+  metres: the same triangles, vertex normals, explicit Mitsuba BSDFs (`mitsuba:*` attributes on
+  the materials, as the glTF's extras), UsdPreviewSurface emission equal to the glTF's
+  explicit area radiance, and the camera (focal length and vertical aperture giving the glTF's
+  vertical field of view).
+- cbox-diffuse-zup-cm.usda: the same scene Z-up in centimetres (coordinates turned and scaled,
+  camera turned), which must import as its Y-up metre twin.
+- composed.usda: a sublayer (cbox-diffuse.usda) and a reference to quad.usda's /quad, moved by
+  a translate op.
+"""
+import base64
+import json
+import math
+import os
+import struct
+
+from pxr import Gf, Sdf, Usd, UsdGeom, UsdShade, UsdUtils, Vt
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+GLTF = os.path.join(HERE, "..", "mitsuba", "cbox-diffuse.gltf")
+
+
+def read_gltf(path):
+    g = json.load(open(path))
+    buffers = [base64.b64decode(b["uri"].split(",", 1)[1]) for b in g["buffers"]]
+
+    def accessor(i):
+        a = g["accessors"][i]
+        view = g["bufferViews"][a["bufferView"]]
+        data = buffers[view["buffer"]]
+        offset = view.get("byteOffset", 0) + a.get("byteOffset", 0)
+        comps = {"SCALAR": 1, "VEC2": 2, "VEC3": 3}[a["type"]]
+        fmt = {5126: "f", 5125: "I", 5123: "H"}[a["componentType"]]
+        size = struct.calcsize(fmt)
+        stride = view.get("byteStride", size * comps)
+        out = []
+        for k in range(a["count"]):
+            vals = struct.unpack_from("<" + fmt * comps, data, offset + k * stride)
+            out.append(vals if comps > 1 else vals[0])
+        return out
+
+    return g, accessor
+
+
+def author(path, z_up_cm):
+    g, accessor = read_gltf(GLTF)
+    stage = Usd.Stage.CreateNew(path)
+    scale = 100.0 if z_up_cm else 1.0
+    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z if z_up_cm else UsdGeom.Tokens.y)
+    UsdGeom.SetStageMetersPerUnit(stage, 0.01 if z_up_cm else 1.0)
+
+    def point(p):
+        # Y-up metres to Z-up centimetres: (x, y, z) -> (x, -z, y) * 100.
+        return Gf.Vec3f(p[0] * scale, -p[2] * scale, p[1] * scale) if z_up_cm else Gf.Vec3f(*p)
+
+    def normal(n):
+        return Gf.Vec3f(n[0], -n[2], n[1]) if z_up_cm else Gf.Vec3f(*n)
+
+    root = UsdGeom.Xform.Define(stage, "/cbox")
+    stage.SetDefaultPrim(root.GetPrim())
+    materials = []
+    for i, m in enumerate(g["materials"]):
+        mat = UsdShade.Material.Define(stage, f"/cbox/Materials/{m['name']}")
+        shader = UsdShade.Shader.Define(stage, f"/cbox/Materials/{m['name']}/surface")
+        shader.CreateIdAttr("UsdPreviewSurface")
+        pbr = m["pbrMetallicRoughness"]
+        shader.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).Set(Gf.Vec3f(*pbr["baseColorFactor"][:3]))
+        shader.CreateInput("roughness", Sdf.ValueTypeNames.Float).Set(pbr["roughnessFactor"])
+        mitsuba = m["extras"]["mitsuba"]
+        if mitsuba["type"] == "area":
+            shader.CreateInput("emissiveColor", Sdf.ValueTypeNames.Color3f).Set(Gf.Vec3f(*mitsuba["radiance"]))
+            mitsuba = m["extras"]["mitsuba_bsdf"]
+        mat.CreateSurfaceOutput().ConnectToSource(shader.ConnectableAPI(), "surface")
+        prim = mat.GetPrim()
+        prim.CreateAttribute("mitsuba:type", Sdf.ValueTypeNames.String).Set(mitsuba["type"])
+        prim.CreateAttribute("mitsuba:reflectance", Sdf.ValueTypeNames.Color3f).Set(Gf.Vec3f(*mitsuba["reflectance"]))
+        materials.append(mat)
+    for node in g["nodes"]:
+        if "mesh" in node:
+            gm = g["meshes"][node["mesh"]]
+            prim = gm["primitives"][0]
+            positions = accessor(prim["attributes"]["POSITION"])
+            indices = accessor(prim["indices"])
+            mesh = UsdGeom.Mesh.Define(stage, f"/cbox/{node['name'].replace('-', '_')}")
+            mesh.CreatePointsAttr(Vt.Vec3fArray([point(p) for p in positions]))
+            mesh.CreateFaceVertexCountsAttr(Vt.IntArray([3] * (len(indices) // 3)))
+            mesh.CreateFaceVertexIndicesAttr(Vt.IntArray(indices))
+            mesh.CreateSubdivisionSchemeAttr("none")
+            mesh.CreateDoubleSidedAttr(False)
+            if "NORMAL" in prim["attributes"]:
+                normals = accessor(prim["attributes"]["NORMAL"])
+                mesh.CreateNormalsAttr(Vt.Vec3fArray([normal(n) for n in normals]))
+                mesh.SetNormalsInterpolation(UsdGeom.Tokens.vertex)
+            UsdShade.MaterialBindingAPI.Apply(mesh.GetPrim()).Bind(materials[prim["material"]])
+        elif "camera" in node:
+            yfov = g["cameras"][node["camera"]]["perspective"]["yfov"]
+            cam = UsdGeom.Camera.Define(stage, "/cbox/camera")
+            focal = 50.0
+            aperture = 2.0 * focal * math.tan(0.5 * yfov)
+            cam.CreateFocalLengthAttr(focal)
+            cam.CreateVerticalApertureAttr(aperture)
+            cam.CreateHorizontalApertureAttr(aperture)
+            t = node["translation"]
+            if z_up_cm:
+                # Local -Z (the view) along world +Y, local +Y (up) along world +Z.
+                m = Gf.Matrix4d((1, 0, 0, 0), (0, 0, 1, 0), (0, -1, 0, 0),
+                                (t[0] * scale, -t[2] * scale, t[1] * scale, 1))
+                cam.AddTransformOp().Set(m)
+            else:
+                cam.AddTranslateOp().Set(Gf.Vec3d(*t))
+    stage.GetRootLayer().Save()
+    return stage
+
+
+def main():
+    base = os.path.join(HERE, "cbox-diffuse.usda")
+    stage = author(base, z_up_cm=False)
+    stage.Export(os.path.join(HERE, "cbox-diffuse.usdc"))
+    usdz = os.path.join(HERE, "cbox-diffuse.usdz")
+    if os.path.exists(usdz):
+        os.remove(usdz)
+    UsdUtils.CreateNewUsdzPackage(Sdf.AssetPath(os.path.join(HERE, "cbox-diffuse.usdc")), usdz)
+    author(os.path.join(HERE, "cbox-diffuse-zup-cm.usda"), z_up_cm=True)
+
+    quad = Usd.Stage.CreateNew(os.path.join(HERE, "quad.usda"))
+    UsdGeom.SetStageUpAxis(quad, UsdGeom.Tokens.y)
+    UsdGeom.SetStageMetersPerUnit(quad, 1.0)
+    q = UsdGeom.Mesh.Define(quad, "/quad")
+    q.CreatePointsAttr(Vt.Vec3fArray([(-0.1, 0, -0.1), (0.1, 0, -0.1), (0.1, 0, 0.1), (-0.1, 0, 0.1)]))
+    q.CreateFaceVertexCountsAttr(Vt.IntArray([4]))
+    q.CreateFaceVertexIndicesAttr(Vt.IntArray([0, 3, 2, 1]))
+    quad.SetDefaultPrim(q.GetPrim())
+    quad.GetRootLayer().Save()
+
+    composed = Usd.Stage.CreateNew(os.path.join(HERE, "composed.usda"))
+    composed.GetRootLayer().subLayerPaths.append("cbox-diffuse.usda")
+    UsdGeom.SetStageUpAxis(composed, UsdGeom.Tokens.y)
+    UsdGeom.SetStageMetersPerUnit(composed, 1.0)
+    # Typeless here, so that the reference's Mesh type composes.
+    extra = composed.DefinePrim("/cbox/extra")
+    extra.GetReferences().AddReference("quad.usda", "/quad")
+    UsdGeom.Xformable(extra).AddTranslateOp().Set(Gf.Vec3d(0.25, -0.5, 0.0))
+    composed.GetRootLayer().Save()
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,233 @@
+//! USD import (openusd 0.6): the Cornell box authored with Pixar's usd-core from the glTF
+//! reference scene gives the same scene IR and the same reference render from usda, usdc and
+//! usdz; a Z-up centimetre stage imports as its Y-up metre twin; sublayers and references
+//! compose; a third-party Cornell box renders with its own camera; broken files give errors.
+//! Fixtures: tests/data/usd (tests/data/README.md).
+
+use glam::Vec3;
+use std::path::{Path, PathBuf};
+use wpbgi::reference::{render, RenderSettings};
+use wpbgi::scene::{Camera, Projection, Scene};
+
+fn data(name: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data")
+        .join(name)
+}
+
+fn load(name: &str) -> Scene {
+    Scene::load(&data(name)).unwrap_or_else(|e| panic!("{name}: {e}"))
+}
+
+/// Within 1e-5 (the IR's positions are float32 of magnitude ≤ 4; 1e-5 is ~30 ulp).
+fn close(a: Vec3, b: Vec3, what: &str) {
+    assert!(
+        (a - b).abs().max_element() <= 1e-5,
+        "{what}: {a} against {b}"
+    );
+}
+
+fn yfov(c: &Camera) -> f32 {
+    match c.projection {
+        Projection::Perspective { yfov } => yfov,
+        Projection::Orthographic { .. } => panic!("{}: orthographic", c.name),
+    }
+}
+
+/// The two scenes' IR agree: meshes in order (positions, normals within 1e-5; triangles
+/// exactly), materials (scattering exactly, emission within 1e-5), and the first camera.
+fn same_ir(a: &Scene, b: &Scene) {
+    assert_eq!(a.meshes.len(), b.meshes.len(), "mesh count");
+    for (m, n) in a.meshes.iter().zip(&b.meshes) {
+        let what = format!("{} / {}", m.name, n.name);
+        assert_eq!(m.triangles, n.triangles, "{what}: triangles");
+        assert_eq!(m.positions.len(), n.positions.len(), "{what}: vertices");
+        for (p, q) in m.positions.iter().zip(&n.positions) {
+            close(*p, *q, &what);
+        }
+        assert_eq!(m.normals.is_some(), n.normals.is_some(), "{what}: normals");
+        for (p, q) in m.normals.iter().flatten().zip(n.normals.iter().flatten()) {
+            close(*p, *q, &format!("{what} normal"));
+        }
+        let (ma, mb) = (&a.materials[m.material], &b.materials[n.material]);
+        assert_eq!(
+            format!("{:?}", ma.scattering),
+            format!("{:?}", mb.scattering),
+            "{what}: scattering"
+        );
+        let radiance =
+            |e: &Option<wpbgi::scene::Emission>| e.as_ref().map(|e| (e.radiance, e.two_sided));
+        match (radiance(&ma.emission), radiance(&mb.emission)) {
+            (Some((ra, sa)), Some((rb, sb))) => {
+                close(ra, rb, &format!("{what} emission"));
+                assert_eq!(sa, sb, "{what}: two-sided emission");
+            }
+            (x, y) => assert_eq!(x.is_some(), y.is_some(), "{what}: emission"),
+        }
+    }
+    let (ca, cb) = (&a.cameras[0], &b.cameras[0]);
+    close(ca.position, cb.position, "camera position");
+    close(ca.forward, cb.forward, "camera forward");
+    close(ca.up, cb.up, "camera up");
+    close(ca.right, cb.right, "camera right");
+    assert!(
+        (yfov(ca) - yfov(cb)).abs() <= 1e-5,
+        "yfov {} against {}",
+        yfov(ca),
+        yfov(cb)
+    );
+}
+
+/// A small path-traced image of `scene` from `camera` at a fixed seed.
+fn reference(scene: &Scene, camera: &Camera) -> Vec<Vec3> {
+    let settings = RenderSettings {
+        spp: 2,
+        max_depth: 3,
+        seed: 7,
+        ..Default::default()
+    };
+    render(scene, &camera.clone().with_size(48, 48), &settings, &|_| {})
+        .expect("render")
+        .mean
+        .pixels
+}
+
+#[test]
+fn cornell_box_from_gltf_and_each_usd_encoding_is_the_same() {
+    let gltf = load("mitsuba/cbox-diffuse.gltf");
+    let camera = gltf.default_camera(48, 48).expect("camera");
+    let image = reference(&gltf, &camera);
+    for name in [
+        "usd/cbox-diffuse.usda",
+        "usd/cbox-diffuse.usdc",
+        "usd/cbox-diffuse.usdz",
+    ] {
+        let usd = load(name);
+        same_ir(&gltf, &usd);
+        // The same triangles and materials, lit and seen alike, give the same bytes (the
+        // camera is the glTF's: its field of view from USD's focal length and aperture is
+        // within an ulp, which moves every ray).
+        assert!(
+            reference(&usd, &camera) == image,
+            "{name}: the render differs"
+        );
+    }
+}
+
+#[test]
+fn z_up_centimetre_stage_imports_as_its_y_up_metre_twin() {
+    let metres = load("usd/cbox-diffuse.usda");
+    let centimetres = load("usd/cbox-diffuse-zup-cm.usda");
+    same_ir(&metres, &centimetres);
+    // Positions agree to rounding (turned and scaled by 100 then 0.01), so the images agree
+    // but for rays that graze an edge.
+    let camera = metres.default_camera(48, 48).expect("camera");
+    let (a, b) = (
+        reference(&metres, &camera),
+        reference(&centimetres, &camera),
+    );
+    let differing = a
+        .iter()
+        .zip(&b)
+        .filter(|(p, q)| (**p - **q).abs().max_element() > 1e-4)
+        .count();
+    assert!(
+        differing <= a.len() / 100,
+        "{differing} of {} pixels differ",
+        a.len()
+    );
+}
+
+#[test]
+fn composed_stage_resolves_its_sublayer_and_reference() {
+    let base = load("usd/cbox-diffuse.usda");
+    let composed = load("usd/composed.usda");
+    assert_eq!(composed.meshes.len(), base.meshes.len() + 1);
+    let extra = composed
+        .meshes
+        .iter()
+        .find(|m| m.name == "/cbox/extra")
+        .expect("the referenced quad");
+    assert_eq!(extra.triangles.len(), 2);
+    // quad.usda's corners (±0.1, 0, ±0.1), moved by the translate op (0.25, -0.5, 0).
+    for p in &extra.positions {
+        let corner = Vec3::new((p.x - 0.25).abs(), p.y, p.z.abs());
+        close(
+            corner,
+            Vec3::new(0.1, -0.5, 0.1),
+            "the referenced quad's corner",
+        );
+    }
+}
+
+#[test]
+fn third_party_cornell_box_renders_with_its_own_camera() {
+    let scene = load("usd/cornell-box-usdpreviewsurface.usda");
+    assert_eq!(scene.triangle_count(), 32, "16 quads");
+    assert_eq!(scene.cameras.len(), 1);
+    let light = scene
+        .materials
+        .iter()
+        .find_map(|m| m.emission.as_ref())
+        .expect("an emissive material");
+    close(light.radiance, Vec3::new(17.0, 12.0, 4.0), "emission");
+    // Z-up in the file; Y-up here: the light hangs at the top of the box.
+    let (lo, hi) = scene.bounds();
+    let light_mesh = scene
+        .meshes
+        .iter()
+        .find(|m| scene.materials[m.material].emission.is_some())
+        .expect("light");
+    assert!(
+        light_mesh
+            .positions
+            .iter()
+            .all(|p| p.y > lo.y + 0.9 * (hi.y - lo.y)),
+        "the light is not at the top"
+    );
+    let camera = scene.default_camera(32, 32).expect("camera");
+    let image = reference(&scene, &camera);
+    assert!(image.iter().all(|p| p.is_finite()));
+    let mean: Vec3 = image.iter().copied().sum::<Vec3>() / image.len() as f32;
+    assert!(mean.min_element() > 0.01, "black image: {mean}");
+}
+
+#[test]
+fn broken_usd_files_give_clear_errors() {
+    let dir = std::env::temp_dir().join(format!("wpbgi-usd-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let write = |name: &str, bytes: &[u8]| {
+        let p = dir.join(name);
+        std::fs::write(&p, bytes).expect("write");
+        p
+    };
+    let usdc = std::fs::read(data("usd/cbox-diffuse.usdc")).expect("usdc");
+    let cases = [
+        (write("truncated.usdc", &usdc[..usdc.len() / 2]), "truncated.usdc"),
+        (write("syntax.usda", b"#usda 1.0\ndef Mesh \"m\" {\n  int[] faceVertexCounts = [3\n"), "syntax.usda"),
+        (
+            write(
+                "missing-ref.usda",
+                b"#usda 1.0\ndef \"a\" (\n  references = @does-not-exist.usda@</x>\n)\n{\n}\n",
+            ),
+            "missing-ref.usda",
+        ),
+        (
+            write(
+                "bad-index.usda",
+                b"#usda 1.0\ndef Mesh \"tri\"\n{\n  point3f[] points = [(0,0,0), (1,0,0), (0,1,0)]\n  int[] faceVertexCounts = [3]\n  int[] faceVertexIndices = [0, 1, 7]\n}\n",
+            ),
+            "/tri",
+        ),
+        (dir.join("absent.usda"), "absent.usda"),
+    ];
+    for (path, names) in cases {
+        let e = std::panic::catch_unwind(|| Scene::load(&path))
+            .unwrap_or_else(|_| panic!("{}: panicked", path.display()))
+            .err()
+            .unwrap_or_else(|| panic!("{}: loaded", path.display()));
+        let message = e.to_string();
+        assert!(message.contains(names), "{}: {message}", path.display());
+        eprintln!("{message}");
+    }
+}
