@@ -231,3 +231,24 @@ fn broken_usd_files_give_clear_errors() {
         eprintln!("{message}");
     }
 }
+
+/// A translate op with time samples at 1 and 10 is read at the stage's start by default and at
+/// any asked time code, linearly interpolated (USD's default interpolation) between samples.
+#[test]
+fn animated_transform_follows_the_time_code() {
+    let path = data("usd/animated.usda");
+    for (time, offset) in [
+        (None, 0.0),
+        (Some(1.0), 0.0),
+        (Some(5.5), 0.45),
+        (Some(10.0), 0.9),
+    ] {
+        let scene = Scene::load_at(&path, time).unwrap_or_else(|e| panic!("{e}"));
+        let xs: Vec<f32> = scene.meshes[0].positions.iter().map(|p| p.x).collect();
+        let centre = xs.iter().sum::<f32>() / xs.len() as f32;
+        assert!(
+            (centre - offset).abs() < 1e-6,
+            "time {time:?}: centre {centre}, expected {offset}"
+        );
+    }
+}

@@ -118,13 +118,21 @@ impl Scene {
     /// Load a `.gltf` or `.glb` file, or (with the `usd` feature) a `.usd`, `.usda`, `.usdc`
     /// or `.usdz` stage.
     pub fn load(path: &Path) -> Result<Scene> {
+        Scene::load_at(path, None)
+    }
+
+    /// [`Scene::load`] at USD time code `time` (none: the default time). glTF scenes have no
+    /// time and ignore it.
+    pub fn load_at(path: &Path, time: Option<f64>) -> Result<Scene> {
+        #[cfg(not(feature = "usd"))]
+        let _ = time;
         let ext = path
             .extension()
             .and_then(|e| e.to_str())
             .map(str::to_ascii_lowercase);
         match ext.as_deref() {
             #[cfg(feature = "usd")]
-            Some("usd") | Some("usda") | Some("usdc") | Some("usdz") => usd::import(path),
+            Some("usd") | Some("usda") | Some("usdc") | Some("usdz") => usd::import(path, time),
             Some("gltf") | Some("glb") => {
                 let bytes = std::fs::read(path).map_err(|source| Error::Io {
                     path: path.to_path_buf(),

@@ -17,7 +17,8 @@
 //! - Cameras: the focal length and vertical aperture give the vertical field of view.
 //!
 //! Attributes are read at their default value, or where they only have time samples, at the
-//! stage's start time code.
+//! stage's start time code; with an explicit time code (`--time`), at that time. Transforms
+//! are composed at that time code.
 
 use super::camera::{Camera, Projection};
 use super::material::{Emission, Material, PbrParams, Scattering};
@@ -36,7 +37,9 @@ use std::collections::HashMap;
 use std::path::Path;
 
 /// Import the USD stage at `path`.
-pub fn import(path: &Path) -> Result<Scene> {
+/// Import the USD stage at `path`, at time code `time` (none: the default time, see the
+/// module docs).
+pub fn import(path: &Path, time: Option<f64>) -> Result<Scene> {
     let file = path.to_string_lossy().into_owned();
     let usd_err = |what: String| Error::Usd {
         path: path.to_path_buf(),
@@ -53,7 +56,10 @@ pub fn import(path: &Path) -> Result<Scene> {
     let mut importer = Importer {
         path,
         stage: &stage,
-        time: TimeCode::new(stage.start_time_code()),
+        time: Time {
+            code: TimeCode::new(time.unwrap_or_else(|| stage.start_time_code())),
+            explicit: time.is_some(),
+        },
         to_ir: stage_to_ir(&stage),
         scene: Scene {
             path: path.to_path_buf(),
@@ -89,7 +95,7 @@ pub fn import(path: &Path) -> Result<Scene> {
 struct Importer<'a> {
     path: &'a Path,
     stage: &'a Stage,
-    time: TimeCode,
+    time: Time,
     /// Stage units and up axis to the IR's metres, Y up (column vectors).
     to_ir: DMat4,
     scene: Scene,
@@ -118,12 +124,13 @@ impl Importer<'_> {
             // Every xformable prim's ops are read through the Xformable interface of an
             // Xform view of it (the ops are plain attributes).
             Ok(Some(x)) => (
-                x.local_to_parent_transform(self.time)
+                x.local_to_parent_transform(self.time.code)
                     .map_err(|e| self.prim_err(prim, format!("{e:#}")))?,
                 x.resets_xform_stack()
                     .map_err(|e| self.prim_err(prim, format!("{e:#}")))?,
             ),
-            _ => xformable_of(&p, self.time).map_err(|e| self.prim_err(prim, format!("{e:#}")))?,
+            _ => xformable_of(&p, self.time.code)
+                .map_err(|e| self.prim_err(prim, format!("{e:#}")))?,
         };
         let local = column_matrix(&local);
         let parent = prim.parent();
@@ -593,11 +600,26 @@ fn default_material() -> Material {
     }
 }
 
-/// An attribute's default value, or its value at `time` where it has only time samples.
-fn sample(attr: &openusd::usd::Attribute, time: TimeCode) -> anyhow::Result<Option<sdf::Value>> {
+/// When attributes are read.
+#[derive(Clone, Copy)]
+struct Time {
+    code: TimeCode,
+    /// Asked for (`--time`): time samples win over default values.
+    explicit: bool,
+}
+
+/// An attribute's value at `time`: at an explicit time its time samples (else its default);
+/// otherwise its default value, or where it has only time samples, its value at the stage's
+/// start.
+fn sample(attr: &openusd::usd::Attribute, time: Time) -> anyhow::Result<Option<sdf::Value>> {
+    if time.explicit {
+        if let Some(v) = attr.get_at::<sdf::Value>(time.code)? {
+            return Ok(Some(v));
+        }
+    }
     match attr.get::<sdf::Value>()? {
         Some(v) => Ok(Some(v)),
-        None => attr.get_at::<sdf::Value>(time),
+        None => attr.get_at::<sdf::Value>(time.code),
     }
 }
 

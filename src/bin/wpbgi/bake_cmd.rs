@@ -9,7 +9,6 @@ use std::time::Instant;
 use wpbgi::bake::store::{bake_hash, BakedCache};
 use wpbgi::bake::{bake, BakeSettings, Quality};
 use wpbgi::bounce::BounceSettings;
-use wpbgi::scene::Scene;
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
 pub enum QualityArg {
@@ -121,7 +120,7 @@ fn emit_json(v: Value) {
 
 pub fn bake_command(a: BakeArgs) -> Result<()> {
     let start = Instant::now();
-    let scene = Scene::load(&a.scene)?;
+    let scene = crate::load_scene(&a.scene)?;
     crate::warn(&scene);
     let settings = settings_of(&a);
     let mut plan = wpbgi::bake::Plan::new(&scene);
@@ -223,7 +222,7 @@ pub fn inspect_command(a: InspectArgs) -> Result<()> {
     let c = BakedCache::read(&a.cache, None)?;
     if let Some(p) = &a.scene {
         // The settings the cache was baked with are in it: hash the scene with those.
-        let scene = Scene::load(p)?;
+        let scene = crate::load_scene(p)?;
         c.cache
             .check_fresh(bake_hash(&scene, &c.plan["settings"]))?;
     }

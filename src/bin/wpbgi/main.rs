@@ -27,6 +27,10 @@ struct Cli {
     /// Worker threads (default: all cores). Results are identical for any count.
     #[arg(long, global = true)]
     threads: Option<usize>,
+    /// Read USD scenes at this time code (default: the stage's default time; glTF scenes have
+    /// no time). Named so as not to clash with `reference --time SECONDS`.
+    #[arg(long, global = true, allow_hyphen_values = true)]
+    time_code: Option<f64>,
     #[command(subcommand)]
     command: Command,
 }
@@ -219,6 +223,14 @@ pub(crate) fn pick_camera(scene: &Scene, args: &CameraArgs) -> Result<Camera> {
     Ok(scene.camera(args.camera_name(), w, h)?)
 }
 
+/// The `--time-code` of this run.
+static TIME_CODE: std::sync::OnceLock<Option<f64>> = std::sync::OnceLock::new();
+
+/// Load a scene at the run's `--time-code`.
+pub(crate) fn load_scene(path: &Path) -> Result<Scene> {
+    Ok(Scene::load_at(path, TIME_CODE.get().copied().flatten())?)
+}
+
 pub(crate) fn warn(scene: &Scene) {
     for w in &scene.warnings {
         eprintln!("warning: {}: {}", scene.path.display(), w.0);
@@ -226,7 +238,7 @@ pub(crate) fn warn(scene: &Scene) {
 }
 
 fn reference(a: ReferenceArgs) -> Result<()> {
-    let scene = Scene::load(&a.scene)?;
+    let scene = load_scene(&a.scene)?;
     warn(&scene);
     let camera = pick_camera(&scene, &a.camera)?;
     let settings = RenderSettings {
@@ -312,6 +324,11 @@ fn demo(a: DemoArgs) -> Result<()> {
 
 fn main() {
     let cli = Cli::parse();
+    if cli.time_code.is_some_and(|t| !t.is_finite()) {
+        eprintln!("error: --time-code must be a finite number");
+        std::process::exit(2);
+    }
+    let _ = TIME_CODE.set(cli.time_code);
     if let Some(n) = cli.threads {
         if n == 0
             || rayon::ThreadPoolBuilder::new()

@@ -79,7 +79,7 @@ pub fn preview_command(a: PreviewArgs) -> Result<()> {
         .scene
         .as_ref()
         .map(|p| -> Result<Scene> {
-            let s = Scene::load(p)?;
+            let s = crate::load_scene(p)?;
             crate::warn(&s);
             Ok(s)
         })

@@ -131,7 +131,7 @@ pub fn print_summary(out: &FinalOutput) {
 
 pub fn render_command(a: RenderArgs) -> Result<()> {
     let start = Instant::now();
-    let scene = Scene::load(&a.scene)?;
+    let scene = crate::load_scene(&a.scene)?;
     crate::warn(&scene);
     let camera = crate::pick_camera(&scene, &a.camera)?;
     let cache = open_fresh_cache(&scene, &a.cache)?;

@@ -11,6 +11,8 @@ by CI; the outputs are committed next to this script).
   camera turned), which must import as its Y-up metre twin.
 - composed.usda: a sublayer (cbox-diffuse.usda) and a reference to quad.usda's /quad, moved by
   a translate op.
+- animated.usda: quad.usda's /quad translated by (0, 0, 0) at time code 1 and (0.9, 0, 0) at 10
+  (start 1, end 10).
 """
 import base64
 import json
@@ -145,6 +147,18 @@ def main():
     extra.GetReferences().AddReference("quad.usda", "/quad")
     UsdGeom.Xformable(extra).AddTranslateOp().Set(Gf.Vec3d(0.25, -0.5, 0.0))
     composed.GetRootLayer().Save()
+
+    animated = Usd.Stage.CreateNew(os.path.join(HERE, "animated.usda"))
+    UsdGeom.SetStageUpAxis(animated, UsdGeom.Tokens.y)
+    UsdGeom.SetStageMetersPerUnit(animated, 1.0)
+    animated.SetStartTimeCode(1)
+    animated.SetEndTimeCode(10)
+    moving = animated.DefinePrim("/moving")
+    moving.GetReferences().AddReference("quad.usda", "/quad")
+    op = UsdGeom.Xformable(moving).AddTranslateOp()
+    op.Set(Gf.Vec3d(0, 0, 0), 1)
+    op.Set(Gf.Vec3d(0.9, 0, 0), 10)
+    animated.GetRootLayer().Save()
 
 
 if __name__ == "__main__":
