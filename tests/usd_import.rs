@@ -252,3 +252,89 @@ fn animated_transform_follows_the_time_code() {
         );
     }
 }
+
+/// The geometric normal and area of a mesh's triangles, summed: for a flat light, its area
+/// times its front normal.
+fn area_normal(m: &wpbgi::scene::Mesh) -> Vec3 {
+    m.triangles
+        .iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| m.positions[i as usize]);
+            0.5 * (b - a).cross(c - a)
+        })
+        .sum()
+}
+
+/// UsdLux lights (tests/data/usd/lights.usda): area lights become one-sided emissive meshes of
+/// radiance intensity × colour × 2^exposure at their transform, facing their local −Z (a
+/// normalized one divided by its area), a sphere light faces outwards, and a distant light is
+/// a directional light of irradiance π sin²(angle/2) × intensity.
+#[test]
+fn usdlux_lights_become_emitters() {
+    let scene = load("usd/lights.usda");
+    let mesh = |name: &str| {
+        scene
+            .meshes
+            .iter()
+            .find(|m| m.name == name)
+            .unwrap_or_else(|| panic!("{name}"))
+    };
+    let emission = |m: &wpbgi::scene::Mesh| {
+        scene.materials[m.material]
+            .emission
+            .clone()
+            .expect("emissive")
+    };
+    // Rect: 0.5 × 0.25 at (0, 1, 0), facing down, radiance 10 × 2¹ × (1, 0.5, 0.25).
+    let rect = mesh("/rect");
+    close(
+        area_normal(rect),
+        Vec3::new(0.0, -0.125, 0.0),
+        "rect area normal",
+    );
+    let centre = rect.positions.iter().copied().sum::<Vec3>() / rect.positions.len() as f32;
+    close(centre, Vec3::new(0.0, 1.0, 0.0), "rect centre");
+    let e = emission(rect);
+    close(e.radiance, Vec3::new(20.0, 10.0, 5.0), "rect radiance");
+    assert!(!e.two_sided);
+    // Disk: normalized, so radiance × area is the intensity, 3; facing −Z.
+    let disk = mesh("/disk");
+    let an = area_normal(disk);
+    assert!(
+        an.x.abs() < 1e-7 && an.y.abs() < 1e-7 && an.z < 0.0,
+        "disk faces {an}"
+    );
+    // The light is a 64-gon inscribed in the disc: area 32 sin(2π/64) r².
+    let polygon = 32.0 * (std::f32::consts::TAU / 64.0).sin() * 0.01;
+    assert!(
+        (an.length() - polygon).abs() < 1e-5 * polygon,
+        "disk area {}",
+        an.length()
+    );
+    close(
+        emission(disk).radiance * an.length(),
+        Vec3::splat(3.0),
+        "disk radiance × area",
+    );
+    // Sphere: every triangle faces away from the centre (1, 0, 0).
+    let sphere = mesh("/sphere");
+    for t in &sphere.triangles {
+        let [a, b, c] = t.map(|i| sphere.positions[i as usize]);
+        let outward = ((a + b + c) / 3.0 - Vec3::X).dot((b - a).cross(c - a));
+        assert!(outward > 0.0, "a sphere triangle faces inwards");
+    }
+    close(
+        emission(sphere).radiance,
+        Vec3::splat(5.0),
+        "sphere radiance",
+    );
+    // Distant: shining down with π sin²(0.265°) × 50000.
+    let sun = &scene.lights[0];
+    close(sun.direction, Vec3::new(0.0, -1.0, 0.0), "sun direction");
+    let expected = 50000.0 * std::f32::consts::PI * (0.265f32.to_radians()).sin().powi(2);
+    assert!(
+        (sun.intensity.x - expected).abs() < 1e-4 * expected,
+        "sun {} against {expected}",
+        sun.intensity
+    );
+}

@@ -11,6 +11,10 @@ by CI; the outputs are committed next to this script).
   camera turned), which must import as its Y-up metre twin.
 - composed.usda: a sublayer (cbox-diffuse.usda) and a reference to quad.usda's /quad, moved by
   a translate op.
+- lights.usda: a RectLight (0.5 x 0.25, intensity 10, exposure 1, colour (1, 0.5, 0.25)) at
+  (0, 1, 0) facing down, a normalized DiskLight (radius 0.1, intensity 3) at (-1, 0, 0), a
+  SphereLight (radius 0.2, intensity 5) at (1, 0, 0) and a DistantLight (intensity 50000,
+  angle 0.53) shining down.
 - animated.usda: quad.usda's /quad translated by (0, 0, 0) at time code 1 and (0.9, 0, 0) at 10
   (start 1, end 10).
 """
@@ -159,6 +163,33 @@ def main():
     op.Set(Gf.Vec3d(0, 0, 0), 1)
     op.Set(Gf.Vec3d(0.9, 0, 0), 10)
     animated.GetRootLayer().Save()
+
+    from pxr import UsdLux
+    lights = Usd.Stage.CreateNew(os.path.join(HERE, "lights.usda"))
+    UsdGeom.SetStageUpAxis(lights, UsdGeom.Tokens.y)
+    UsdGeom.SetStageMetersPerUnit(lights, 1.0)
+    rect = UsdLux.RectLight.Define(lights, "/rect")
+    rect.CreateWidthAttr(0.5)
+    rect.CreateHeightAttr(0.25)
+    rect.CreateIntensityAttr(10.0)
+    rect.CreateExposureAttr(1.0)
+    rect.CreateColorAttr(Gf.Vec3f(1.0, 0.5, 0.25))
+    rect.AddTranslateOp().Set(Gf.Vec3d(0, 1, 0))
+    rect.AddRotateXOp().Set(-90.0)  # local -Z (the emitting side) along world -Y
+    disk = UsdLux.DiskLight.Define(lights, "/disk")
+    disk.CreateRadiusAttr(0.1)
+    disk.CreateIntensityAttr(3.0)
+    disk.CreateNormalizeAttr(True)
+    disk.AddTranslateOp().Set(Gf.Vec3d(-1, 0, 0))
+    sphere = UsdLux.SphereLight.Define(lights, "/sphere")
+    sphere.CreateRadiusAttr(0.2)
+    sphere.CreateIntensityAttr(5.0)
+    sphere.AddTranslateOp().Set(Gf.Vec3d(1, 0, 0))
+    sun = UsdLux.DistantLight.Define(lights, "/sun")
+    sun.CreateIntensityAttr(50000.0)
+    sun.CreateAngleAttr(0.53)
+    sun.AddRotateXOp().Set(-90.0)
+    lights.GetRootLayer().Save()
 
 
 if __name__ == "__main__":
