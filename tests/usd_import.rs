@@ -220,6 +220,7 @@ fn broken_usd_files_give_clear_errors() {
             "/tri",
         ),
         (dir.join("absent.usda"), "absent.usda"),
+        (data("usd/missing-member.usdz"), "missing-member.usdz"),
     ];
     for (path, names) in cases {
         let e = std::panic::catch_unwind(|| Scene::load(&path))
@@ -337,4 +338,17 @@ fn usdlux_lights_become_emitters() {
         "sun {} against {expected}",
         sun.intensity
     );
+}
+
+/// Instance proxies are imported once per instance, each at its instance's transform; guide
+/// purpose and invisible meshes are left out (tests/data/usd/instancing.usda).
+#[test]
+fn instances_expand_and_guides_and_hidden_meshes_are_skipped() {
+    let scene = load("usd/instancing.usda");
+    let names: Vec<&str> = scene.meshes.iter().map(|m| m.name.as_str()).collect();
+    assert_eq!(names, ["/instance0/quad", "/instance1/quad"]);
+    for (m, x) in scene.meshes.iter().zip([-0.5f32, 0.5]) {
+        let centre = m.positions.iter().copied().sum::<Vec3>() / m.positions.len() as f32;
+        close(centre, Vec3::new(x, 0.0, 0.0), &m.name);
+    }
 }

@@ -15,6 +15,9 @@ by CI; the outputs are committed next to this script).
   (0, 1, 0) facing down, a normalized DiskLight (radius 0.1, intensity 3) at (-1, 0, 0), a
   SphereLight (radius 0.2, intensity 5) at (1, 0, 0) and a DistantLight (intensity 50000,
   angle 0.53) shining down.
+- instancing.usda: a class /proto holding quad.usda's /quad as its child, instanced twice (at
+  x = -0.5 and 0.5), and a guide-purpose and an invisible reference to the quad.
+- missing-member.usdz: a usdz whose layer references gone.usda, which the archive lacks.
 - animated.usda: quad.usda's /quad translated by (0, 0, 0) at time code 1 and (0.9, 0, 0) at 10
   (start 1, end 10).
 """
@@ -190,6 +193,35 @@ def main():
     sun.CreateAngleAttr(0.53)
     sun.AddRotateXOp().Set(-90.0)
     lights.GetRootLayer().Save()
+
+    inst = Usd.Stage.CreateNew(os.path.join(HERE, "instancing.usda"))
+    UsdGeom.SetStageUpAxis(inst, UsdGeom.Tokens.y)
+    UsdGeom.SetStageMetersPerUnit(inst, 1.0)
+    # A class holding the quad as a child, instanced twice: the quads are instance proxies.
+    proto = inst.CreateClassPrim("/proto")
+    inst.DefinePrim("/proto/quad").GetReferences().AddReference("quad.usda", "/quad")
+    for i, x in enumerate([-0.5, 0.5]):
+        prim = inst.DefinePrim(f"/instance{i}")
+        prim.GetReferences().AddInternalReference(proto.GetPath())
+        prim.SetInstanceable(True)
+        UsdGeom.Xformable(prim).AddTranslateOp().Set(Gf.Vec3d(x, 0, 0))
+    guide = UsdGeom.Mesh.Define(inst, "/guide")
+    guide.GetPrim().GetReferences().AddReference("quad.usda", "/quad")
+    guide.CreatePurposeAttr(UsdGeom.Tokens.guide)
+    hidden = UsdGeom.Mesh.Define(inst, "/hidden")
+    hidden.GetPrim().GetReferences().AddReference("quad.usda", "/quad")
+    hidden.CreateVisibilityAttr(UsdGeom.Tokens.invisible)
+    inst.GetRootLayer().Save()
+
+    # A usdz whose layer references a member that is not in the archive.
+    layer = os.path.join(HERE, "missing-member-root.usda")
+    with open(layer, "w") as f:
+        f.write('#usda 1.0\ndef "a" (\n  references = @gone.usda@</x>\n)\n{\n}\n')
+    usdz = os.path.join(HERE, "missing-member.usdz")
+    if os.path.exists(usdz):
+        os.remove(usdz)
+    UsdUtils.CreateNewUsdzPackage(Sdf.AssetPath(layer), usdz)
+    os.remove(layer)
 
 
 if __name__ == "__main__":
