@@ -148,48 +148,68 @@ fn headless_frame_matches_cpu_oracle_under_validation() {
 }
 
 /// The G-buffer sees what primary rays see: the point under each pixel's centre is the
-/// closest hit of the ray through it, to 1e-4 of the scene's size, at all but the pixels on
-/// silhouettes (where a centre a hair from an edge rounds to the other triangle): at most 1 %
-/// (measured: 2 pixels of 4096, 0.05 %).
+/// closest hit of the ray through it, to 1e-4 of the scene's size, and the pixel shows
+/// emission exactly where that hit is on an emitter's front. Measured: every one of the 4096
+/// pixels agrees on both scenes. The bound allows one pixel per scene, a centre a hair from a
+/// silhouette that a device may round to the other triangle. The USD Cornell box hangs its
+/// light 1 mm under the ceiling, 4 m from the eye; with the usual depth mapping the two fought
+/// (the light showed stripes of ceiling; 2 and 3 pixels disagreed), which reversed depth
+/// fixed.
 #[test]
 fn gbuffer_matches_ray_casting() {
-    let scene = bundled();
-    let cache = cache(&scene, 1000);
-    let size = (64, 64);
+    let usd_box = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/usd/cornell-box-usdpreviewsurface.usda");
     let gpu = validated_gpu();
-    let mut preview = Preview::new(gpu.clone(), &cache, Some(&scene), size).expect("preview");
-    let camera = scene.default_camera(size.0, size.1).expect("camera");
-    let (view, splats, settings) = preview.prepare(&camera, Show::Direct, 2.0);
-    preview.draw(&view, &splats, settings).expect("frame");
-    let [positions, normals, _] = preview.gbuffer().expect("G-buffer");
-    let accel = Accel::build(&scene);
-    let (lo, hi) = scene.bounds();
-    let tolerance = 1e-4 * (hi - lo).length();
-    let mut off = 0;
-    for y in 0..size.1 {
-        for x in 0..size.0 {
-            let i = (y * size.0 + x) as usize;
-            let (o, d) = camera.generate_ray(glam::Vec2::new(x as f32 + 0.5, y as f32 + 0.5));
-            let hit = accel.closest_hit(o, d, 0.0, f32::INFINITY);
-            let gp = positions[i];
-            let agrees = match hit {
-                Some(h) => {
-                    let n = Vec3::from_slice(&normals[i][..3]);
-                    gp[3] == 1.0
-                        && (Vec3::from_slice(&gp[..3]) - (o + h.t * d)).length() <= tolerance
-                        && (n.length() - 1.0).abs() < 1e-3
-                }
-                None => gp[3] == 0.0,
-            };
-            off += !agrees as usize;
+    for scene in [bundled(), Scene::load(&usd_box).expect("USD Cornell box")] {
+        let cache = cache(&scene, 1000);
+        let size = (64, 64);
+        let mut preview = Preview::new(gpu.clone(), &cache, Some(&scene), size).expect("preview");
+        let camera = scene.default_camera(size.0, size.1).expect("camera");
+        let (view, splats, settings) = preview.prepare(&camera, Show::Direct, 2.0);
+        preview.draw(&view, &splats, settings).expect("frame");
+        let [positions, normals, emission] = preview.gbuffer().expect("G-buffer");
+        let accel = Accel::build(&scene);
+        let (lo, hi) = scene.bounds();
+        let tolerance = 1e-4 * (hi - lo).length();
+        let (mut off, mut emitting) = (0, 0);
+        for y in 0..size.1 {
+            for x in 0..size.0 {
+                let i = (y * size.0 + x) as usize;
+                let (o, d) = camera.generate_ray(glam::Vec2::new(x as f32 + 0.5, y as f32 + 0.5));
+                let hit = accel.closest_hit(o, d, 0.0, f32::INFINITY);
+                let gp = positions[i];
+                let shows_emission = emission[i][..3].iter().any(|&e| e > 0.0);
+                let agrees = match hit {
+                    Some(h) => {
+                        let mesh = &scene.meshes[h.mesh as usize];
+                        let [a, b, c] =
+                            mesh.triangles[h.triangle as usize].map(|v| mesh.positions[v as usize]);
+                        let front = (b - a).cross(c - a).dot(d) < 0.0;
+                        let emits = scene.materials[mesh.material]
+                            .emission_at(&scene.textures, glam::Vec2::ZERO, front)
+                            .max_element()
+                            > 0.0;
+                        emitting += emits as usize;
+                        let n = Vec3::from_slice(&normals[i][..3]);
+                        gp[3] == 1.0
+                            && (Vec3::from_slice(&gp[..3]) - (o + h.t * d)).length() <= tolerance
+                            && (n.length() - 1.0).abs() < 1e-3
+                            && shows_emission == emits
+                    }
+                    None => gp[3] == 0.0,
+                };
+                off += !agrees as usize;
+            }
         }
+        let share = off as f64 / (size.0 * size.1) as f64;
+        eprintln!(
+            "{}: {off} pixels ({:.2} %) disagree with ray casting; {emitting} on the emitter",
+            scene.path.display(),
+            100.0 * share
+        );
+        assert!(emitting > 0, "the emitter is not in view");
+        assert!(off <= 1, "{off} pixels disagree with ray casting");
     }
-    let share = off as f64 / (size.0 * size.1) as f64;
-    eprintln!(
-        "G-buffer: {off} pixels ({:.2} %) disagree with ray casting",
-        100.0 * share
-    );
-    assert!(share <= 0.01, "{off} pixels disagree with ray casting");
     assert!(
         gpu.validation_messages().is_empty(),
         "{:#?}",

@@ -399,7 +399,7 @@ pub fn pipeline(
     let depth = vk::PipelineDepthStencilStateCreateInfo::default()
         .depth_test_enable(desc.depth_test)
         .depth_write_enable(desc.depth_test)
-        .depth_compare_op(vk::CompareOp::LESS);
+        .depth_compare_op(vk::CompareOp::GREATER);
     let blend = vk::PipelineColorBlendAttachmentState {
         blend_enable: desc.blend_add.into(),
         src_color_blend_factor: vk::BlendFactor::ONE,

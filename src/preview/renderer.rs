@@ -437,9 +437,10 @@ impl Renderer {
         let zero = vk::ClearValue {
             color: vk::ClearColorValue { float32: [0.0; 4] },
         };
+        // Reversed depth (see `view.rs`): the far plane is 0.
         let far = vk::ClearValue {
             depth_stencil: vk::ClearDepthStencilValue {
-                depth: 1.0,
+                depth: 0.0,
                 stencil: 0,
             },
         };

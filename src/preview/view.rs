@@ -1,7 +1,9 @@
 //! The camera as the previewer's shaders see it: the per-frame uniforms (`frame.glsl`) and the
 //! frustum that culls the cut (DESIGN.md §8).
 //!
-//! Clip space is Vulkan's: x right, y down, depth in [0, 1]. Pixel (x, y)'s centre is the film
+//! Clip space is Vulkan's: x right, y down, with depth reversed (1 at the near plane, 0 at the
+//! far one), which float depth resolves evenly over the range: with the usual mapping, a
+//! light 1 mm under a ceiling fought with it 4 m away. Pixel (x, y)'s centre is the film
 //! point (x + 0.5, y + 0.5) of [`Camera::generate_ray`], so the preview and the final render
 //! see the same rays.
 
@@ -78,11 +80,12 @@ impl View {
         let rows = match c.projection {
             Projection::Perspective { yfov } => {
                 let t = (0.5 * yfov).tan();
-                let a = self.far / (self.far - self.near);
+                // Reversed depth: near → 1, far → 0.
+                let a = self.near / (self.far - self.near);
                 [
                     row(c.right, 1.0 / (t * aspect), 0.0),
                     row(c.up, -1.0 / t, 0.0),
-                    row(c.forward, a, -a * self.near),
+                    row(c.forward, -a, a * self.far),
                     row(c.forward, 1.0, 0.0),
                 ]
             }
@@ -91,7 +94,7 @@ impl View {
                 [
                     row(c.right, 1.0 / xmag, 0.0),
                     row(c.up, -1.0 / ymag, 0.0),
-                    row(c.forward, depth, -self.near * depth),
+                    row(c.forward, -depth, self.far * depth),
                     Vec4::W,
                 ]
             }
