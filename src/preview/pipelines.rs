@@ -29,22 +29,15 @@ pub const FLOAT4: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
 pub const DEPTH: vk::Format = vk::Format::D32_SFLOAT;
 pub const COLOR: vk::ImageAspectFlags = vk::ImageAspectFlags::COLOR;
 
-/// RGBA32F where the device blends it (lavapipe and desktop GPUs), else RGBA16F.
-pub fn accumulation_format(o: &Objects) -> vk::Format {
+/// What the device can do with [`FLOAT4`] images (optimal tiling).
+pub fn float4_features(o: &Objects) -> vk::FormatFeatureFlags {
     // SAFETY: a plain query of the physical device.
-    let props = unsafe {
+    unsafe {
         o.gpu
             .instance
             .get_physical_device_format_properties(o.gpu.physical, FLOAT4)
-    };
-    if props
-        .optimal_tiling_features
-        .contains(vk::FormatFeatureFlags::COLOR_ATTACHMENT_BLEND)
-    {
-        FLOAT4
-    } else {
-        vk::Format::R16G16B16A16_SFLOAT
     }
+    .optimal_tiling_features
 }
 
 /// A one-subpass render pass over colour attachments of `formats` (cleared; left in

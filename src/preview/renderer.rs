@@ -15,7 +15,7 @@ use super::cut::Splat;
 use super::device::{check, Gpu, VulkanError};
 use super::objects::{Buffer, Objects};
 use super::pipelines::{
-    accumulation_format, descriptor_set, pipeline, pipeline_layout, render_pass, write_descriptors,
+    descriptor_set, float4_features, pipeline, pipeline_layout, render_pass, write_descriptors,
     PipelineDesc, COLOR, DEPTH, FLOAT4,
 };
 use super::transfer;
@@ -101,13 +101,16 @@ impl Renderer {
             vk::ImageUsageFlags::DEPTH_STENCIL_ATTACHMENT,
             vk::ImageAspectFlags::DEPTH,
         )?;
-        let accum = o.image(
-            "splat accumulation",
-            size,
-            accumulation_format(&o),
-            sampled,
-            COLOR,
-        )?;
+        // Splat weights reach W_MAX = 1e4 and radiance 1e6, far past half floats: the
+        // accumulation needs 32-bit float blending (lavapipe and desktop GPUs have it).
+        let features = float4_features(&o);
+        if !features.contains(vk::FormatFeatureFlags::COLOR_ATTACHMENT_BLEND) {
+            return Err(VulkanError::Call {
+                call: "vkGetPhysicalDeviceFormatProperties (the device cannot blend 32-bit float images)",
+                result: vk::Result::ERROR_FORMAT_NOT_SUPPORTED,
+            });
+        }
+        let accum = o.image("splat accumulation", size, FLOAT4, sampled, COLOR)?;
         let output = o.image(
             "output",
             size,
@@ -207,7 +210,7 @@ impl Renderer {
         })?[0];
         o.name(command, "frame commands")?;
         let fence = o.fence("frame fence", &vk::FenceCreateInfo::default())?;
-        let blit_linear = linear_blit(&o);
+        let blit_linear = features.contains(vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR);
         Ok(Renderer {
             objects: o,
             size,
@@ -248,18 +251,13 @@ impl Renderer {
         splats: &[Splat],
         settings: FrameSettings,
     ) -> Result<RgbImage, VulkanError> {
-        self.upload(view, splats, settings)?;
-        let cmd = self.command;
-        self.submit(
-            |r, d| {
-                r.record_passes(d, cmd, splats.len() as u32, settings);
-                let output = (r.output, r.size);
-                // SAFETY: the output is in the transfer layout after the resolve pass, and
-                // the readback buffer holds a float4 image of the renderer's size.
-                unsafe { transfer::record_readback(d, cmd, output, r.readback.handle, None) };
-            },
-            None,
-        )?;
+        self.draw(view, splats, settings, None, |r, d, cmd| {
+            // SAFETY: the output is in the transfer layout after the resolve pass, and the
+            // readback buffer holds a float4 image of the renderer's size.
+            unsafe {
+                transfer::record_readback(d, cmd, (r.output, r.size), r.readback.handle, None)
+            };
+        })?;
         Ok(RgbImage {
             width: self.size.0,
             height: self.size.1,
@@ -269,7 +267,8 @@ impl Renderer {
 
     /// Draw one frame into a window's swapchain image (blitted from the float output, which
     /// converts it to the image's format). With `target.screenshot`, the swapchain image is
-    /// also read back: its bytes, 4 per pixel in its format, row-major from the top.
+    /// also read back: its bytes, 4 per pixel in its format, row-major from the top (only when
+    /// the frame has the image's size, which the readback buffer holds).
     pub fn present(
         &mut self,
         view: &View,
@@ -277,26 +276,19 @@ impl Renderer {
         settings: FrameSettings,
         target: &PresentTarget,
     ) -> Result<Option<Vec<u8>>, VulkanError> {
-        self.upload(view, splats, settings)?;
-        let cmd = self.command;
-        self.submit(
-            |r, d| {
-                r.record_passes(d, cmd, splats.len() as u32, settings);
-                let output = (r.output, r.size);
-                // A screenshot needs the frame at the image's size, which the readback
-                // buffer holds.
-                let screenshot =
-                    (target.screenshot && target.size == r.size).then_some(r.readback.handle);
-                let linear = r.blit_linear;
-                let image = (target.image, target.size);
-                // SAFETY: the submit waits for the image's acquisition at the transfer stage;
-                // a screenshot's image has the renderer's size, 4 bytes a pixel (the readback
-                // buffer holds 16).
-                unsafe { transfer::record_present(d, cmd, output, image, screenshot, linear) };
-            },
-            Some((target.acquired, target.rendered)),
-        )?;
-        Ok((target.screenshot && target.size == self.size).then(|| {
+        let screenshot = target.screenshot && target.size == self.size;
+        let semaphores = Some((target.acquired, target.rendered));
+        self.draw(view, splats, settings, semaphores, |r, d, cmd| {
+            let readback = screenshot.then_some(r.readback.handle);
+            let image = (target.image, target.size);
+            // SAFETY: the submit waits for the image's acquisition at the transfer stage; a
+            // screenshot's image has the renderer's size, 4 bytes a pixel (the readback buffer
+            // holds 16).
+            unsafe {
+                transfer::record_present(d, cmd, (r.output, r.size), image, readback, r.blit_linear)
+            };
+        })?;
+        Ok(screenshot.then(|| {
             let n = self.size.0 as usize * self.size.1 as usize;
             self.readback
                 .read::<[u8; 4]>(n)
@@ -304,6 +296,27 @@ impl Renderer {
                 .flatten()
                 .collect()
         }))
+    }
+
+    /// Upload and record the three passes, then `finish` (what happens to the output), and
+    /// submit with `semaphores` (see [`Renderer::submit`]).
+    fn draw(
+        &mut self,
+        view: &View,
+        splats: &[Splat],
+        settings: FrameSettings,
+        semaphores: Option<(vk::Semaphore, vk::Semaphore)>,
+        finish: impl FnOnce(&Self, &ash::Device, vk::CommandBuffer),
+    ) -> Result<(), VulkanError> {
+        self.upload(view, splats, settings)?;
+        let cmd = self.command;
+        self.submit(
+            |r, d| {
+                r.record_passes(d, cmd, splats.len() as u32, settings);
+                finish(r, d, cmd);
+            },
+            semaphores,
+        )
     }
 
     /// Write the frame's uniforms and splats.
@@ -558,17 +571,4 @@ pub struct PresentTarget {
     pub size: (u32, u32),
     /// Read the image back after drawing (only when the frame has the image's size).
     pub screenshot: bool,
-}
-
-/// Whether the device filters RGBA32F linearly in blits.
-fn linear_blit(o: &Objects) -> bool {
-    // SAFETY: a plain query of the physical device.
-    let props = unsafe {
-        o.gpu
-            .instance
-            .get_physical_device_format_properties(o.gpu.physical, FLOAT4)
-    };
-    props
-        .optimal_tiling_features
-        .contains(vk::FormatFeatureFlags::SAMPLED_IMAGE_FILTER_LINEAR)
 }

@@ -124,18 +124,8 @@ impl Importer<'_> {
             return Ok(*m);
         }
         let p = self.stage.prim(prim.clone());
-        let (local, resets) = match ug::Xform::get(self.stage, prim.clone()) {
-            // Every xformable prim's ops are read through the Xformable interface of an
-            // Xform view of it (the ops are plain attributes).
-            Ok(Some(x)) => (
-                x.local_to_parent_transform(self.time.code)
-                    .map_err(|e| self.prim_err(prim, format!("{e:#}")))?,
-                x.resets_xform_stack()
-                    .map_err(|e| self.prim_err(prim, format!("{e:#}")))?,
-            ),
-            _ => xformable_of(&p, self.time.code)
-                .map_err(|e| self.prim_err(prim, format!("{e:#}")))?,
-        };
+        let (local, resets) =
+            xformable_of(&p, self.time.code).map_err(|e| self.prim_err(prim, format!("{e:#}")))?;
         let local = column_matrix(&local);
         let parent = prim.parent();
         let m = match parent {
@@ -822,8 +812,8 @@ fn sample(attr: &openusd::usd::Attribute, time: Time) -> anyhow::Result<Option<s
     }
 }
 
-/// A prim's local transform and whether it resets the transform stack, for any xformable
-/// prim type (the ops are read through an Xform view of the prim).
+/// A prim's local transform and whether it resets the transform stack, for any prim type
+/// (the ops are plain attributes; typeless prims, such as a reference's root, have them too).
 fn xformable_of(prim: &openusd::usd::Prim, time: TimeCode) -> anyhow::Result<(gf::Matrix4d, bool)> {
     let view = XformableView(prim.clone());
     Ok((
