@@ -1,11 +1,13 @@
 //! Sampling of every emitter in a scene for next-event estimation: emissive triangles (uniform
-//! by area within a triangle) and punctual lights, chosen with probability proportional to their
-//! power. Kinds the scene does not have cost nothing.
+//! by area within a triangle), punctual lights and the environment (by its radiance, see
+//! [`crate::scene::environment`]), chosen with probability proportional to their power. Kinds
+//! the scene does not have cost nothing.
 
 use crate::accel::Accel;
 use crate::geometry::offset::{interpolate_with_error, offset_origin, SHADOW_EPSILON};
 use crate::geometry::spherical_triangle::SphericalTriangle;
 use crate::geometry::warp::square_to_uniform_triangle;
+use crate::scene::environment::EnvironmentSampler;
 use crate::scene::{LightKind, Scene};
 use crate::spectrum::{luminance, Rgb};
 use glam::{Vec2, Vec3, Vec3A};
@@ -15,7 +17,7 @@ use glam::{Vec2, Vec3, Vec3A};
 pub struct EmitterSample {
     /// Unit direction from the shading point towards the emitter.
     pub wi: Vec3,
-    /// Distance to the emitter point (infinite for directional lights).
+    /// Distance to the emitter point (infinite for directional lights and the environment).
     pub dist: f32,
     /// Emitted radiance (area) or intensity/irradiance terms, divided by the sampling density
     /// and multiplied by the geometry term: the value to multiply with the BSDF.
@@ -62,8 +64,10 @@ pub struct EmitterSampler {
     tris: Vec<EmissiveTriangle>,
     /// Index of the first emitter entry of each mesh (`u32::MAX` for non-emissive meshes).
     mesh_base: Vec<u32>,
-    /// Cumulative selection weights over `tris` followed by the scene's punctual lights.
+    /// Cumulative selection weights over `tris`, then the scene's punctual lights, then the
+    /// environment if any.
     cdf: Vec<f64>,
+    environment: Option<EnvironmentSampler>,
     /// Bounding-sphere radius, for the power of directional lights.
     scene_radius: f32,
 }
@@ -114,6 +118,16 @@ impl EmitterSampler {
             };
             weights.push(w.max(0.0) as f64);
         }
+        let environment = scene
+            .environment
+            .as_ref()
+            .map(|e| e.sampler())
+            .filter(|s| !s.is_black());
+        if let Some(s) = &environment {
+            // What crosses the scene's disc: π R² × ½ ∫ L dω, with ∫ L dω = 2π² ∫∫ L sin θ du dv.
+            let pi = std::f64::consts::PI;
+            weights.push(pi * (scene_radius as f64).powi(2) * pi * pi * s.integral());
+        }
         let mut acc = 0.0;
         let cdf = weights
             .iter()
@@ -126,6 +140,7 @@ impl EmitterSampler {
             tris,
             mesh_base,
             cdf,
+            environment,
             scene_radius,
         }
     }
@@ -158,6 +173,15 @@ impl EmitterSampler {
             return 0.0;
         }
         self.selection_probability(i) / self.tris[i].area * dist * dist / cos
+    }
+
+    /// Solid-angle density with which [`EmitterSampler::sample`] would pick the environment
+    /// along world direction `w` (0 without one).
+    pub fn pdf_environment(&self, scene: &Scene, w: Vec3) -> f32 {
+        match (&self.environment, &scene.environment) {
+            (Some(s), Some(env)) => self.selection_probability(self.cdf.len() - 1) * s.pdf(env, w),
+            _ => 0.0,
+        }
     }
 
     /// Sample an emitter as seen from `p`: `u_sel` picks the emitter, `u` the point on it
@@ -246,7 +270,22 @@ impl EmitterSampler {
                 normal: ng,
             });
         }
-        let l = &scene.lights[i - self.tris.len()];
+        let Some(l) = scene.lights.get(i - self.tris.len()) else {
+            let (sampler, env) = (self.environment.as_ref()?, scene.environment.as_ref()?);
+            let (wi, pdf) = sampler.sample(env, u)?;
+            let pdf = sel * pdf;
+            let le = env.radiance(wi);
+            return (le != Rgb::ZERO).then_some(EmitterSample {
+                wi,
+                dist: f32::INFINITY,
+                value: le / pdf,
+                pdf,
+                delta: false,
+                point: p + wi * (4.0 * self.scene_radius),
+                point_err: Vec3::ZERO,
+                normal: -wi,
+            });
+        };
         match l.kind {
             LightKind::Directional => Some(EmitterSample {
                 wi: -l.direction,

@@ -23,13 +23,15 @@ fn thin(kind: Distribution, au: f32, av: f32, eta: f32) -> Bsdf {
     })
 }
 
+/// The BSDF of a glTF material with `extensions`; not metallic (glTF's default metallicFactor
+/// is 1, and a metal does not transmit).
 fn material_of(extensions: &str) -> Bsdf {
     let tri = [[0., 0., 0.], [1., 0., 0.], [0., 1., 0.]];
     let text = triangle_gltf(
         &tri,
         &[0, 1, 2],
         &format!(
-            r#","pbrMetallicRoughness":{{"roughnessFactor":0.5}},"extensions":{{{extensions}}}"#
+            r#","pbrMetallicRoughness":{{"metallicFactor":0.0,"roughnessFactor":0.5}},"extensions":{{{extensions}}}"#
         ),
     );
     let scene = Scene::from_gltf_bytes(Path::new("thin.gltf"), text.as_bytes()).expect("loads");

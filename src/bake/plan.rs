@@ -101,6 +101,7 @@ impl Plan {
             "point": count(|k| matches!(k, LightKind::Point)),
             "spot": count(|k| matches!(k, LightKind::Spot { .. })),
             "directional": count(|k| matches!(k, LightKind::Directional)),
+            "environment": scene.environment.is_some(),
         });
         let mut left_out = Vec::new();
         if materials.iter().all(|m| m["storage"] == "RGB") {
@@ -111,6 +112,9 @@ impl Plan {
         }
         if scene.lights.is_empty() {
             left_out.push("punctual and directional lights: the scene has none");
+        }
+        if scene.environment.is_none() {
+            left_out.push("environment lighting: the scene has no environment");
         }
         if emissive_triangles == 0 {
             left_out.push("emitting surfels: no surface emits");

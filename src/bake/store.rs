@@ -114,11 +114,23 @@ pub fn bake_hash(scene: &Scene, settings: &Value) -> [u8; 16] {
     // Debug formatting prints every float so that it parses back to the same value.
     let materials = format!("{:?}", scene.materials);
     let lights = format!("{:?}", scene.lights);
+    let environment = match &scene.environment {
+        Some(e) => {
+            let mut bytes = format!("{:?} {:?} {}", e.scale, e.to_local, e.name).into_bytes();
+            if let Some(m) = &e.map {
+                bytes.extend_from_slice(&m.width.to_le_bytes());
+                bytes.extend_from_slice(bytemuck::cast_slice(&m.texels));
+            }
+            bytes
+        }
+        None => Vec::new(),
+    };
     cache::content_hash(&[
         &geometry,
         &textures,
         materials.as_bytes(),
         lights.as_bytes(),
+        &environment,
         settings.to_string().as_bytes(),
         env!("CARGO_PKG_VERSION").as_bytes(),
     ])

@@ -89,7 +89,19 @@ pub fn radiance(ctx: &RenderContext, mut o: Vec3, mut d: Vec3, sampler: &mut Sam
     let mut prev_delta = true;
     // For `Transport::CacheOneBounce`: rough vertices and chain vertices so far.
     let (mut rough, mut chain) = (0u32, 0u32);
-    while let Some(si) = intersect(ctx, o, d) {
+    loop {
+        let Some(si) = intersect(ctx, o, d) else {
+            // Escaped: the environment, weighted as emission is.
+            if let Some(env) = &scene.environment {
+                let w = if prev_delta {
+                    1.0
+                } else {
+                    mis(prev_bsdf_pdf, ctx.emitters.pdf_environment(scene, d))
+                };
+                result += throughput * env.radiance(d) * w;
+            }
+            break;
+        };
         let material = &scene.materials[scene.meshes[si.mesh as usize].material];
         let wi = si.frame.to_local(-d);
         // Emission, weighted against the emitter sampling that could have found it.

@@ -109,6 +109,12 @@ pub fn trace_primary(
     let mut first = true;
     while let Some((o, d, throughput, chain)) = stack.pop() {
         let Some(hit) = intersect(ctx, o, d) else {
+            // The environment, seen directly or along the chain.
+            if let Some(env) = &ctx.scene.environment {
+                if within(settings.max_depth, chain + 1) {
+                    out.direct += throughput * env.radiance(d);
+                }
+            }
             continue;
         };
         let material = &ctx.scene.materials[ctx.scene.meshes[hit.mesh as usize].material];
@@ -238,6 +244,10 @@ fn direct_light(
             };
             let dir = hit.frame.to_world(bs.wo).normalize();
             let Some(h) = intersect(ctx, hit.spawn(dir), dir) else {
+                if let Some(env) = &ctx.scene.environment {
+                    let w = mis(bs.pdf, ctx.emitters.pdf_environment(ctx.scene, dir));
+                    sum += bs.weight * env.radiance(dir) * w;
+                }
                 continue;
             };
             let m = &ctx.scene.materials[ctx.scene.meshes[h.mesh as usize].material];

@@ -8,7 +8,7 @@
 use super::camera::{Camera, Projection};
 use super::light::{LightKind, PunctualLight};
 use super::material::{Emission, Material, PbrParams, Scattering};
-use super::texture::{TexRef, Texture, Wrap};
+use super::texture::{ChannelRef, TexRef, Texture, Wrap};
 use super::{Mesh, Scene, Warning};
 use crate::bsdf::mitsuba::parse_bsdf;
 use crate::error::{Error, Result};
@@ -322,6 +322,8 @@ fn tex_ref(
         wrap_t: wrap(sampler.wrap_t()),
         transform,
         srgb,
+        scale: Vec4::ONE,
+        bias: Vec4::ZERO,
     })
 }
 
@@ -413,23 +415,36 @@ fn pbr_scattering(
 ) -> Scattering {
     let [r, g_, b, _] = pbr.base_color_factor();
     let transmission = m.transmission();
+    // Roughness in G, metalness in B of one image.
+    let metallic_roughness = pbr
+        .metallic_roughness_texture()
+        .and_then(|t| tex_ref(&t, image_of_texture, false, warnings, what));
     Scattering::Pbr(PbrParams {
         base_color: Rgb::new(r, g_, b).clamp(Rgb::ZERO, Rgb::ONE),
         base_color_texture: pbr
             .base_color_texture()
             .and_then(|t| tex_ref(&t, image_of_texture, true, warnings, what)),
         metallic: pbr.metallic_factor().clamp(0.0, 1.0),
+        metallic_texture: metallic_roughness.map(|texture| ChannelRef {
+            texture,
+            channel: 2,
+        }),
         roughness: pbr.roughness_factor().clamp(0.0, 1.0),
-        metallic_roughness_texture: pbr
-            .metallic_roughness_texture()
-            .and_then(|t| tex_ref(&t, image_of_texture, false, warnings, what)),
+        roughness_texture: metallic_roughness.map(|texture| ChannelRef {
+            texture,
+            channel: 1,
+        }),
         transmission: transmission
             .as_ref()
             .map_or(0.0, |t| t.transmission_factor().clamp(0.0, 1.0)),
         transmission_texture: transmission
             .as_ref()
             .and_then(|t| t.transmission_texture())
-            .and_then(|t| tex_ref(&t, image_of_texture, false, warnings, what)),
+            .and_then(|t| tex_ref(&t, image_of_texture, false, warnings, what))
+            .map(|texture| ChannelRef {
+                texture,
+                channel: 0,
+            }),
         ior: m
             .ior()
             .filter(|x| x.is_finite() && *x >= 1.0)

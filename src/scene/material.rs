@@ -1,15 +1,16 @@
 //! Materials of the scene IR and their mapping to Mitsuba BSDFs (DESIGN.md §4).
 //!
-//! An explicit Mitsuba description always wins. Otherwise glTF metallic-roughness maps as:
-//! `alpha = roughness²` with GGX; transmission > 0 → `roughdielectric` (`int_ior` = the glTF
-//! IOR, exterior 1.0, `specular_transmittance` = base colour), or the thin-walled
-//! [`ThinDielectric`] when the material has no `KHR_materials_volume` or a zero thickness (the
-//! glTF definition of thin-walled); metallic ≥ 0.5 →
-//! `roughconductor` with `material: none` and `specular_reflectance` = base colour; otherwise
-//! `diffuse(base colour)`. Textured factors are resolved per shading point, so a metallic mask
-//! switches the BSDF per texel.
+//! An explicit Mitsuba description always wins. Otherwise glTF metallic-roughness (and
+//! UsdPreviewSurface, read into the same parameters) maps as: `alpha = roughness²` with GGX;
+//! metallic ≥ 0.5 → `roughconductor` with `material: none` and `specular_reflectance` = base
+//! colour; otherwise transmission > 0 → `roughdielectric` (`int_ior` = the glTF IOR, exterior
+//! 1.0, `specular_transmittance` = base colour), or the thin-walled [`ThinDielectric`] when the
+//! material has no `KHR_materials_volume` or a zero thickness (the glTF definition of
+//! thin-walled); otherwise `diffuse(base colour)`. Metal comes first, in DESIGN.md §4's order
+//! and as in glTF, where transmission is a lobe of the dielectric part only. Textured factors
+//! are resolved per shading point, so a metallic mask switches the BSDF per texel.
 
-use super::texture::{TexRef, Texture};
+use super::texture::{ChannelRef, TexRef, Texture};
 use crate::bsdf::{
     Bsdf, Diffuse, Distribution, Microfacet, RoughConductor, RoughDielectric, ThinDielectric,
 };
@@ -22,11 +23,13 @@ pub struct PbrParams {
     pub base_color: Rgb,
     pub base_color_texture: Option<TexRef>,
     pub metallic: f32,
+    /// Multiplies `metallic` (glTF: the B channel of the metallic-roughness image).
+    pub metallic_texture: Option<ChannelRef>,
     pub roughness: f32,
-    /// Roughness in G, metalness in B (glTF convention).
-    pub metallic_roughness_texture: Option<TexRef>,
+    /// Multiplies `roughness` (glTF: the G channel of the metallic-roughness image).
+    pub roughness_texture: Option<ChannelRef>,
     pub transmission: f32,
-    pub transmission_texture: Option<TexRef>,
+    pub transmission_texture: Option<ChannelRef>,
     /// Index of refraction of the interior (KHR_materials_ior, default 1.5).
     pub ior: f32,
     /// A transmissive surface without a volume behind it (a pane, a leaf).
@@ -40,8 +43,9 @@ impl PbrParams {
             base_color,
             base_color_texture: None,
             metallic,
+            metallic_texture: None,
             roughness,
-            metallic_roughness_texture: None,
+            roughness_texture: None,
             transmission: 0.0,
             transmission_texture: None,
             ior: 1.5,
@@ -52,6 +56,9 @@ impl PbrParams {
 
 /// What scatters light at a surface.
 #[derive(Clone, Debug)]
+// A scene has few materials and they are read in place, so the larger Pbr variant costs
+// nothing worth a box.
+#[allow(clippy::large_enum_variant)]
 pub enum Scattering {
     /// An explicit Mitsuba description (`extras.mitsuba` or `mitsuba:*` attributes).
     Explicit(Bsdf),
@@ -85,19 +92,23 @@ impl Material {
                 if let Some(t) = &p.base_color_texture {
                     base *= t.sample(textures, uv).truncate();
                 }
-                let (mut metallic, mut roughness) = (p.metallic, p.roughness);
-                if let Some(t) = &p.metallic_roughness_texture {
-                    let v = t.sample(textures, uv);
-                    roughness *= v.y;
-                    metallic *= v.z;
-                }
-                let mut transmission = p.transmission;
-                if let Some(t) = &p.transmission_texture {
-                    transmission *= t.sample(textures, uv).x;
-                }
+                let scalar = |value: f32, texture: &Option<ChannelRef>| match texture {
+                    Some(t) => value * t.sample(textures, uv),
+                    None => value,
+                };
+                let metallic = scalar(p.metallic, &p.metallic_texture);
+                let roughness = scalar(p.roughness, &p.roughness_texture);
+                let transmission = scalar(p.transmission, &p.transmission_texture);
                 let alpha = roughness.clamp(0.0, 1.0).powi(2);
                 let distr = Microfacet::new(Distribution::Ggx, alpha, alpha);
-                if transmission > 0.0 && p.thin_walled {
+                if metallic >= 0.5 {
+                    Bsdf::Conductor(RoughConductor {
+                        distr,
+                        eta: Rgb::ZERO,
+                        k: Rgb::ONE,
+                        specular_reflectance: base,
+                    })
+                } else if transmission > 0.0 && p.thin_walled {
                     Bsdf::ThinDielectric(ThinDielectric {
                         distr,
                         eta: p.ior,
@@ -110,13 +121,6 @@ impl Material {
                         eta: p.ior,
                         specular_reflectance: Rgb::ONE,
                         specular_transmittance: base,
-                    })
-                } else if metallic >= 0.5 {
-                    Bsdf::Conductor(RoughConductor {
-                        distr,
-                        eta: Rgb::ZERO,
-                        k: Rgb::ONE,
-                        specular_reflectance: base,
                     })
                 } else {
                     Bsdf::Diffuse(Diffuse { reflectance: base })
@@ -134,5 +138,30 @@ impl Material {
             },
             _ => Rgb::ZERO,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Metal wins over transmission (DESIGN.md §4's order; glTF's transmission is a lobe of
+    /// the dielectric part only), and transmission over diffuse.
+    #[test]
+    fn metal_then_transmission_then_diffuse() {
+        let bsdf = |metallic: f32, transmission: f32| {
+            Material {
+                name: "m".into(),
+                scattering: Scattering::Pbr(PbrParams {
+                    transmission,
+                    ..PbrParams::constant(Rgb::splat(0.8), metallic, 0.3)
+                }),
+                emission: None,
+            }
+            .bsdf_at(&[], Vec2::ZERO)
+        };
+        assert!(matches!(bsdf(1.0, 1.0), Bsdf::Conductor(_)));
+        assert!(matches!(bsdf(0.0, 1.0), Bsdf::Dielectric(_)));
+        assert!(matches!(bsdf(0.0, 0.0), Bsdf::Diffuse(_)));
     }
 }

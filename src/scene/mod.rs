@@ -2,6 +2,7 @@
 //! for every importer (glTF now, USD later), validated on import (DESIGN.md §4).
 
 pub mod camera;
+pub mod environment;
 mod gltf;
 pub mod light;
 pub mod material;
@@ -10,9 +11,10 @@ pub mod texture;
 mod usd;
 
 pub use camera::{Camera, Projection};
+pub use environment::Environment;
 pub use light::{LightKind, PunctualLight};
 pub use material::{Emission, Material, PbrParams, Scattering};
-pub use texture::{TexRef, Texture, Wrap};
+pub use texture::{ChannelRef, TexRef, Texture, Wrap};
 
 use crate::error::{Error, Result};
 use glam::{Vec2, Vec3};
@@ -110,6 +112,8 @@ pub struct Scene {
     pub materials: Vec<Material>,
     pub textures: Vec<Texture>,
     pub lights: Vec<PunctualLight>,
+    /// Radiance from far away (a USD dome light).
+    pub environment: Option<Environment>,
     pub cameras: Vec<Camera>,
     pub warnings: Vec<Warning>,
 }
@@ -170,6 +174,7 @@ impl Scene {
     /// True when anything emits light.
     pub fn has_emitters(&self) -> bool {
         !self.lights.is_empty()
+            || self.environment.is_some()
             || self.meshes.iter().any(|m| {
                 self.materials[m.material]
                     .emission

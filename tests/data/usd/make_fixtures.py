@@ -20,6 +20,18 @@ by CI; the outputs are committed next to this script).
 - missing-member.usdz: a usdz whose layer references gone.usda, which the archive lacks.
 - animated.usda: quad.usda's /quad translated by (0, 0, 0) at time code 1 and (0.9, 0, 0) at 10
   (start 1, end 10).
+- textured.usda + checker.png: a unit quad whose texture coordinates are the indexed primvar
+  `uv`, read through a UsdPrimvarReader_float2 and a UsdTransform2d (scale 2, rotation 90°,
+  translation (1, 0)); metallic 1; diffuseColor from the 2x2 sRGB checker's rgb, roughness from its g
+  channel with scale 0.5 and bias 0.1 (raw), wrap clamp, and emissiveColor from its rgb with
+  wrap black.
+- dome.usda: a diffuse (0.5) UV-sphere mesh of radius 1 under a DomeLight of colour 0.5 and
+  intensity 2 (radiance 1 from everywhere), with a camera on +Z.
+- dome-sky.usda + sky.png: a diffuse (0.5) floor facing up under a DomeLight whose
+  latitude-longitude map (64 x 32, sRGB PNG) is white above the horizon and black below;
+  dome-sky-flipped.usda is the same with the light turned upside down (rotateX 180).
+- roughness-test-lit.usda: roughness-test/RoughnessTest.usdz (which has no light and no
+  camera) referenced under a stage with a rect light and a camera in front of its cards.
 """
 import base64
 import json
@@ -213,6 +225,12 @@ def main():
     hidden.CreateVisibilityAttr(UsdGeom.Tokens.invisible)
     inst.GetRootLayer().Save()
 
+    textured(os.path.join(HERE, "textured.usda"))
+    roughness_test_lit(os.path.join(HERE, "roughness-test-lit.usda"))
+    dome(os.path.join(HERE, "dome.usda"))
+    dome_sky(os.path.join(HERE, "dome-sky.usda"), flipped=False)
+    dome_sky(os.path.join(HERE, "dome-sky-flipped.usda"), flipped=True)
+
     # A usdz whose layer references a member that is not in the archive.
     layer = os.path.join(HERE, "missing-member-root.usda")
     with open(layer, "w") as f:
@@ -222,6 +240,183 @@ def main():
         os.remove(usdz)
     UsdUtils.CreateNewUsdzPackage(Sdf.AssetPath(layer), usdz)
     os.remove(layer)
+
+
+def write_png(path, width, height, rgb):
+    """An 8-bit RGB PNG (usd-core writes no images)."""
+    import zlib
+
+    def chunk(kind, data):
+        c = kind + data
+        return struct.pack(">I", len(data)) + c + struct.pack(">I", zlib.crc32(c) & 0xFFFFFFFF)
+
+    rows = b"".join(b"\x00" + bytes(rgb[y * width * 3:(y + 1) * width * 3]) for y in range(height))
+    with open(path, "wb") as f:
+        f.write(b"\x89PNG\r\n\x1a\n")
+        f.write(chunk(b"IHDR", struct.pack(">IIBBBBB", width, height, 8, 2, 0, 0, 0)))
+        f.write(chunk(b"IDAT", zlib.compress(rows)))
+        f.write(chunk(b"IEND", b""))
+
+
+def textured(path):
+    # Rows top to bottom: (255, 0, 0) (0, 255, 0) / (0, 0, 255) (255, 255, 255).
+    write_png(os.path.join(HERE, "checker.png"), 2, 2,
+              [255, 0, 0, 0, 255, 0, 0, 0, 255, 255, 255, 255])
+    stage = Usd.Stage.CreateNew(path)
+    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.y)
+    UsdGeom.SetStageMetersPerUnit(stage, 1.0)
+    mesh = UsdGeom.Mesh.Define(stage, "/quad")
+    mesh.CreatePointsAttr(Vt.Vec3fArray([(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0)]))
+    mesh.CreateFaceVertexCountsAttr(Vt.IntArray([4]))
+    mesh.CreateFaceVertexIndicesAttr(Vt.IntArray([0, 1, 2, 3]))
+    uv = UsdGeom.PrimvarsAPI(mesh).CreatePrimvar(
+        "uv", Sdf.ValueTypeNames.TexCoord2fArray, UsdGeom.Tokens.faceVarying)
+    # Indexed: corners 0..3 take values 2, 0, 1, 3 of this table.
+    uv.Set(Vt.Vec2fArray([(1, 0), (0, 1), (0, 0), (1, 1)]))
+    uv.SetIndices(Vt.IntArray([2, 0, 3, 1]))
+    material = UsdShade.Material.Define(stage, "/look")
+    surface = UsdShade.Shader.Define(stage, "/look/surface")
+    surface.CreateIdAttr("UsdPreviewSurface")
+    surface.CreateInput("metallic", Sdf.ValueTypeNames.Float).Set(1.0)
+    reader = UsdShade.Shader.Define(stage, "/look/reader")
+    reader.CreateIdAttr("UsdPrimvarReader_float2")
+    reader.CreateInput("varname", Sdf.ValueTypeNames.Token).Set("uv")
+    reader.CreateOutput("result", Sdf.ValueTypeNames.Float2)
+    xf = UsdShade.Shader.Define(stage, "/look/transform")
+    xf.CreateIdAttr("UsdTransform2d")
+    xf.CreateInput("in", Sdf.ValueTypeNames.Float2).ConnectToSource(reader.GetOutput("result"))
+    xf.CreateInput("scale", Sdf.ValueTypeNames.Float2).Set(Gf.Vec2f(2, 2))
+    xf.CreateInput("rotation", Sdf.ValueTypeNames.Float).Set(90.0)
+    xf.CreateInput("translation", Sdf.ValueTypeNames.Float2).Set(Gf.Vec2f(1, 0))
+    xf.CreateOutput("result", Sdf.ValueTypeNames.Float2)
+
+    def texture(name, colour_space, wrap):
+        tex = UsdShade.Shader.Define(stage, "/look/" + name)
+        tex.CreateIdAttr("UsdUVTexture")
+        tex.CreateInput("file", Sdf.ValueTypeNames.Asset).Set("checker.png")
+        tex.CreateInput("sourceColorSpace", Sdf.ValueTypeNames.Token).Set(colour_space)
+        tex.CreateInput("wrapS", Sdf.ValueTypeNames.Token).Set(wrap)
+        tex.CreateInput("wrapT", Sdf.ValueTypeNames.Token).Set(wrap)
+        tex.CreateInput("st", Sdf.ValueTypeNames.Float2).ConnectToSource(xf.GetOutput("result"))
+        return tex
+
+    colour = texture("colour", "sRGB", "clamp")
+    surface.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).ConnectToSource(
+        colour.CreateOutput("rgb", Sdf.ValueTypeNames.Float3))
+    rough = texture("rough", "raw", "clamp")
+    rough.CreateInput("scale", Sdf.ValueTypeNames.Float4).Set(Gf.Vec4f(0.5, 0.5, 0.5, 1))
+    rough.CreateInput("bias", Sdf.ValueTypeNames.Float4).Set(Gf.Vec4f(0.1, 0.1, 0.1, 0))
+    surface.CreateInput("roughness", Sdf.ValueTypeNames.Float).ConnectToSource(
+        rough.CreateOutput("g", Sdf.ValueTypeNames.Float))
+    glow = texture("glow", "sRGB", "black")
+    surface.CreateInput("emissiveColor", Sdf.ValueTypeNames.Color3f).ConnectToSource(
+        glow.CreateOutput("rgb", Sdf.ValueTypeNames.Float3))
+    material.CreateSurfaceOutput().ConnectToSource(surface.CreateOutput("surface", Sdf.ValueTypeNames.Token))
+    UsdShade.MaterialBindingAPI.Apply(mesh.GetPrim()).Bind(material)
+    stage.GetRootLayer().Save()
+
+
+def roughness_test_lit(path):
+    from pxr import UsdLux
+    stage = Usd.Stage.CreateNew(path)
+    # The referenced layer's stage metadata does not cross the reference: say it again.
+    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
+    UsdGeom.SetStageMetersPerUnit(stage, 1.0)
+    stage.DefinePrim("/Roughness").GetReferences().AddReference("roughness-test/RoughnessTest.usdz")
+    # The cards span x -6.7 … 6.6, z 0 … 5.3 and face -y.
+    light = UsdLux.RectLight.Define(stage, "/light")
+    light.CreateWidthAttr(4.0)
+    light.CreateHeightAttr(2.0)
+    light.CreateIntensityAttr(20.0)
+    light.AddTranslateOp().Set(Gf.Vec3d(0, -9, 4.5))
+    light.AddRotateXOp().Set(90.0)  # local -Z (the emitting side) along world +y
+    camera = UsdGeom.Camera.Define(stage, "/camera")
+    camera.CreateFocalLengthAttr(24.0)
+    camera.CreateVerticalApertureAttr(15.2908)
+    camera.CreateHorizontalApertureAttr(20.955)
+    camera.AddTranslateOp().Set(Gf.Vec3d(0, -16, 2.65))
+    camera.AddRotateXOp().Set(90.0)  # looking along +y, z up
+    stage.GetRootLayer().Save()
+
+
+def diffuse_material(stage, path, albedo):
+    material = UsdShade.Material.Define(stage, path)
+    surface = UsdShade.Shader.Define(stage, path + "/surface")
+    surface.CreateIdAttr("UsdPreviewSurface")
+    surface.CreateInput("diffuseColor", Sdf.ValueTypeNames.Color3f).Set(Gf.Vec3f(albedo))
+    surface.CreateInput("roughness", Sdf.ValueTypeNames.Float).Set(1.0)
+    material.CreateSurfaceOutput().ConnectToSource(surface.CreateOutput("surface", Sdf.ValueTypeNames.Token))
+    return material
+
+
+def dome(path):
+    from pxr import UsdLux
+    stage = Usd.Stage.CreateNew(path)
+    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.y)
+    UsdGeom.SetStageMetersPerUnit(stage, 1.0)
+    rings, segments = 24, 48
+    points, normals, counts, indices = [(0, 1, 0)], [(0, 1, 0)], [], []
+    for i in range(1, rings):
+        theta = math.pi * i / rings
+        for k in range(segments):
+            phi = 2 * math.pi * k / segments
+            n = (math.sin(theta) * math.cos(phi), math.cos(theta), -math.sin(theta) * math.sin(phi))
+            points.append(n)
+            normals.append(n)
+    points.append((0, -1, 0))
+    normals.append((0, -1, 0))
+    at = lambda i, k: 1 + (i - 1) * segments + k % segments
+    south = len(points) - 1
+    for k in range(segments):
+        counts += [3, 3]
+        indices += [0, at(1, k), at(1, k + 1)]
+        indices += [south, at(rings - 1, k + 1), at(rings - 1, k)]
+    for i in range(1, rings - 1):
+        for k in range(segments):
+            counts.append(4)
+            indices += [at(i, k), at(i + 1, k), at(i + 1, k + 1), at(i, k + 1)]
+    sphere = UsdGeom.Mesh.Define(stage, "/sphere")
+    sphere.CreatePointsAttr(Vt.Vec3fArray(points))
+    sphere.CreateNormalsAttr(Vt.Vec3fArray(normals))
+    sphere.SetNormalsInterpolation(UsdGeom.Tokens.vertex)
+    sphere.CreateFaceVertexCountsAttr(Vt.IntArray(counts))
+    sphere.CreateFaceVertexIndicesAttr(Vt.IntArray(indices))
+    UsdShade.MaterialBindingAPI.Apply(sphere.GetPrim()).Bind(diffuse_material(stage, "/grey", (0.5, 0.5, 0.5)))
+    light = UsdLux.DomeLight.Define(stage, "/dome")
+    light.CreateColorAttr(Gf.Vec3f(0.5, 0.5, 0.5))
+    light.CreateIntensityAttr(2.0)
+    camera = UsdGeom.Camera.Define(stage, "/camera")
+    camera.CreateFocalLengthAttr(50.0)
+    camera.CreateVerticalApertureAttr(24.0)
+    camera.AddTranslateOp().Set(Gf.Vec3d(0, 0, 5))
+    stage.GetRootLayer().Save()
+
+
+def dome_sky(path, flipped):
+    from pxr import UsdLux
+    width, height = 64, 32
+    if not flipped:
+        write_png(os.path.join(HERE, "sky.png"), width, height,
+                  [255 if y < height // 2 else 0 for y in range(height) for _ in range(width * 3)])
+    stage = Usd.Stage.CreateNew(path)
+    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.y)
+    UsdGeom.SetStageMetersPerUnit(stage, 1.0)
+    floor = UsdGeom.Mesh.Define(stage, "/floor")
+    floor.CreatePointsAttr(Vt.Vec3fArray([(-1, 0, 1), (1, 0, 1), (1, 0, -1), (-1, 0, -1)]))
+    floor.CreateFaceVertexCountsAttr(Vt.IntArray([4]))
+    floor.CreateFaceVertexIndicesAttr(Vt.IntArray([0, 1, 2, 3]))
+    UsdShade.MaterialBindingAPI.Apply(floor.GetPrim()).Bind(diffuse_material(stage, "/grey", (0.5, 0.5, 0.5)))
+    light = UsdLux.DomeLight.Define(stage, "/sky")
+    light.CreateTextureFileAttr("sky.png")
+    light.CreateTextureFormatAttr(UsdLux.Tokens.latlong)
+    if flipped:
+        light.AddRotateXOp().Set(180.0)
+    camera = UsdGeom.Camera.Define(stage, "/camera")
+    camera.CreateFocalLengthAttr(50.0)
+    camera.CreateVerticalApertureAttr(24.0)
+    camera.AddTranslateOp().Set(Gf.Vec3d(0, 3, 0))
+    camera.AddRotateXOp().Set(-90.0)  # looking down
+    stage.GetRootLayer().Save()
 
 
 if __name__ == "__main__":

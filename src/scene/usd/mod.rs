@@ -10,27 +10,25 @@
 //!   metre twin.
 //! - Polygons are fanned into triangles; `orientation = "leftHanded"` and mirroring
 //!   transforms flip the winding so that front faces stay counter-clockwise.
-//! - Materials come from `compute_bound_material`, mapped from `UsdPreviewSurface` as glTF's
-//!   metallic-roughness is (`roughness` → α = roughness², `metallic`, `opacity` < 1 →
-//!   transmission with `ior`, `emissiveColor` → emission), unless explicit `mitsuba:*`
-//!   attributes on the material say otherwise.
+//! - Materials come from `compute_bound_material` ([`shading`]); UsdLux lights become
+//!   emitters ([`lights`]).
 //! - Cameras: the focal length and vertical aperture give the vertical field of view.
 //!
 //! Attributes are read at their default value, or where they only have time samples, at the
 //! stage's start time code; with an explicit time code (`--time`), at that time. Transforms
 //! are composed at that time code.
 
+mod lights;
+mod shading;
+
 use super::camera::{Camera, Projection};
-use super::material::{Emission, Material, PbrParams, Scattering};
 use super::{drop_degenerate, Mesh, Scene, Warning};
 use crate::error::{Error, Result};
-use crate::spectrum::Rgb;
 use glam::{DMat4, DVec3, Vec3};
 use openusd::gf;
 use openusd::schemas::geom::{
     self as ug, Gprim, Imageable, PointBased, Purpose, Visibility, Xformable,
 };
-use openusd::schemas::shade::{read_preview_surface, Channel, MaterialBindingAPI};
 use openusd::sdf;
 use openusd::usd::{PrimPredicate, Stage, TimeCode};
 use std::collections::HashMap;
@@ -67,6 +65,9 @@ pub fn import(path: &Path, time: Option<f64>) -> Result<Scene> {
             ..Default::default()
         },
         materials: HashMap::new(),
+        textures: HashMap::new(),
+        uv_sets: Vec::new(),
+        uv_set_of: HashMap::new(),
         world: HashMap::new(),
     };
     let mut prims = Vec::new();
@@ -83,7 +84,7 @@ pub fn import(path: &Path, time: Option<f64>) -> Result<Scene> {
             Some("Camera") => importer.camera(&p)?,
             Some(
                 t @ ("RectLight" | "DiskLight" | "SphereLight" | "DistantLight" | "DomeLight"
-                | "CylinderLight"),
+                | "DomeLight_1" | "CylinderLight"),
             ) => importer.light(&p, t)?,
             _ => {}
         }
@@ -105,6 +106,12 @@ struct Importer<'a> {
     scene: Scene,
     /// Material prim path (or "" for the default material) to its index.
     materials: HashMap<String, usize>,
+    /// Resolved texture file to its index, and whether `auto` reads it as sRGB.
+    textures: HashMap<String, (usize, bool)>,
+    /// The primvars read by the textures of the material being imported.
+    uv_sets: Vec<String>,
+    /// Each material's texture coordinate primvar (`st` unless its textures say otherwise).
+    uv_set_of: HashMap<usize, String>,
     /// Local-to-world matrices (column vectors, stage units) by prim path.
     world: HashMap<String, DMat4>,
 }
@@ -231,8 +238,21 @@ impl Importer<'_> {
                     .collect::<Vec<_>>();
                 (v, fv)
             });
+        let double_sided = mesh
+            .double_sided_attr()
+            .get::<bool>()
+            .ok()
+            .flatten()
+            .unwrap_or(false);
+        let material = self.material_of(prim, double_sided)?;
+        let uv_set = format!(
+            "primvars:{}",
+            self.uv_set_of
+                .get(&material)
+                .map_or(shading::DEFAULT_UV_SET, String::as_str)
+        );
         let uvs = self.primvar2(
-            &openusd::usd::SchemaBase::prim(&mesh).attribute("primvars:st"),
+            &openusd::usd::SchemaBase::prim(&mesh).attribute(uv_set.as_str()),
             prim,
             at,
             n,
@@ -289,13 +309,6 @@ impl Importer<'_> {
         if triangles.is_empty() {
             return Ok(());
         }
-        let double_sided = mesh
-            .double_sided_attr()
-            .get::<bool>()
-            .ok()
-            .flatten()
-            .unwrap_or(false);
-        let material = self.material_of(prim, double_sided)?;
         self.scene.meshes.push(Mesh {
             name: prim.as_str().to_string(),
             positions,
@@ -310,7 +323,7 @@ impl Importer<'_> {
     /// A primvar's values and whether they are face-varying (one per face corner, of which
     /// the mesh has `corners`), or per point (`points` of them); `None` where it is absent or
     /// constant or uniform (left out).
-    fn primvar<T>(
+    fn primvar<T: Copy>(
         &self,
         attr: &openusd::usd::Attribute,
         prim: &sdf::Path,
@@ -329,8 +342,29 @@ impl Importer<'_> {
         else {
             return Ok(None);
         };
-        let values = read(value)
+        let mut values = read(value)
             .ok_or_else(|| self.prim_err(prim, format!("{name} has an unexpected type")))?;
+        // An indexed primvar: its values are a table, its `:indices` say which entry each
+        // element takes.
+        let indices_path = sdf::Path::new(&format!("{}:indices", attr.path().as_str()))
+            .map_err(|e| self.prim_err(prim, format!("{name}: {e:#}")))?;
+        let indices = sample(&self.stage.attribute(indices_path), self.time)
+            .map_err(|e| self.prim_err(prim, format!("{name}:indices: {e:#}")))?;
+        if let Some(indices) = indices {
+            let sdf::Value::IntVec(indices) = indices else {
+                return Err(self.prim_err(prim, format!("{name}:indices must be an int array")));
+            };
+            values = indices
+                .iter()
+                .map(|&i| usize::try_from(i).ok().and_then(|i| values.get(i).copied()))
+                .collect::<Option<Vec<T>>>()
+                .ok_or_else(|| {
+                    self.prim_err(
+                        prim,
+                        format!("{name}:indices reach past its {} values", values.len()),
+                    )
+                })?;
+        }
         let interpolation = attr
             .get_metadata::<sdf::Value>("interpolation")
             .ok()
@@ -376,144 +410,6 @@ impl Importer<'_> {
         self.primvar(attr, prim, (corners, points), |v| match v {
             sdf::Value::Vec2fVec(v) => Some(v.iter().map(|p| glam::Vec2::new(p.x, p.y)).collect()),
             _ => None,
-        })
-    }
-
-    /// The index of the material bound to `prim` (imported on first use).
-    fn material_of(&mut self, prim: &sdf::Path, double_sided: bool) -> Result<usize> {
-        let bound = match MaterialBindingAPI::get(self.stage, prim.clone()) {
-            Ok(Some(api)) => api
-                .compute_bound_material("")
-                .map_err(|e| self.prim_err(prim, format!("material binding: {e:#}")))?,
-            _ => None,
-        };
-        let key = format!(
-            "{}{}",
-            bound.as_ref().map_or("", |p| p.as_str()),
-            if double_sided { " (double-sided)" } else { "" }
-        );
-        if let Some(&i) = self.materials.get(&key) {
-            return Ok(i);
-        }
-        let material = match &bound {
-            Some(m) => self.preview_material(m, double_sided)?,
-            None => default_material(),
-        };
-        self.scene.materials.push(material);
-        let i = self.scene.materials.len() - 1;
-        self.materials.insert(key, i);
-        Ok(i)
-    }
-
-    /// The explicit Mitsuba BSDF of material prim `m` (its `mitsuba:*` attributes), if any.
-    fn explicit_bsdf(&self, m: &sdf::Path) -> Result<Option<crate::bsdf::Bsdf>> {
-        let prim = self.stage.prim(m.clone());
-        let names = prim
-            .property_names()
-            .map_err(|e| self.prim_err(m, format!("{e:#}")))?;
-        let mut desc = serde_json::Map::new();
-        for name in names
-            .iter()
-            .filter_map(|n| n.as_str().strip_prefix("mitsuba:"))
-        {
-            let attr = prim.attribute(format!("mitsuba:{name}"));
-            let Some(value) = attr
-                .get::<sdf::Value>()
-                .map_err(|e| self.prim_err(m, format!("mitsuba:{name}: {e:#}")))?
-            else {
-                continue;
-            };
-            let json = if let Ok(x) = value.clone().cast::<f64>() {
-                serde_json::json!(x)
-            } else if let Ok(v) = value.clone().cast::<gf::Vec3f>() {
-                serde_json::json!([v.x, v.y, v.z])
-            } else if let Ok(t) = value.clone().cast::<String>() {
-                serde_json::json!(t)
-            } else if let Ok(b) = value.clone().cast::<bool>() {
-                serde_json::json!(b)
-            } else {
-                return Err(self.prim_err(
-                    m,
-                    format!("mitsuba:{name} must be a number, a colour, a string or a bool"),
-                ));
-            };
-            desc.insert(name.to_string(), json);
-        }
-        if desc.is_empty() {
-            return Ok(None);
-        }
-        crate::bsdf::mitsuba::parse_bsdf(&serde_json::Value::Object(desc))
-            .map(Some)
-            .map_err(|e| self.prim_err(m, e))
-    }
-
-    /// A material from the `UsdPreviewSurface` of material prim `m`; explicit `mitsuba:*`
-    /// attributes on it win over the surface's scattering.
-    fn preview_material(&mut self, m: &sdf::Path, double_sided: bool) -> Result<Material> {
-        let explicit = self.explicit_bsdf(m)?;
-        let surface = read_preview_surface(self.stage, m)
-            .map_err(|e| self.prim_err(m, format!("UsdPreviewSurface: {e:#}")))?;
-        let Some(s) = surface else {
-            if explicit.is_none() {
-                self.scene.warnings.push(Warning(format!(
-                    "material {}: no UsdPreviewSurface; grey diffuse used",
-                    m.as_str()
-                )));
-            }
-            return Ok(Material {
-                name: m.as_str().to_string(),
-                scattering: explicit.map_or(default_material().scattering, Scattering::Explicit),
-                emission: None,
-            });
-        };
-        let textured = [
-            ("diffuseColor", s.diffuse_color.texture()),
-            ("emissiveColor", s.emissive_color.texture()),
-            ("metallic", s.metallic.texture()),
-            ("roughness", s.roughness.texture()),
-            ("opacity", s.opacity.texture()),
-        ];
-        for (name, t) in textured {
-            if let Some(t) = t {
-                self.scene.warnings.push(Warning(format!(
-                    "material {}: the {name} texture {t} is not read yet; its constant is used",
-                    m.as_str()
-                )));
-            }
-        }
-        let rgb = |c: &Channel<gf::Vec3f>, default: Rgb| {
-            c.value().map_or(default, |v| Rgb::new(v.x, v.y, v.z))
-        };
-        let scalar = |c: &Channel<f32>, default: f32| c.value().copied().unwrap_or(default);
-        let opacity = scalar(&s.opacity, 1.0).clamp(0.0, 1.0);
-        let emission = rgb(&s.emissive_color, Rgb::ZERO);
-        if !emission.is_finite() || emission.min_element() < 0.0 {
-            return Err(self.prim_err(
-                m,
-                format!("emissiveColor {emission} must be finite and non-negative"),
-            ));
-        }
-        Ok(Material {
-            name: m.as_str().to_string(),
-            scattering: match explicit {
-                Some(b) => Scattering::Explicit(b),
-                // UsdPreviewSurface's defaults: diffuse 0.18, metallic 0, roughness 0.5,
-                // ior 1.5.
-                None => Scattering::Pbr(PbrParams {
-                    transmission: 1.0 - opacity,
-                    ior: scalar(&s.ior, 1.5),
-                    ..PbrParams::constant(
-                        rgb(&s.diffuse_color, Rgb::splat(0.18)),
-                        scalar(&s.metallic, 0.0),
-                        scalar(&s.roughness, 0.5),
-                    )
-                }),
-            },
-            emission: (emission.max_element() > 0.0).then_some(Emission {
-                radiance: emission,
-                texture: None,
-                two_sided: double_sided,
-            }),
         })
     }
 
@@ -575,201 +471,6 @@ impl Importer<'_> {
     }
 }
 
-impl Importer<'_> {
-    /// A float input of light `p` (`inputs:name`, or the pre-2021 `name`).
-    fn light_input(&self, p: &sdf::Path, name: &str, default: f32) -> Result<f32> {
-        let prim = self.stage.prim(p.clone());
-        for n in [format!("inputs:{name}"), name.to_string()] {
-            let v = sample(&prim.attribute(n.as_str()), self.time)
-                .map_err(|e| self.prim_err(p, format!("{n}: {e:#}")))?;
-            if let Some(v) = v {
-                return v
-                    .cast::<f32>()
-                    .ok()
-                    .filter(|x| x.is_finite())
-                    .ok_or_else(|| self.prim_err(p, format!("{n} must be a finite number")));
-            }
-        }
-        Ok(default)
-    }
-
-    /// A UsdLux light: area lights become emissive meshes (radiance `intensity × color ×
-    /// 2^exposure`, over the light's area with `normalize`), a distant light a directional
-    /// light. Dome and cylinder lights are not supported yet (a warning).
-    fn light(&mut self, p: &sdf::Path, ty: &str) -> Result<()> {
-        let prim = self.stage.prim(p.clone());
-        let intensity = self.light_input(p, "intensity", 1.0)?;
-        let exposure = self.light_input(p, "exposure", 0.0)?;
-        let mut color = Rgb::ONE;
-        for n in ["inputs:color", "color"] {
-            if let Some(v) = sample(&prim.attribute(n), self.time)
-                .map_err(|e| self.prim_err(p, format!("{n}: {e:#}")))?
-            {
-                let c = v
-                    .cast::<gf::Vec3f>()
-                    .map_err(|_| self.prim_err(p, format!("{n} must be a colour")))?;
-                color = Rgb::new(c.x, c.y, c.z);
-                break;
-            }
-        }
-        let normalize = ["inputs:normalize", "normalize"].iter().any(|n| {
-            prim.attribute(*n)
-                .get::<sdf::Value>()
-                .ok()
-                .flatten()
-                .and_then(|v| v.cast::<bool>().ok())
-                .unwrap_or(false)
-        });
-        let radiance = color * intensity * exposure.exp2();
-        if !radiance.is_finite() || radiance.min_element() < 0.0 {
-            return Err(self.prim_err(
-                p,
-                format!("radiance {radiance} must be finite and non-negative"),
-            ));
-        }
-        let world = self.to_ir * self.world(p)?;
-        // Local shapes; rect and disk emit towards local −Z (UsdLux), the sphere outwards.
-        let (local, triangles): (Vec<DVec3>, Vec<[u32; 3]>) = match ty {
-            "RectLight" => {
-                let w = 0.5 * self.light_input(p, "width", 1.0)? as f64;
-                let h = 0.5 * self.light_input(p, "height", 1.0)? as f64;
-                (
-                    vec![
-                        DVec3::new(-w, -h, 0.0),
-                        DVec3::new(-w, h, 0.0),
-                        DVec3::new(w, h, 0.0),
-                        DVec3::new(w, -h, 0.0),
-                    ],
-                    vec![[0, 1, 2], [0, 2, 3]],
-                )
-            }
-            "DiskLight" => {
-                let r = self.light_input(p, "radius", 0.5)? as f64;
-                let n = LIGHT_SEGMENTS;
-                let mut points = vec![DVec3::ZERO];
-                points.extend((0..n).map(|k| {
-                    // Clockwise seen from +Z, so that the front faces −Z.
-                    let a = -std::f64::consts::TAU * k as f64 / n as f64;
-                    DVec3::new(r * a.cos(), r * a.sin(), 0.0)
-                }));
-                let tris = (0..n).map(|k| [0, 1 + k, 1 + (k + 1) % n]).collect();
-                (points, tris)
-            }
-            "SphereLight" => sphere(self.light_input(p, "radius", 0.5)? as f64),
-            "DistantLight" => {
-                let angle = self.light_input(p, "angle", 0.53)?.to_radians();
-                // Radiance over a disc of `angle` (irradiance π sin²(angle/2) L), or with
-                // `normalize` the irradiance itself.
-                let irradiance = if normalize {
-                    radiance
-                } else {
-                    radiance * std::f32::consts::PI * (0.5 * angle).sin().powi(2)
-                };
-                let direction = world
-                    .transform_vector3(DVec3::NEG_Z)
-                    .as_vec3()
-                    .try_normalize()
-                    .ok_or_else(|| self.prim_err(p, "the light's transform is singular"))?;
-                self.scene.lights.push(crate::scene::PunctualLight {
-                    name: p.as_str().to_string(),
-                    kind: crate::scene::LightKind::Directional,
-                    position: Vec3::ZERO,
-                    direction,
-                    intensity: irradiance,
-                });
-                return Ok(());
-            }
-            other => {
-                self.scene.warnings.push(Warning(format!(
-                    "{} is a {other}, which is not supported yet; left out",
-                    p.as_str()
-                )));
-                return Ok(());
-            }
-        };
-        let positions: Vec<Vec3> = local
-            .iter()
-            .map(|&x| world.transform_point3(x).as_vec3())
-            .collect();
-        let mut triangles = triangles;
-        if world.determinant() < 0.0 {
-            for t in &mut triangles {
-                t.swap(1, 2);
-            }
-        }
-        let area: f32 = triangles
-            .iter()
-            .map(|t| {
-                let [a, b, c] = t.map(|i| positions[i as usize]);
-                0.5 * (b - a).cross(c - a).length()
-            })
-            .sum();
-        if !(area > 0.0 && area.is_finite()) {
-            return Err(self.prim_err(p, "the light has no area"));
-        }
-        let radiance = if normalize { radiance / area } else { radiance };
-        self.scene.materials.push(Material {
-            name: p.as_str().to_string(),
-            // An area light absorbs what reaches it, as Mitsuba's `area` emitters do.
-            scattering: Scattering::Explicit(crate::bsdf::Bsdf::Diffuse(crate::bsdf::Diffuse {
-                reflectance: Rgb::ZERO,
-            })),
-            emission: Some(Emission {
-                radiance,
-                texture: None,
-                two_sided: false,
-            }),
-        });
-        self.scene.meshes.push(Mesh {
-            name: p.as_str().to_string(),
-            positions,
-            normals: None,
-            uvs: None,
-            triangles,
-            material: self.scene.materials.len() - 1,
-        });
-        Ok(())
-    }
-}
-
-/// Segments of a disk light's polygon, and twice the rings of a sphere light's.
-const LIGHT_SEGMENTS: u32 = 64;
-
-/// A UV sphere of `radius` around the origin, counter-clockwise seen from outside.
-fn sphere(radius: f64) -> (Vec<DVec3>, Vec<[u32; 3]>) {
-    let (rings, segments) = (LIGHT_SEGMENTS / 2, LIGHT_SEGMENTS);
-    let mut points = vec![DVec3::new(0.0, 0.0, radius)];
-    for i in 1..rings {
-        let theta = std::f64::consts::PI * i as f64 / rings as f64;
-        for k in 0..segments {
-            let phi = std::f64::consts::TAU * k as f64 / segments as f64;
-            points.push(
-                radius
-                    * DVec3::new(
-                        theta.sin() * phi.cos(),
-                        theta.sin() * phi.sin(),
-                        theta.cos(),
-                    ),
-            );
-        }
-    }
-    points.push(DVec3::new(0.0, 0.0, -radius));
-    let at = |i: u32, k: u32| 1 + (i - 1) * segments + k % segments;
-    let south = points.len() as u32 - 1;
-    let mut tris = Vec::new();
-    for k in 0..segments {
-        tris.push([0, at(1, k), at(1, k + 1)]);
-        tris.push([south, at(rings - 1, k + 1), at(rings - 1, k)]);
-    }
-    for i in 1..rings - 1 {
-        for k in 0..segments {
-            tris.push([at(i, k), at(i + 1, k), at(i + 1, k + 1)]);
-            tris.push([at(i, k), at(i + 1, k + 1), at(i, k + 1)]);
-        }
-    }
-    (points, tris)
-}
-
 /// Per-point `values` spread to one per face corner (`corner_points`), or face-varying ones
 /// (`face_varying`) as they are.
 fn spread<T: Copy>(values: Vec<T>, face_varying: bool, corner_points: &[u32]) -> Vec<T> {
@@ -777,15 +478,6 @@ fn spread<T: Copy>(values: Vec<T>, face_varying: bool, corner_points: &[u32]) ->
         values
     } else {
         corner_points.iter().map(|&i| values[i as usize]).collect()
-    }
-}
-
-/// A grey (0.18) diffuse material, for meshes without a binding.
-fn default_material() -> Material {
-    Material {
-        name: "default".into(),
-        scattering: Scattering::Pbr(PbrParams::constant(Rgb::splat(0.18), 0.0, 1.0)),
-        emission: None,
     }
 }
 
@@ -852,16 +544,19 @@ fn meters_per_unit(stage: &Stage) -> f64 {
         .unwrap_or(0.01)
 }
 
-/// Stage coordinates to the IR's: scaled to metres, and a Z-up stage turned Y-up
-/// ((x, y, z) → (x, z, −y)).
-fn stage_to_ir(stage: &Stage) -> DMat4 {
-    let z_up = stage
+fn stage_is_z_up(stage: &Stage) -> bool {
+    stage
         .stage_metadata("upAxis")
         .ok()
         .flatten()
         .and_then(|v| v.cast::<String>().ok())
-        .is_some_and(|a| a == "Z");
-    let axes = if z_up {
+        .is_some_and(|a| a == "Z")
+}
+
+/// Stage coordinates to the IR's: scaled to metres, and a Z-up stage turned Y-up
+/// ((x, y, z) → (x, z, −y)).
+fn stage_to_ir(stage: &Stage) -> DMat4 {
+    let axes = if stage_is_z_up(stage) {
         DMat4::from_cols(
             glam::DVec4::X,
             glam::DVec4::new(0.0, 0.0, -1.0, 0.0),
