@@ -29,6 +29,7 @@ pub mod bake;
 pub mod bounce;
 pub mod bsdf;
 pub mod cache;
+pub mod compare;
 pub mod emitters;
 pub mod error;
 pub mod gather;

@@ -36,6 +36,16 @@ pub enum Quality {
 }
 
 impl Quality {
+    /// The preset's name on the command line and in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Quality::Draft => "draft",
+            Quality::Preview => "preview",
+            Quality::Final => "final",
+            Quality::Ultra => "ultra",
+        }
+    }
+
     pub fn points(self) -> usize {
         match self {
             Quality::Draft => 20_000,

@@ -22,6 +22,17 @@ pub enum QualityArg {
     Ultra,
 }
 
+impl QualityArg {
+    pub fn quality(self) -> Quality {
+        match self {
+            QualityArg::Draft => Quality::Draft,
+            QualityArg::Preview => Quality::Preview,
+            QualityArg::Final => Quality::Final,
+            QualityArg::Ultra => Quality::Ultra,
+        }
+    }
+}
+
 #[derive(Args)]
 pub struct BakeArgs {
     /// The scene (.gltf, .glb, .usd, .usda, .usdc or .usdz).
@@ -87,22 +98,8 @@ pub struct InspectArgs {
     scene: Option<PathBuf>,
 }
 
-/// Peak resident memory of this process in bytes (Linux), if known.
-pub(crate) fn peak_memory() -> Option<u64> {
-    let status = std::fs::read_to_string("/proc/self/status").ok()?;
-    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
-    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kb * 1024)
-}
-
 fn settings_of(a: &BakeArgs) -> BakeSettings {
-    let q = match a.quality {
-        QualityArg::Draft => Quality::Draft,
-        QualityArg::Preview => Quality::Preview,
-        QualityArg::Final => Quality::Final,
-        QualityArg::Ultra => Quality::Ultra,
-    };
-    let mut s = BakeSettings::from_quality(q);
+    let mut s = BakeSettings::from_quality(a.quality.quality());
     s.points = a.points.unwrap_or(s.points);
     s.light_samples = a.light_samples.unwrap_or(s.light_samples);
     s.tau = a.threshold;
@@ -178,7 +175,7 @@ pub fn bake_command(a: BakeArgs) -> Result<()> {
         stats["bounces"] = r.to_json();
         stats["bounces"]["seconds"] = json!(r.seconds);
     }
-    let peak = peak_memory();
+    let peak = wpbgi::compare::memory::peak();
     let per_surfel = bytes as f64 / baked.surfels.len().max(1) as f64;
     let total = start.elapsed().as_secs_f64();
     stats["peak_memory_bytes"] = json!(peak);

@@ -2,6 +2,7 @@
 //! and turns every error into one sentence and a non-zero exit code.
 
 mod bake_cmd;
+mod compare_cmd;
 mod preview_cmd;
 mod render_cmd;
 
@@ -59,6 +60,10 @@ enum Command {
     /// surfaces with radiance cache splatting, a view-dependent cut of the tree per frame.
     /// Headless to a PNG or EXR, or in a window with an orbit camera.
     Preview(preview_cmd::PreviewArgs),
+    /// Measure error against run time: bake and render at each quality preset, path-trace for
+    /// the same wall time, and compare both with a reference (given, or path-traced here).
+    /// Writes report.json, error_vs_time.svg and .png, and summary.md.
+    Compare(compare_cmd::CompareArgs),
 }
 
 #[derive(Args)]
@@ -347,6 +352,7 @@ fn main() {
         Command::Inspect(a) => bake_cmd::inspect_command(a),
         Command::Render(a) => render_cmd::render_command(a),
         Command::Preview(a) => preview_cmd::preview_command(a),
+        Command::Compare(a) => compare_cmd::compare_command(a),
     };
     if let Err(e) = result {
         eprintln!("error: {e:#}");

@@ -1,13 +1,12 @@
 //! `wpbgi render`: the final image from a cache.
 
-use crate::bake_cmd::peak_memory;
 use crate::CameraArgs;
 use anyhow::{bail, Result};
 use clap::{Args, ValueEnum};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 use wpbgi::bake::store::{bake_hash, BakedCache};
-use wpbgi::image::{error_against, read_exr, write_exr_layers, write_png, Image};
+use wpbgi::image::{read_exr, write_exr_layers, write_png, Image};
 use wpbgi::render::{render_final, FinalOutput, FinalSettings, GatherMode};
 use wpbgi::scene::{Camera, Scene};
 
@@ -76,7 +75,8 @@ pub struct RenderArgs {
     /// Also write an sRGB PNG preview.
     #[arg(long)]
     pub png: Option<PathBuf>,
-    /// Print the error (MSE, relative MSE) against this reference image.
+    /// Print the error (MSE, relative MSE, MSSIM) against this reference image, and store it
+    /// next to the output as OUTPUT.error.json.
     #[arg(long)]
     pub reference: Option<PathBuf>,
     #[command(flatten)]
@@ -124,7 +124,7 @@ pub fn print_summary(out: &FinalOutput) {
     for (stage, secs) in &out.timings {
         eprintln!("  {stage}: {secs:.2} s");
     }
-    if let Some(b) = peak_memory() {
+    if let Some(b) = wpbgi::compare::memory::peak() {
         eprintln!("  peak memory {} MB", b / 1_000_000);
     }
 }
@@ -163,6 +163,17 @@ pub fn render_command(a: RenderArgs) -> Result<()> {
         ..Default::default()
     };
     let reference = a.reference.as_deref().map(read_exr).transpose()?;
+    if let Some(r) = &reference {
+        if (r.width, r.height) != (camera.width, camera.height) {
+            bail!(
+                "the reference image is {}x{} but the render is {}x{} (set --size)",
+                r.width,
+                r.height,
+                camera.width,
+                camera.height
+            );
+        }
+    }
     let out = run_final(&scene, &cache, &camera, &settings)?;
     let all = a.aov.contains(&Aov::All);
     let wanted = |x: Aov| all || a.aov.contains(&x);
@@ -194,19 +205,24 @@ pub fn render_command(a: RenderArgs) -> Result<()> {
         start.elapsed().as_secs_f64()
     );
     print_summary(&out);
-    if let Some(r) = &reference {
-        match error_against(&out.beauty, r) {
-            Some((mse, rel)) => {
-                eprintln!("  error against the reference: MSE {mse:.3e}, relMSE {rel:.3e}")
-            }
-            None => bail!(
-                "the reference image is {}x{} but the render is {}x{}",
-                r.width,
-                r.height,
-                camera.width,
-                camera.height
-            ),
-        }
+    if let (Some(r), Some(path)) = (&reference, &a.reference) {
+        let (mse, rel_mse, mssim) = wpbgi::compare::errors(&out.beauty, r)?;
+        eprintln!(
+            "  error against the reference: MSE {mse:.3e}, relMSE {rel_mse:.3e}, MSSIM {mssim:.4}"
+        );
+        let record = serde_json::json!({
+            "image": a.output.display().to_string(),
+            "reference": path.display().to_string(),
+            "mse": mse,
+            "rel_mse": rel_mse,
+            "mssim": mssim,
+            "render_s": out.timings.iter().map(|t| t.1).sum::<f64>(),
+        });
+        let sidecar = a.output.with_extension("error.json");
+        wpbgi::atomic::write_atomically(&sidecar, |tmp| {
+            std::fs::write(tmp, format!("{record:#}\n")).map_err(|e| e.to_string())
+        })?;
+        eprintln!("  wrote {}", sidecar.display());
     }
     Ok(())
 }
