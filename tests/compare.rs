@@ -129,6 +129,9 @@ fn compare_writes_report_plot_and_summary() {
         "draft",
         "--reference-spp",
         "32",
+        // Direct-only caches: the files are what is tested here, and bounces cost CI minutes.
+        "--bounces",
+        "0",
     ]);
     check_report(&bundled, true);
     // cbox-glossy against Mitsuba's render.
@@ -146,6 +149,8 @@ fn compare_writes_report_plot_and_summary() {
         "32x32",
         "--presets",
         "draft",
+        "--bounces",
+        "0",
     ]);
     check_report(&glossy, false);
     // A reference of another size is refused before any work, in one sentence.

@@ -94,13 +94,9 @@ pub fn parse_bsdf(v: &Value) -> Result<Bsdf, String> {
         _ => {
             let distr = microfacet(obj)?;
             let int_ior = ior(obj, "int_ior", "bk7")?;
+            // Equal indices are allowed: the interface is invisible, and the scene leaves such
+            // clear glass out (`Scene::drop_invisible_meshes`, DESIGN.md §10).
             let ext_ior = ior(obj, "ext_ior", "air")?;
-            if int_ior == ext_ior {
-                return Err(
-                    "int_ior and ext_ior must differ (an index-matched interface is invisible)"
-                        .into(),
-                );
-            }
             Ok(Bsdf::Dielectric(RoughDielectric {
                 distr,
                 eta: int_ior / ext_ior,
@@ -247,12 +243,19 @@ mod tests {
             json!({"type": "roughconductor", "alpha_u": 0.2}),
             json!({"type": "roughconductor", "material": "Au", "eta": 1.0}),
             json!({"type": "roughconductor", "material": "Unobtainium"}),
-            json!({"type": "roughdielectric", "int_ior": 1.0, "ext_ior": 1.0}),
             json!({"type": "roughdielectric", "int_ior": -1.0}),
             json!({"type": "diffuse", "reflectance": [0.5, 0.5]}),
             json!({"type": "diffuse", "albedo": 0.5}),
         ] {
             assert!(parse_bsdf(&bad).is_err(), "{bad} should be refused");
         }
+    }
+
+    /// Equal indices parse (an index-matched interface, η = 1); the scene leaves such glass
+    /// out (DESIGN.md §10), it is not an error.
+    #[test]
+    fn index_matched_dielectric_parses() {
+        let b = parse_bsdf(&json!({"type": "roughdielectric", "int_ior": 1.0, "ext_ior": 1.0}));
+        assert!(matches!(b, Ok(Bsdf::Dielectric(d)) if d.eta == 1.0));
     }
 }

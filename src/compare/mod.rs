@@ -15,6 +15,7 @@ mod plot;
 use crate::atomic::write_atomically;
 use crate::bake::store::BakedCache;
 use crate::bake::{bake, BakeSettings, Quality};
+use crate::bounce::BounceSettings;
 use crate::error::{Error, Result};
 use crate::image::{error_against, srgb8, Image};
 use crate::reference::{render, RenderSettings};
@@ -31,6 +32,8 @@ pub struct CompareSettings {
     pub presets: Vec<Quality>,
     /// Samples per pixel of the reference when none is given.
     pub reference_spp: u32,
+    /// The bakes' indirect bounces (`wpbgi bake`'s default: automatic).
+    pub bounces: BounceSettings,
     pub final_settings: FinalSettings,
     pub seed: u64,
 }
@@ -40,6 +43,7 @@ impl Default for CompareSettings {
         CompareSettings {
             presets: vec![Quality::Draft, Quality::Preview, Quality::Final],
             reference_spp: 1024,
+            bounces: BounceSettings::auto(),
             final_settings: FinalSettings::default(),
             seed: 0,
         }
@@ -207,6 +211,7 @@ pub fn compare(
         memory::reset_peak();
         let bake_settings = BakeSettings {
             seed: settings.seed,
+            bounces: settings.bounces,
             ..BakeSettings::from_quality(preset)
         };
         let start = Instant::now();

@@ -64,6 +64,10 @@ pub fn intersect(ctx: &RenderContext, o: Vec3, d: Vec3) -> Option<SurfaceHit> {
     })
 }
 
+/// The largest probability with which Russian roulette continues a path (see the module docs
+/// of [`crate::reference`] for why not Mitsuba's 0.95).
+pub const RR_MAX: f32 = 0.999;
+
 /// Power heuristic with exponent 2.
 #[inline]
 pub(crate) fn mis(a: f32, b: f32) -> f32 {
@@ -181,7 +185,7 @@ pub fn radiance(ctx: &RenderContext, mut o: Vec3, mut d: Vec3, sampler: &mut Sam
             break;
         }
         if depth >= ctx.rr_depth {
-            let q = (tmax * eta * eta).min(0.95);
+            let q = (tmax * eta * eta).min(RR_MAX);
             if sampler.next_1d() >= q {
                 break;
             }

@@ -5,8 +5,16 @@
 //! (power heuristic), Russian roulette, and Mitsuba's `path` integrator semantics, so that our
 //! images agree with Mitsuba's in expectation: `max_depth` counts path segments (1 = directly
 //! visible emitters, 2 = direct lighting, −1 = unlimited), Russian roulette starts at `rr_depth`
-//! with continuation probability `min(max(throughput)·η², 0.95)`, one-sided BSDFs and emitters
-//! are black from behind, the box pixel filter averages samples uniform over each pixel.
+//! with continuation probability `min(max(throughput)·η², RR_MAX)`, one-sided BSDFs and
+//! emitters are black from behind, the box pixel filter averages samples uniform over each
+//! pixel.
+//!
+//! The one departure: Mitsuba caps the continuation probability at 0.95, we at 0.999. The
+//! expectation is the same. But with 0.95, a path in a scene of albedo ρ > 0.95 carries a
+//! throughput that grows as (ρ/0.95)^k, and the variance diverges: the stability matrix's
+//! closed box of albedo 0.99 (exact answer 100) read 79 at 64 samples per pixel. With 0.999 the
+//! throughput stays bounded wherever ρ ≤ 0.999, and a path trapped by total internal
+//! reflection still ends (after 1000 bounces on average).
 //!
 //! Every random number is keyed by (pixel, sample index, dimension), so an image is a pure
 //! function of the scene and the settings: byte-identical for any thread count.

@@ -17,6 +17,10 @@ use crate::bsdf::{
 use crate::spectrum::Rgb;
 use glam::Vec2;
 
+/// How close to 1 a relative index of refraction is taken as index-matched (a float32 ulp at 1
+/// is 1.2e-7; 1.0001, a stiff but real case, stays glass).
+pub const INDEX_MATCHED: f32 = 1e-6;
+
 /// glTF metallic-roughness parameters (with their textures).
 #[derive(Clone, Debug)]
 pub struct PbrParams {
@@ -83,6 +87,31 @@ pub struct Material {
 }
 
 impl Material {
+    /// Clear, non-emitting glass of relative index 1 everywhere: it neither reflects nor bends
+    /// nor tints light, so it is invisible.
+    pub fn is_index_matched(&self) -> bool {
+        let matched = |eta: f32| (eta - 1.0).abs() <= INDEX_MATCHED;
+        let glass = match &self.scattering {
+            Scattering::Explicit(Bsdf::Dielectric(d)) => {
+                matched(d.eta) && d.specular_transmittance == Rgb::ONE
+            }
+            Scattering::Explicit(Bsdf::ThinDielectric(d)) => {
+                matched(d.eta) && d.specular_transmittance == Rgb::ONE
+            }
+            Scattering::Explicit(_) => false,
+            Scattering::Pbr(p) => {
+                matched(p.ior)
+                    && p.transmission > 0.0
+                    && p.transmission_texture.is_none()
+                    && p.metallic < 0.5
+                    && p.metallic_texture.is_none()
+                    && p.base_color == Rgb::ONE
+                    && p.base_color_texture.is_none()
+            }
+        };
+        glass && self.emission.is_none()
+    }
+
     /// The BSDF at a shading point with texture coordinate `uv`.
     pub fn bsdf_at(&self, textures: &[Texture], uv: Vec2) -> Bsdf {
         match &self.scattering {

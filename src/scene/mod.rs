@@ -134,25 +134,54 @@ impl Scene {
             .extension()
             .and_then(|e| e.to_str())
             .map(str::to_ascii_lowercase);
-        match ext.as_deref() {
+        let mut scene = match ext.as_deref() {
             #[cfg(feature = "usd")]
-            Some("usd") | Some("usda") | Some("usdc") | Some("usdz") => usd::import(path, time),
+            Some("usd") | Some("usda") | Some("usdc") | Some("usdz") => usd::import(path, time)?,
             Some("gltf") | Some("glb") => {
                 let bytes = std::fs::read(path).map_err(|source| Error::Io {
                     path: path.to_path_buf(),
                     source,
                 })?;
-                gltf::import(path, &bytes)
+                gltf::import(path, &bytes)?
             }
-            _ => Err(Error::UnsupportedFormat {
-                path: path.to_path_buf(),
-            }),
-        }
+            _ => {
+                return Err(Error::UnsupportedFormat {
+                    path: path.to_path_buf(),
+                })
+            }
+        };
+        scene.drop_invisible_meshes();
+        Ok(scene)
     }
 
     /// Load a glTF/GLB from memory; `path` names it in errors and anchors relative URIs.
     pub fn from_gltf_bytes(path: &Path, bytes: &[u8]) -> Result<Scene> {
-        gltf::import(path, bytes)
+        let mut scene = gltf::import(path, bytes)?;
+        scene.drop_invisible_meshes();
+        Ok(scene)
+    }
+
+    /// Leave out meshes that do not interact with light: clear glass of index 1 (index-matched
+    /// with the air around it: no reflection, no bending), which DESIGN.md §10 requires to
+    /// vanish. Kept, they would still stop shadow rays and hold surfels. A warning each.
+    pub fn drop_invisible_meshes(&mut self) {
+        let materials = &self.materials;
+        let mut dropped = Vec::new();
+        self.meshes.retain(|m| {
+            let invisible = materials
+                .get(m.material)
+                .is_some_and(Material::is_index_matched);
+            if invisible {
+                dropped.push(m.name.clone());
+            }
+            !invisible
+        });
+        for name in dropped {
+            self.warnings.push(Warning(format!(
+                "mesh {name}: its material is clear glass of index 1, which does not interact \
+                 with light; left out"
+            )));
+        }
     }
 
     /// Number of triangles over all meshes.

@@ -74,7 +74,7 @@ pub struct BakeArgs {
     json: bool,
 }
 
-fn parse_bounces(s: &str) -> Result<BounceSettings, String> {
+pub(crate) fn parse_bounces(s: &str) -> Result<BounceSettings, String> {
     if s == "auto" {
         return Ok(BounceSettings::auto());
     }

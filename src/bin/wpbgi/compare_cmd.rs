@@ -33,6 +33,9 @@ pub struct CompareArgs {
         default_value = "draft,preview,final"
     )]
     pub presets: Vec<QualityArg>,
+    /// Indirect bounces of each bake, as for `wpbgi bake` (a number, or `auto`).
+    #[arg(long, default_value = "auto", value_parser = crate::bake_cmd::parse_bounces)]
+    pub bounces: wpbgi::bounce::BounceSettings,
     /// Seed of the random streams.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -87,6 +90,7 @@ pub fn compare_command(a: CompareArgs) -> Result<()> {
     let settings = CompareSettings {
         presets: a.presets.iter().map(|q| q.quality()).collect(),
         reference_spp: a.reference_spp,
+        bounces: a.bounces,
         seed: a.seed,
         ..Default::default()
     };
