@@ -32,6 +32,8 @@ pub mod cache;
 pub mod compare;
 pub mod emitters;
 pub mod error;
+#[doc(hidden)]
+pub mod fuzzing;
 pub mod gather;
 pub mod geometry;
 pub mod haar;

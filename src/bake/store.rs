@@ -263,6 +263,11 @@ impl BakedCache {
         Self::from_cache(Cache::read(path, expected_hash)?)
     }
 
+    /// Validate `bytes` as a cache file's contents (`path` only names it in errors).
+    pub fn from_bytes(path: &Path, bytes: Vec<u8>) -> Result<BakedCache, CacheError> {
+        Self::from_cache(Cache::parse(path, bytes, None)?)
+    }
+
     /// The cache that [`write`] would write of `baked`, without a file (`path` only names it
     /// in errors).
     pub fn in_memory(path: &Path, baked: &Baked) -> Result<BakedCache, CacheError> {
