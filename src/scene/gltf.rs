@@ -30,7 +30,15 @@ pub(super) fn import(path: &Path, bytes: &[u8]) -> Result<Scene> {
             "a .glb file must start with the magic bytes \"glTF\"".into()
         ));
     }
-    let doc = g::Gltf::from_slice(bytes).map_err(|e| fmt(describe_gltf_error(&e)))?;
+    // Parse, check what gltf-json's validation would index unchecked, then validate.
+    let g::Gltf { document, blob } =
+        g::Gltf::from_slice_without_validation(bytes).map_err(|e| fmt(describe_gltf_error(&e)))?;
+    let json = document.into_json();
+    check_position_accessors(&json).map_err(fmt)?;
+    let doc = g::Gltf {
+        document: g::Document::from_json(json).map_err(|e| fmt(describe_gltf_error(&e)))?,
+        blob,
+    };
     let base = path.parent().unwrap_or(Path::new("."));
     let buffers = load_buffers(path, &doc, base)?;
     let mut scene = Scene {
@@ -455,6 +463,31 @@ fn pbr_scattering(
 }
 
 /// Check that an accessor's elements lie inside its buffer before anything reads them.
+/// gltf-json 1.4's validation indexes the accessor a primitive's POSITION names without a
+/// bounds check, and panics when it is out of range (found by fuzzing): check those first.
+fn check_position_accessors(root: &g::json::Root) -> std::result::Result<(), String> {
+    use g::json::validation::Checked;
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            let Some(position) = prim
+                .attributes
+                .get(&Checked::Valid(g::json::mesh::Semantic::Positions))
+            else {
+                continue;
+            };
+            if position.value() >= root.accessors.len() {
+                return Err(format!(
+                    "mesh {m}, primitive {p}: POSITION names accessor {}, but the file has {} \
+                     accessors",
+                    position.value(),
+                    root.accessors.len()
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 fn check_accessor(a: &g::Accessor, buffers: &[Vec<u8>]) -> std::result::Result<(), String> {
     if a.sparse().is_some() {
         return Err(format!(
@@ -480,15 +513,44 @@ fn check_accessor(a: &g::Accessor, buffers: &[Vec<u8>]) -> std::result::Result<(
     let elem = a.size();
     let stride = view.stride().unwrap_or(elem);
     if a.count() > 0 {
-        let need = a.offset() + stride * (a.count() - 1) + elem;
-        if need > view.length() {
+        let need = stride
+            .checked_mul(a.count() - 1)
+            .and_then(|n| n.checked_add(a.offset()))
+            .and_then(|n| n.checked_add(elem));
+        if need.is_none_or(|need| need > view.length()) {
             return Err(format!(
-                "accessor {} reads {} bytes past the end of buffer view {}",
+                "accessor {} reads past the end of buffer view {} ({} elements of {elem} bytes, \
+                 stride {stride}, from byte {})",
                 a.index(),
-                need - view.length(),
-                view.index()
+                view.index(),
+                a.count(),
+                a.offset()
             ));
         }
+    }
+    Ok(())
+}
+
+/// Refuse an accessor whose element type the glTF specification does not allow for its use
+/// (the gltf crate's readers assume the allowed types and panic on others).
+fn check_element_type(
+    a: &g::Accessor,
+    what: &str,
+    dimensions: g::accessor::Dimensions,
+    components: &[g::accessor::DataType],
+) -> std::result::Result<(), String> {
+    if a.dimensions() != dimensions || !components.contains(&a.data_type()) {
+        return Err(format!(
+            "{what} accessor {} holds {:?} of {:?}, where glTF allows {dimensions:?} of {}",
+            a.index(),
+            a.dimensions(),
+            a.data_type(),
+            components
+                .iter()
+                .map(|c| format!("{c:?}"))
+                .collect::<Vec<_>>()
+                .join(" or ")
+        ));
     }
     Ok(())
 }
@@ -524,14 +586,24 @@ fn convert_primitive(
         )));
         return Ok(None);
     }
+    use g::accessor::{DataType as C, Dimensions as D};
     let pos_acc = prim
         .get(&g::Semantic::Positions)
         .ok_or_else(|| err("has no POSITION attribute".into()))?;
     check_accessor(&pos_acc, buffers).map_err(&err)?;
+    check_element_type(&pos_acc, "POSITION", D::Vec3, &[C::F32]).map_err(&err)?;
     let mut accessors = vec![];
-    for sem in [g::Semantic::Normals, g::Semantic::TexCoords(0)] {
+    for (sem, dimensions, components) in [
+        (g::Semantic::Normals, D::Vec3, &[C::F32][..]),
+        (
+            g::Semantic::TexCoords(0),
+            D::Vec2,
+            &[C::F32, C::U8, C::U16][..],
+        ),
+    ] {
         if let Some(a) = prim.get(&sem) {
             check_accessor(&a, buffers).map_err(&err)?;
+            check_element_type(&a, &format!("{sem:?}"), dimensions, components).map_err(&err)?;
             if a.count() != pos_acc.count() {
                 return Err(err(format!(
                     "attribute {sem:?} has {} elements but POSITION has {}",
@@ -544,6 +616,7 @@ fn convert_primitive(
     }
     if let Some(a) = prim.indices() {
         check_accessor(&a, buffers).map_err(&err)?;
+        check_element_type(&a, "index", D::Scalar, &[C::U8, C::U16, C::U32]).map_err(&err)?;
     }
     let reader = prim.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
     let local: Vec<Vec3> = reader

@@ -34,10 +34,34 @@ use openusd::usd::{PrimPredicate, Stage, TimeCode};
 use std::collections::HashMap;
 use std::path::Path;
 
-/// Import the USD stage at `path`.
 /// Import the USD stage at `path`, at time code `time` (none: the default time, see the
 /// module docs).
+///
+/// openusd 0.6's crate (usdc) reader panics on many malformed files (indices past the end of
+/// its tables, lz4 chunking it does not implement, capacity overflows; found by fuzzing). Such
+/// a panic is caught here and reported as the file's error. Its allocations of sizes read from
+/// the file abort the process, which no caller can catch (docs/fuzzing.md).
 pub fn import(path: &Path, time: Option<f64>) -> Result<Scene> {
+    std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        import_unguarded(path, time)
+    }))
+    .unwrap_or_else(|payload| {
+        let what = payload
+            .downcast_ref::<&str>()
+            .map(|s| s.to_string())
+            .or_else(|| payload.downcast_ref::<String>().cloned())
+            .unwrap_or_else(|| "no message".into());
+        Err(Error::Usd {
+            path: path.to_path_buf(),
+            reason: format!(
+                "openusd failed reading it ({}); the file is probably malformed",
+                shown(&what)
+            ),
+        })
+    })
+}
+
+fn import_unguarded(path: &Path, time: Option<f64>) -> Result<Scene> {
     let file = path.to_string_lossy().into_owned();
     let usd_err = |what: String| Error::Usd {
         path: path.to_path_buf(),
@@ -49,6 +73,7 @@ pub fn import(path: &Path, time: Option<f64>) -> Result<Scene> {
             source: std::io::Error::new(std::io::ErrorKind::NotFound, "no such file"),
         });
     }
+    check_names(path).map_err(&usd_err)?;
     let stage = Stage::open(&file).map_err(|e| usd_err(format!("cannot open the stage: {e:#}")))?;
     let warnings = Vec::new();
     let mut importer = Importer {
@@ -504,10 +529,112 @@ fn sample(attr: &openusd::usd::Attribute, time: Time) -> anyhow::Result<Option<s
     }
 }
 
+/// `text` quoted for a message, cut to 60 characters (fuzzed names run for kilobytes).
+pub(super) fn shown(text: &str) -> String {
+    let cut: String = text.chars().take(60).collect();
+    let more = if cut.len() < text.len() { "…" } else { "" };
+    format!("{cut:?}{more}")
+}
+
+/// Refuse a root layer whose prims or properties are not named by identifiers. openusd 0.6
+/// reads such names (`def Shader "a}b"`) and then recurses without end composing them (found
+/// by fuzzing), so the layer is parsed once on its own and checked first. A layer that does
+/// not parse is left to `Stage::open`, which says why. Layers it brings in by sublayer or
+/// reference are not checked.
+fn check_names(path: &Path) -> std::result::Result<(), String> {
+    use openusd::sdf::AbstractData;
+    let Ok(bytes) = std::fs::read(path) else {
+        return Ok(());
+    };
+    let data: Box<dyn AbstractData> = if bytes.starts_with(b"PK") {
+        match openusd::usdz::Archive::from_reader(std::io::Cursor::new(bytes))
+            .and_then(|mut a| a.read_first_layer())
+        {
+            Ok(d) => d,
+            Err(_) => return Ok(()),
+        }
+    } else if bytes.starts_with(openusd::usdc::MAGIC) {
+        match openusd::usdc::CrateData::open(std::io::Cursor::new(bytes), true) {
+            Ok(d) => Box::new(d),
+            Err(_) => return Ok(()),
+        }
+    } else {
+        match std::str::from_utf8(&bytes).ok().map(openusd::usda::parse) {
+            Some(Ok(d)) => Box::new(d),
+            _ => return Ok(()),
+        }
+    };
+    let plain_prim_path = |p: &str| {
+        p.strip_prefix('/')
+            .is_some_and(|p| !p.is_empty() && p.split('/').all(sdf::Path::is_valid_identifier))
+    };
+    for spec in data.spec_paths() {
+        // Arcs to prim paths that are not made of identifiers make openusd 0.6 compose
+        // without end too.
+        for field in ["references", "payload", "inherits", "specializes"] {
+            let targets: Vec<String> = match data.try_field(&spec, field).ok().flatten().as_deref()
+            {
+                Some(sdf::Value::ReferenceListOp(op)) => op
+                    .iter()
+                    .map(|r| r.prim_path.as_str().to_string())
+                    .collect(),
+                Some(sdf::Value::PayloadListOp(op)) => op
+                    .iter()
+                    .map(|r| r.prim_path.as_str().to_string())
+                    .collect(),
+                Some(sdf::Value::PathListOp(op)) => {
+                    op.iter().map(|p| p.as_str().to_string()).collect()
+                }
+                _ => Vec::new(),
+            };
+            if let Some(bad) = targets
+                .iter()
+                .find(|t| !t.is_empty() && !plain_prim_path(t))
+            {
+                return Err(format!(
+                    "{} has {field} to {}, which is not a prim path",
+                    spec.as_str(),
+                    shown(bad)
+                ));
+            }
+        }
+        let text = spec.as_str();
+        // Variant selections and relationship or connection targets have syntax of their own.
+        if text.contains('{') || text.contains('[') || spec.is_abs_root() {
+            continue;
+        }
+        let (prim, property) = match spec.split_property() {
+            Some((prim, property)) => (prim, Some(property.to_string())),
+            None => (spec.clone(), None),
+        };
+        let prim_ok = plain_prim_path(prim.as_str());
+        let property_ok = property
+            .as_deref()
+            .is_none_or(sdf::Path::is_valid_namespace_identifier);
+        if !(prim_ok && property_ok) {
+            return Err(format!(
+                "the layer names a spec {}, which is not a valid path",
+                shown(text)
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// A prim's local transform and whether it resets the transform stack, for any prim type
 /// (the ops are plain attributes; typeless prims, such as a reference's root, have them too).
 fn xformable_of(prim: &openusd::usd::Prim, time: TimeCode) -> anyhow::Result<(gf::Matrix4d, bool)> {
     let view = XformableView(prim.clone());
+    // Op names become property paths; openusd 0.6 can hang on a name that is not a
+    // namespaced identifier (found by fuzzing: a token holding a newline and a brace).
+    for op in view.xform_op_order()?.unwrap_or_default() {
+        let name = op.strip_prefix("!invert!").unwrap_or(&op);
+        let valid = op == "!resetXformStack!"
+            || (name.starts_with("xformOp:") && sdf::Path::is_valid_namespace_identifier(name));
+        if !valid {
+            anyhow::bail!("xformOpOrder names {}, which is not an xformOp", shown(&op));
+        }
+    }
     Ok((
         view.local_to_parent_transform(time)?,
         view.resets_xform_stack()?,

@@ -49,6 +49,23 @@ impl Importer<'_> {
                 .map_err(|e| self.prim_err(prim, format!("material binding: {e:#}")))?,
             _ => None,
         };
+        // openusd 0.6 recurses without end on a binding to a path that is not made of
+        // identifiers (found by fuzzing).
+        if let Some(b) = &bound {
+            let plain = b
+                .as_str()
+                .strip_prefix('/')
+                .is_some_and(|p| !p.is_empty() && p.split('/').all(sdf::Path::is_valid_identifier));
+            if !plain {
+                return Err(self.prim_err(
+                    prim,
+                    format!(
+                        "its material binding names {}, which is not a prim path",
+                        super::shown(b.as_str())
+                    ),
+                ));
+            }
+        }
         let key = format!(
             "{}{}",
             bound.as_ref().map_or("", |p| p.as_str()),
@@ -127,13 +144,41 @@ impl Importer<'_> {
             .map_err(|e| self.prim_err(m, e))
     }
 
+    /// Refuse connection `source` of `prim`'s `what` unless it is a plain property path (see
+    /// [`is_plain_property_path`]).
+    fn require_property_path(
+        &self,
+        prim: &sdf::Path,
+        what: &str,
+        source: &sdf::Path,
+    ) -> Result<()> {
+        if is_plain_property_path(source) {
+            return Ok(());
+        }
+        Err(self.prim_err(
+            prim,
+            format!(
+                "{what} connects to {}, which is not a property path",
+                super::shown(source.as_str())
+            ),
+        ))
+    }
+
     /// The `UsdPreviewSurface` shader that is the surface of material prim `m`, if any.
     fn preview_surface(&self, m: &sdf::Path) -> Result<Option<Shader>> {
         let err = |e: anyhow::Error| self.prim_err(m, format!("surface shader: {e:#}"));
         let Some(material) = UsdMaterial::get(self.stage, m.clone()).map_err(err)? else {
             return Ok(None);
         };
-        let Some(shader) = material.compute_surface_source().map_err(err)? else {
+        // The universal `outputs:surface` and its source, read here rather than by
+        // `compute_surface_source`, which recurses without end on a target that is not a
+        // property path (found by fuzzing).
+        let output = material.surface_output();
+        let Some(source) = output.connections().map_err(err)?.into_iter().next() else {
+            return Ok(None);
+        };
+        self.require_property_path(m, "outputs:surface", &source)?;
+        let Some(shader) = Shader::get(self.stage, source.prim_path()).map_err(err)? else {
             return Ok(None);
         };
         Ok((shader.id().map_err(err)?.as_deref() == Some("UsdPreviewSurface")).then_some(shader))
@@ -307,6 +352,7 @@ impl Importer<'_> {
                     None => Input::Unset,
                 });
             };
+            self.require_property_path(&sp, &format!("inputs:{name}"), &source)?;
             let (prim, property) = source
                 .split_property()
                 .map(|(p, n)| (p, n.to_string()))
@@ -477,6 +523,7 @@ impl Importer<'_> {
             else {
                 return Ok((transform, DEFAULT_UV_SET.to_string()));
             };
+            self.require_property_path(&at, &format!("inputs:{input}"), &source)?;
             let prim = source.prim_path();
             let id = Shader::get(self.stage, prim.clone())
                 .ok()
@@ -528,6 +575,18 @@ impl Importer<'_> {
         }
         Err(self.prim_err(node, "inputs:st: connections loop or nest too deep"))
     }
+}
+
+/// Whether `path` is an absolute prim path of identifiers followed by a namespaced property
+/// name. openusd 0.6's parser accepts connection targets that are not, and then recurses
+/// without end resolving them (found by fuzzing), so they are refused first.
+fn is_plain_property_path(path: &sdf::Path) -> bool {
+    let Some((prim, property)) = path.as_str().rsplit_once('.') else {
+        return false;
+    };
+    prim.strip_prefix('/')
+        .is_some_and(|p| !p.is_empty() && p.split('/').all(sdf::Path::is_valid_identifier))
+        && sdf::Path::is_valid_namespace_identifier(property)
 }
 
 /// A grey (0.18) diffuse material, for meshes without a binding.
