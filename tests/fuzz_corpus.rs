@@ -52,7 +52,8 @@ fn cache_inputs_never_panic() {
 /// 30 seconds. Before: openusd 0.6 looped or recursed without end on names and paths that are
 /// not identifiers (an xformOp name, a prim name, a binding, a connection, a reference), its
 /// crate reader panicked on malformed usdc, and the gltf crate panicked on an index accessor
-/// of VEC3 floats and on a POSITION naming an accessor that does not exist.
+/// of VEC3 floats, on a POSITION naming an accessor that does not exist, and on an image in a
+/// buffer view without a MIME type.
 #[test]
 fn fuzzer_findings_give_clear_errors() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz/regressions");
@@ -78,6 +79,10 @@ fn fuzzer_findings_give_clear_errors() {
         (
             "gltf/position-accessor-out-of-range.gltf",
             "POSITION names accessor 0, but the file has 0 accessors",
+        ),
+        (
+            "gltf/image-without-mime-type.gltf",
+            "image 0 needs a bufferView with a mimeType, or a uri",
         ),
     ] {
         let path = root.join(file);

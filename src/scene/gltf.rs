@@ -34,7 +34,7 @@ pub(super) fn import(path: &Path, bytes: &[u8]) -> Result<Scene> {
     let g::Gltf { document, blob } =
         g::Gltf::from_slice_without_validation(bytes).map_err(|e| fmt(describe_gltf_error(&e)))?;
     let json = document.into_json();
-    check_position_accessors(&json).map_err(fmt)?;
+    check_unchecked_references(&json).map_err(fmt)?;
     let doc = g::Gltf {
         document: g::Document::from_json(json).map_err(|e| fmt(describe_gltf_error(&e)))?,
         blob,
@@ -463,9 +463,10 @@ fn pbr_scattering(
 }
 
 /// Check that an accessor's elements lie inside its buffer before anything reads them.
-/// gltf-json 1.4's validation indexes the accessor a primitive's POSITION names without a
-/// bounds check, and panics when it is out of range (found by fuzzing): check those first.
-fn check_position_accessors(root: &g::json::Root) -> std::result::Result<(), String> {
+/// What gltf 1.4 reads unchecked and panics on (found by fuzzing): gltf-json's validation
+/// indexes the accessor a primitive's POSITION names without a bounds check, and images are
+/// assumed complete. Checked before validation.
+fn check_unchecked_references(root: &g::json::Root) -> std::result::Result<(), String> {
     use g::json::validation::Checked;
     for (m, mesh) in root.meshes.iter().enumerate() {
         for (p, prim) in mesh.primitives.iter().enumerate() {
@@ -483,6 +484,19 @@ fn check_position_accessors(root: &g::json::Root) -> std::result::Result<(), Str
                     root.accessors.len()
                 ));
             }
+        }
+    }
+    // The gltf crate's `Image::source` unwraps the MIME type of an image in a buffer view and
+    // the URI of any other (found by fuzzing).
+    for (i, image) in root.images.iter().enumerate() {
+        let complete = match &image.buffer_view {
+            Some(view) => image.mime_type.is_some() && view.value() < root.buffer_views.len(),
+            None => image.uri.is_some(),
+        };
+        if !complete {
+            return Err(format!(
+                "image {i} needs a bufferView with a mimeType, or a uri"
+            ));
         }
     }
     Ok(())
