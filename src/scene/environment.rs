@@ -13,7 +13,7 @@
 //! it) times sin θ, the cell's share of the sphere, so every direction with radiance can be
 //! drawn. The density in solid angle is p(u, v) / (2π² sin θ).
 
-use super::texture::Texture;
+use super::texture::{TexRef, Texture, Wrap};
 use crate::spectrum::{luminance, Rgb};
 use glam::{Mat3, Vec2, Vec3, Vec4};
 use std::f32::consts::PI;
@@ -41,7 +41,17 @@ impl Environment {
             return self.scale;
         };
         let uv = direction_to_uv(self.to_local * w);
-        self.scale * bilinear(map, uv).truncate()
+        // The texture lookup of materials: repeat in longitude, clamp at the poles.
+        let lookup = TexRef {
+            texture: 0,
+            wrap_s: Wrap::Repeat,
+            wrap_t: Wrap::Clamp,
+            transform: glam::Affine2::IDENTITY,
+            srgb: false,
+            scale: Vec4::ONE,
+            bias: Vec4::ZERO,
+        };
+        self.scale * lookup.sample(std::slice::from_ref(map), uv).truncate()
     }
 
     /// The sampling distribution over directions (built once per render or bake).
@@ -95,23 +105,6 @@ fn uv_to_direction(uv: Vec2) -> (Vec3, f32) {
     let (sl, cl) = longitude.sin_cos();
     let (sp, cp) = latitude.sin_cos();
     (Vec3::new(cp * sl, sp, cp * cl), cp.max(0.0))
-}
-
-/// Bilinear lookup, wrapping in u and clamped in v.
-fn bilinear(map: &Texture, uv: Vec2) -> Vec4 {
-    let x = uv.x * map.width as f32 - 0.5;
-    let y = uv.y * map.height as f32 - 0.5;
-    let (x0, y0) = (x.floor(), y.floor());
-    let (fx, fy) = (x - x0, y - y0);
-    let fetch = |i: i64, j: i64| {
-        let i = i.rem_euclid(map.width as i64) as u32;
-        let j = j.clamp(0, map.height as i64 - 1) as u32;
-        map.texels[(j * map.width + i) as usize]
-    };
-    let (i, j) = (x0 as i64, y0 as i64);
-    let top = fetch(i, j).lerp(fetch(i + 1, j), fx);
-    let bottom = fetch(i, j + 1).lerp(fetch(i + 1, j + 1), fx);
-    top.lerp(bottom, fy)
 }
 
 /// Draws directions from an [`Environment`] in proportion to its radiance.

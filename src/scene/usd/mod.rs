@@ -529,6 +529,13 @@ fn sample(attr: &openusd::usd::Attribute, time: Time) -> anyhow::Result<Option<s
     }
 }
 
+/// Whether `path` is an absolute prim path of identifiers (what openusd 0.6 can resolve
+/// without looping; see [`check_names`]).
+pub(super) fn is_plain_prim_path(path: &str) -> bool {
+    path.strip_prefix('/')
+        .is_some_and(|p| !p.is_empty() && p.split('/').all(sdf::Path::is_valid_identifier))
+}
+
 /// `text` quoted for a message, cut to 60 characters (fuzzed names run for kilobytes).
 pub(super) fn shown(text: &str) -> String {
     let cut: String = text.chars().take(60).collect();
@@ -564,10 +571,6 @@ fn check_names(path: &Path) -> std::result::Result<(), String> {
             _ => return Ok(()),
         }
     };
-    let plain_prim_path = |p: &str| {
-        p.strip_prefix('/')
-            .is_some_and(|p| !p.is_empty() && p.split('/').all(sdf::Path::is_valid_identifier))
-    };
     for spec in data.spec_paths() {
         // Arcs to prim paths that are not made of identifiers make openusd 0.6 compose
         // without end too.
@@ -589,7 +592,7 @@ fn check_names(path: &Path) -> std::result::Result<(), String> {
             };
             if let Some(bad) = targets
                 .iter()
-                .find(|t| !t.is_empty() && !plain_prim_path(t))
+                .find(|t| !t.is_empty() && !is_plain_prim_path(t))
             {
                 return Err(format!(
                     "{} has {field} to {}, which is not a prim path",
@@ -607,7 +610,7 @@ fn check_names(path: &Path) -> std::result::Result<(), String> {
             Some((prim, property)) => (prim, Some(property.to_string())),
             None => (spec.clone(), None),
         };
-        let prim_ok = plain_prim_path(prim.as_str());
+        let prim_ok = is_plain_prim_path(prim.as_str());
         let property_ok = property
             .as_deref()
             .is_none_or(sdf::Path::is_valid_namespace_identifier);

@@ -52,11 +52,7 @@ impl Importer<'_> {
         // openusd 0.6 recurses without end on a binding to a path that is not made of
         // identifiers (found by fuzzing).
         if let Some(b) = &bound {
-            let plain = b
-                .as_str()
-                .strip_prefix('/')
-                .is_some_and(|p| !p.is_empty() && p.split('/').all(sdf::Path::is_valid_identifier));
-            if !plain {
+            if !super::is_plain_prim_path(b.as_str()) {
                 return Err(self.prim_err(
                     prim,
                     format!(
@@ -584,9 +580,7 @@ fn is_plain_property_path(path: &sdf::Path) -> bool {
     let Some((prim, property)) = path.as_str().rsplit_once('.') else {
         return false;
     };
-    prim.strip_prefix('/')
-        .is_some_and(|p| !p.is_empty() && p.split('/').all(sdf::Path::is_valid_identifier))
-        && sdf::Path::is_valid_namespace_identifier(property)
+    super::is_plain_prim_path(prim) && sdf::Path::is_valid_namespace_identifier(property)
 }
 
 /// A grey (0.18) diffuse material, for meshes without a binding.
