@@ -601,6 +601,28 @@ fn check_names(path: &Path) -> std::result::Result<(), String> {
                 ));
             }
         }
+        // Children listed under names that are not identifiers (an empty one names the prim
+        // itself) make openusd 0.6's traversal run without end.
+        for (field, valid) in [
+            (
+                "primChildren",
+                sdf::Path::is_valid_identifier as fn(&str) -> bool,
+            ),
+            ("properties", sdf::Path::is_valid_namespace_identifier),
+        ] {
+            let names: Vec<String> = match data.try_field(&spec, field).ok().flatten().as_deref() {
+                Some(sdf::Value::TokenVec(v)) => v.iter().map(|t| t.as_str().to_string()).collect(),
+                Some(sdf::Value::StringVec(v)) => v.clone(),
+                _ => Vec::new(),
+            };
+            if let Some(bad) = names.iter().find(|n| !valid(n)) {
+                return Err(format!(
+                    "{} lists a child named {}, which is not an identifier",
+                    spec.as_str(),
+                    shown(bad)
+                ));
+            }
+        }
         let text = spec.as_str();
         // Variant selections and relationship or connection targets have syntax of their own.
         if text.contains('{') || text.contains('[') || spec.is_abs_root() {
