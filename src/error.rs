@@ -79,6 +79,9 @@ pub enum Error {
 
     #[error(transparent)]
     Cache(#[from] crate::cache::CacheError),
+
+    #[error("the bake was cancelled")]
+    Cancelled,
 }
 
 pub type Result<T, E = Error> = std::result::Result<T, E>;

@@ -233,3 +233,47 @@ fn root_projected_area_is_the_sum_over_surfels() {
         "error {err} > bound {bound} (norm {norm})"
     );
 }
+
+/// A bake stops with `Error::Cancelled` once its flag is set: at once when set before it
+/// starts, and within the stage when the progress callback sets it (the plugin's cancel).
+#[test]
+fn a_cancelled_bake_stops_in_the_stage_that_sees_the_flag() {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    use std::sync::Mutex;
+    use wpbgi::bake::bake_cancellable;
+    let scene = cbox();
+    let mut s = settings();
+    s.bounces = wpbgi::bounce::BounceSettings::exactly(2);
+
+    let set = AtomicBool::new(true);
+    let r = bake_cancellable(&scene, &s, &|_, _| {}, &set);
+    assert!(matches!(r, Err(wpbgi::Error::Cancelled)));
+
+    for stop_at in ["surfels", "coding", "bounces"] {
+        let cancel = AtomicBool::new(false);
+        let seen = Mutex::new(Vec::new());
+        let progress = |stage: &str, f: f32| {
+            seen.lock().expect("lock").push((stage.to_string(), f));
+            if stage == stop_at {
+                cancel.store(true, Ordering::Relaxed);
+            }
+        };
+        let r = bake_cancellable(&scene, &s, &progress, &cancel);
+        assert!(
+            matches!(r, Err(wpbgi::Error::Cancelled)),
+            "stopped at {stop_at}"
+        );
+        // Nothing after the stage that saw the flag reported progress.
+        let seen = seen.into_inner().expect("lock");
+        let later = ["surfels", "direct light", "coding", "bounces"]
+            .iter()
+            .skip_while(|&&s| s != stop_at)
+            .skip(1)
+            .find(|&&s| seen.iter().any(|(x, _)| x == s));
+        assert_eq!(later, None, "stopped at {stop_at}: {seen:?}");
+    }
+    assert_eq!(
+        wpbgi::Error::Cancelled.to_string(),
+        "the bake was cancelled"
+    );
+}

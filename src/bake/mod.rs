@@ -11,7 +11,7 @@ pub mod tree;
 
 pub use coding::{encode, CodedTree, NodeCoding};
 pub use direct::DirectLight;
-pub use pipeline::{bake, BakeSettings, Baked, Quality, SurfelRadiance};
+pub use pipeline::{bake, bake_cancellable, BakeSettings, Baked, Quality, SurfelRadiance};
 pub use plan::Plan;
 pub use surfels::{sample_surfels, Surfel};
 pub use tree::{Node, SurfelTree};

@@ -21,6 +21,7 @@ use crate::haar::{texel_directions, Haar2d, SparseHaar};
 use crate::scene::{LightKind, Scene};
 use crate::spectrum::Rgb;
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 /// Scenes with more point and spot lights than this use a light tree (Lightcuts).
@@ -148,8 +149,27 @@ pub struct Baked {
 /// Which stage is running and how far it is (from 0 to 1), for progress display.
 pub type Progress<'a> = &'a (dyn Fn(&str, f32) + Sync);
 
-/// Bake `scene` (direct light only).
+/// Bake `scene`: direct light, then the indirect bounces `settings` asks for.
 pub fn bake(scene: &Scene, settings: &BakeSettings, progress: Progress) -> Result<Baked> {
+    bake_cancellable(scene, settings, progress, &AtomicBool::new(false))
+}
+
+/// [`bake`], stopping with [`Error::Cancelled`] soon after `cancel` is set (by the progress
+/// callback, another thread or a signal handler). The surfel loops look at the flag once per
+/// surfel or receiver group; only the tree's coding (a few per cent of a bake) runs on.
+pub fn bake_cancellable(
+    scene: &Scene,
+    settings: &BakeSettings,
+    progress: Progress,
+    cancel: &AtomicBool,
+) -> Result<Baked> {
+    let stop = || {
+        if cancel.load(Ordering::Relaxed) {
+            Err(Error::Cancelled)
+        } else {
+            Ok(())
+        }
+    };
     if settings.points == 0 || settings.light_samples == 0 {
         return Err(Error::InvalidSetting(
             "points and light samples must be at least 1".into(),
@@ -186,6 +206,7 @@ pub fn bake(scene: &Scene, settings: &BakeSettings, progress: Progress) -> Resul
     let surfels = sample_surfels(scene, settings.points, settings.seed);
     progress("surfels", 1.0);
     stage("surfels", t);
+    stop()?;
 
     let t = Instant::now();
     let direct = DirectLight {
@@ -202,14 +223,15 @@ pub fn bake(scene: &Scene, settings: &BakeSettings, progress: Progress) -> Resul
         .par_iter()
         .enumerate()
         .map(|(i, s)| {
+            stop()?;
             let r = surfel_radiance(scene, &direct, s, i as u64, settings.tau);
-            let n = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            let n = done.fetch_add(1, Ordering::Relaxed) + 1;
             if n.is_multiple_of(4096) {
                 progress("direct light", n as f32 / surfels.len() as f32);
             }
-            r
+            Ok(r)
         })
-        .collect();
+        .collect::<Result<_>>()?;
     progress("direct light", 1.0);
     stage("direct light", t);
 
@@ -244,6 +266,7 @@ pub fn bake(scene: &Scene, settings: &BakeSettings, progress: Progress) -> Resul
     let projected = encode(&tree, &area_leaf, eps, settings.tau);
     progress("coding", 1.0);
     stage("coding", t);
+    stop()?;
 
     let mut baked = Baked {
         plan,
@@ -260,7 +283,13 @@ pub fn bake(scene: &Scene, settings: &BakeSettings, progress: Progress) -> Resul
     };
     if settings.bounces.max > 0 {
         let t = Instant::now();
-        baked.bounces = Some(add_bounces(scene, &mut baked, &settings.bounces, progress)?);
+        baked.bounces = Some(add_bounces(
+            scene,
+            &mut baked,
+            &settings.bounces,
+            progress,
+            cancel,
+        )?);
         baked.timings.push(("bounces", t.elapsed().as_secs_f64()));
     }
     Ok(baked)

@@ -136,6 +136,26 @@ pub fn bake_hash(scene: &Scene, settings: &Value) -> [u8; 16] {
     ])
 }
 
+/// Save `baked`, a bake of `scene`, to `path` atomically, as `wpbgi bake` does: hashed with
+/// its settings, with [`cache_stats`] in the plan.
+pub fn save(path: &Path, scene: &Scene, baked: &Baked) -> Result<(), CacheError> {
+    let hash = bake_hash(scene, &baked.settings.to_json());
+    write(path, hash, baked, cache_stats(baked))
+}
+
+/// The figures of a bake that its inputs determine, kept in the cache's plan. Times and memory
+/// are left out so that the same bake writes a byte-identical cache.
+pub fn cache_stats(baked: &Baked) -> Value {
+    let (maps, coefficients) = baked.coded.stored_counts();
+    serde_json::json!({
+        "surfels": baked.surfels.len(),
+        "nodes": baked.tree.nodes.len(),
+        "tree_depth": baked.tree.depth(),
+        "stored_maps": maps,
+        "coefficients": coefficients,
+    })
+}
+
 /// Serialize `baked` to `path` atomically. `stats` is added to the plan section as is.
 pub fn write(path: &Path, hash: [u8; 16], baked: &Baked, stats: Value) -> Result<(), CacheError> {
     let werr = |reason: String| CacheError::Write {
@@ -261,6 +281,16 @@ pub struct BakedCache {
 impl BakedCache {
     pub fn read(path: &Path, expected_hash: Option<[u8; 16]>) -> Result<BakedCache, CacheError> {
         Self::from_cache(Cache::read(path, expected_hash)?)
+    }
+
+    /// Read the cache at `path`, refusing it if `scene` or the bake settings stored in it
+    /// changed since it was baked.
+    pub fn open_fresh(scene: &Scene, path: &Path) -> Result<BakedCache, CacheError> {
+        let cache = Self::read(path, None)?;
+        cache
+            .cache
+            .check_fresh(bake_hash(scene, &cache.plan["settings"]))?;
+        Ok(cache)
     }
 
     /// Validate `bytes` as a cache file's contents (`path` only names it in errors).

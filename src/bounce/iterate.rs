@@ -33,7 +33,7 @@ use crate::bake::plan::map_levels;
 use crate::bake::store::{BakedCache, SOLID};
 use crate::bake::surfels::Surfel;
 use crate::bsdf::Bsdf;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::gather::cut::splat_cut;
 use crate::gather::fpbgi::{cluster_cut, member_buffer, ClusterReceivers};
 use crate::gather::microbuffer::Microbuffer;
@@ -46,6 +46,7 @@ use crate::spectrum::{luminance, Rgb};
 use glam::{Vec3, Vec3A};
 use rayon::prelude::*;
 use std::path::Path;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Arc;
 
 /// Microbuffer pixels per side for diffuse surfels (as the final render's default).
@@ -179,6 +180,7 @@ pub fn add_bounces(
     baked: &mut Baked,
     settings: &BounceSettings,
     progress: Progress,
+    cancel: &AtomicBool,
 ) -> Result<BounceReport> {
     let mut report = BounceReport::default();
     if settings.max == 0 || baked.surfels.is_empty() {
@@ -207,7 +209,8 @@ pub fn add_bounces(
     let mut ratios: Vec<f64> = Vec::new();
     for bounce in 1..=settings.max {
         let start = std::time::Instant::now();
-        progress("bounces", (bounce - 1) as f32 / settings.max as f32);
+        let done_before = (bounce - 1) as f32 / settings.max as f32;
+        progress("bounces", done_before);
         let senders = senders_of(baked, emit.take())?;
         let light = gather_bounce(
             (scene, &accel),
@@ -215,7 +218,11 @@ pub fn add_bounces(
             baked,
             (&bsdfs, &ops),
             settings.view_tree,
-        );
+            (
+                &|f| progress("bounces", done_before + f / settings.max as f32),
+                cancel,
+            ),
+        )?;
         let e = energy(baked, &light);
         report.energies.push(e);
         if let Some(&prev) = report.energies.iter().rev().nth(1) {
@@ -384,7 +391,8 @@ fn gather_bounce(
     baked: &Baked,
     (bsdfs, ops): (&[Bsdf], &[Option<Arc<BsdfOperator>>]),
     view_tree: bool,
-) -> Vec<SurfelRadiance> {
+    (progress, cancel): (&(dyn Fn(f32) + Sync), &AtomicBool),
+) -> Result<Vec<SurfelRadiance>> {
     let groups = if view_tree {
         receiver_groups(&baked.tree, &baked.surfels)
     } else {
@@ -399,9 +407,17 @@ fn gather_bounce(
     };
     let side = |i: u32| ops[i as usize].as_ref().map_or(DIFFUSE_BUFFER, |op| op.n);
     let tau = baked.settings.tau;
+    let done = AtomicUsize::new(0);
     let gathered: Vec<Vec<(u32, SurfelRadiance)>> = groups
         .par_iter()
         .map_init(Vec::new, |stack, group| {
+            if cancel.load(Ordering::Relaxed) {
+                return Vec::new();
+            }
+            let n = done.fetch_add(1, Ordering::Relaxed) + 1;
+            if n.is_multiple_of(256) {
+                progress(n as f32 / groups.len() as f32);
+            }
             let buffer = |i: u32| {
                 let s = &baked.surfels[i as usize];
                 let spherical = bsdfs[i as usize].is_two_sided();
@@ -451,11 +467,14 @@ fn gather_bounce(
                 .collect()
         })
         .collect();
+    if cancel.load(Ordering::Relaxed) {
+        return Err(Error::Cancelled);
+    }
     let mut light = vec![SurfelRadiance::Rgb(Rgb::ZERO); baked.surfels.len()];
     for (i, l) in gathered.into_iter().flatten() {
         light[i as usize] = l;
     }
-    light
+    Ok(light)
 }
 
 /// A surfel's outgoing radiance from its closed buffer: the cosine convolution for diffuse

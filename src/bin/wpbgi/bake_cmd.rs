@@ -150,19 +150,11 @@ pub fn bake_command(a: BakeArgs) -> Result<()> {
     };
     let baked = bake(&scene, &settings, &progress)?;
     bar.as_ref().map(crate::StagedBar::finish);
-    let (maps, coefficients) = baked.coded.stored_counts();
-    // Only what the inputs determine goes into the cache, so that it is byte-identical from run
-    // to run; times and memory are reported here.
-    let mut stats = json!({
-        "surfels": baked.surfels.len(),
-        "nodes": baked.tree.nodes.len(),
-        "tree_depth": baked.tree.depth(),
-        "stored_maps": maps,
-        "coefficients": coefficients,
-    });
-    let hash = bake_hash(&scene, &settings.to_json());
+    let coefficients = baked.coded.stored_counts().1;
     let t = Instant::now();
-    wpbgi::bake::store::write(&a.output, hash, &baked, stats.clone())?;
+    wpbgi::bake::store::save(&a.output, &scene, &baked)?;
+    // The cache holds what the inputs determine; times and memory are reported here.
+    let mut stats = wpbgi::bake::store::cache_stats(&baked);
     let bytes = std::fs::metadata(&a.output).map(|m| m.len()).unwrap_or(0);
     stats["seconds"] = baked
         .timings

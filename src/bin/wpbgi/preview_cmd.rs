@@ -1,6 +1,5 @@
 //! `wpbgi preview`: the cache splatted with Vulkan, headless to an image (or in a window).
 
-use crate::render_cmd::open_fresh_cache;
 use crate::CameraArgs;
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
@@ -85,7 +84,7 @@ pub fn preview_command(a: PreviewArgs) -> Result<()> {
         })
         .transpose()?;
     let cache = match &scene {
-        Some(s) => open_fresh_cache(s, &a.cache)?,
+        Some(s) => BakedCache::open_fresh(s, &a.cache)?,
         None => BakedCache::read(&a.cache, None)?,
     };
     let (w, h) = a.camera.size;

@@ -3,9 +3,9 @@
 use crate::CameraArgs;
 use anyhow::{bail, Result};
 use clap::{Args, ValueEnum};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
-use wpbgi::bake::store::{bake_hash, BakedCache};
+use wpbgi::bake::store::BakedCache;
 use wpbgi::image::{read_exr, write_exr_layers, write_png, Image};
 use wpbgi::render::{render_final, FinalOutput, FinalSettings, GatherMode};
 use wpbgi::scene::{Camera, Scene};
@@ -83,15 +83,6 @@ pub struct RenderArgs {
     pub camera: CameraArgs,
 }
 
-/// Load the cache and refuse it if it was baked from another scene or other settings.
-pub fn open_fresh_cache(scene: &Scene, path: &Path) -> Result<BakedCache> {
-    let cache = BakedCache::read(path, None)?;
-    cache
-        .cache
-        .check_fresh(bake_hash(scene, &cache.plan["settings"]))?;
-    Ok(cache)
-}
-
 /// Render with a progress bar.
 pub fn run_final(
     scene: &Scene,
@@ -134,7 +125,7 @@ pub fn render_command(a: RenderArgs) -> Result<()> {
     let scene = crate::load_scene(&a.scene)?;
     crate::warn(&scene);
     let camera = crate::pick_camera(&scene, &a.camera)?;
-    let cache = open_fresh_cache(&scene, &a.cache)?;
+    let cache = BakedCache::open_fresh(&scene, &a.cache)?;
     let bounces = cache.plan["plan"]["bounces"]["bounces"]
         .as_u64()
         .unwrap_or(0);
