@@ -20,4 +20,34 @@ PREVIEW_PACKAGES="libvulkan1 mesa-vulkan-drivers vulkan-validationlayers xvfb xa
 if ! dpkg -s $PREVIEW_PACKAGES >/dev/null 2>&1; then
   $SUDO apt-get update -qq && $SUDO apt-get install -y -qq $PREVIEW_PACKAGES
 fi
+# Python 3 for the plugin's ctypes example (plugin/python). Installed only when missing.
+if ! command -v python3 >/dev/null 2>&1; then
+  $SUDO apt-get update -qq && $SUDO apt-get install -y -qq python3
+fi
+# Pixar's USD Python modules (usd-core, from PyPI) for the plugin's USD pipeline example, in a
+# virtual environment under target/. Without them (no network, say) that one test is skipped
+# with a message; everything else runs.
+usd_python() {
+  if python3 -c "import pxr.Sdf" >/dev/null 2>&1; then
+    echo python3
+    return
+  fi
+  local venv=target/usd-venv
+  if [ ! -x "$venv/bin/python" ]; then
+    python3 -m venv "$venv" >/dev/null 2>&1 ||
+      { $SUDO apt-get install -y -qq python3-venv >/dev/null 2>&1 && python3 -m venv "$venv"; } ||
+      return
+  fi
+  if "$venv/bin/python" -c "import pxr.Sdf" >/dev/null 2>&1 ||
+    "$venv/bin/python" -m pip install -q usd-core >/dev/null 2>&1; then
+    echo "$PWD/$venv/bin/python"
+  fi
+}
+WPBGI_USD_PYTHON="$(usd_python || true)"
+if [ -n "$WPBGI_USD_PYTHON" ]; then
+  export WPBGI_USD_PYTHON
+else
+  unset WPBGI_USD_PYTHON
+  echo "note: usd-core could not be installed; the USD pipeline example's test is skipped" >&2
+fi
 cargo test --release --workspace --all-targets "$@"

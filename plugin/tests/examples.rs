@@ -1,0 +1,264 @@
+//! The examples, run as a user runs them: the C example compiled with the system's C compiler
+//! against `wpbgi.h` and the shared library, the Python example through ctypes, and the USD
+//! pipeline example when Pixar's USD modules are installed. Their caches and images must equal
+//! the Rust API's byte for byte.
+
+mod common;
+
+use common::*;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// The folder holding the shared library this test run built (`target/<profile>`, or its
+/// `deps`).
+fn library_dir() -> PathBuf {
+    let name = format!(
+        "{}wpbgi_plugin{}",
+        std::env::consts::DLL_PREFIX,
+        std::env::consts::DLL_SUFFIX
+    );
+    let exe = std::env::current_exe().expect("the test's path");
+    let deps = exe.parent().expect("deps folder");
+    let found = [deps, deps.parent().expect("profile folder")]
+        .into_iter()
+        .find(|d| d.join(&name).is_file())
+        .unwrap_or_else(|| panic!("{name} was not built next to {}", exe.display()))
+        .to_path_buf();
+    found
+}
+
+fn library_path() -> PathBuf {
+    library_dir().join(format!(
+        "{}wpbgi_plugin{}",
+        std::env::consts::DLL_PREFIX,
+        std::env::consts::DLL_SUFFIX
+    ))
+}
+
+fn plugin_dir() -> &'static Path {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+#[track_caller]
+fn run(cmd: &mut Command) -> String {
+    let out = cmd
+        .output()
+        .unwrap_or_else(|e| panic!("cannot run {cmd:?}: {e}"));
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(out.status.success(), "{cmd:?} failed:\n{stderr}");
+    String::from_utf8_lossy(&out.stdout).into_owned() + &stderr
+}
+
+/// The example's arguments: the scene, its outputs, and the shared small bake.
+fn example_args(dir: &Path, name: &str) -> Vec<String> {
+    vec![
+        scene_path().display().to_string(),
+        dir.join(format!("{name}.wpc")).display().to_string(),
+        dir.join(format!("{name}.pfm")).display().to_string(),
+        POINTS.to_string(),
+        BOUNCES.to_string(),
+        SIZE.to_string(),
+    ]
+}
+
+/// Assert that `name`'s cache and image in `dir` are the Rust API's.
+#[track_caller]
+fn assert_same_as_rust(dir: &Path, name: &str, rust: &(Vec<u8>, Vec<f32>)) {
+    let cache = std::fs::read(dir.join(format!("{name}.wpc"))).expect("the example's cache");
+    assert!(
+        cache == rust.0,
+        "{name}: its cache differs from the Rust API's"
+    );
+    let (w, h, rgb) = read_pfm(&dir.join(format!("{name}.pfm")));
+    assert_eq!((w, h), (SIZE, SIZE));
+    assert!(
+        same_bits(&rgb, &rust.1),
+        "{name}: its image differs from the Rust API's"
+    );
+}
+
+#[test]
+fn c_and_python_examples_reproduce_the_rust_api() {
+    let dir = scratch("examples");
+    let rust = rust_api_result(POINTS, BOUNCES, SIZE);
+
+    // C: compiled with warnings as errors against the checked-in header.
+    let exe = dir.join("bake_and_render");
+    let lib_dir = library_dir();
+    run(
+        Command::new(std::env::var("CC").unwrap_or_else(|_| "cc".into()))
+            .args(["-std=c99", "-Wall", "-Wextra", "-Werror", "-I"])
+            .arg(plugin_dir().join("include"))
+            .arg(plugin_dir().join("examples/bake_and_render.c"))
+            .arg("-L")
+            .arg(&lib_dir)
+            .arg("-lwpbgi_plugin")
+            .arg(format!("-Wl,-rpath,{}", lib_dir.display()))
+            .arg("-o")
+            .arg(&exe),
+    );
+    let log = run(Command::new(&exe).args(example_args(&dir, "c")));
+    assert!(log.contains("progress reports"), "{log}");
+    assert_same_as_rust(&dir, "c", &rust);
+    // Its EXR, written by wpbgi_render_to_file, holds the same floats.
+    let exr = wpbgi::image::read_exr(&dir.join("c.exr")).expect("the example's EXR");
+    let floats: Vec<f32> = exr.pixels.iter().flat_map(|p| p.to_array()).collect();
+    assert!(same_bits(&floats, &rust.1));
+
+    // Python, through ctypes.
+    let python = std::env::var("WPBGI_PYTHON").unwrap_or_else(|_| "python3".into());
+    run(Command::new(&python)
+        .arg(plugin_dir().join("python/example.py"))
+        .args(example_args(&dir, "python"))
+        .env("WPBGI_LIBRARY", library_path()));
+    assert_same_as_rust(&dir, "python", &rust);
+
+    // Python's errors: the status and the library's sentence; a callback that returns True
+    // cancels, one that raises cancels and re-raises, and neither leaves a cache; a closed
+    // handle is passed as NULL and refused.
+    let check = r#"
+import os, sys, wpbgi
+scene_path, out = sys.argv[1], sys.argv[2]
+try:
+    wpbgi.Scene(out + "/missing.gltf")
+    raise SystemExit("a missing scene loaded")
+except wpbgi.Error as e:
+    assert e.status == wpbgi.FAILED and "missing.gltf" in str(e), (e.status, str(e))
+scene = wpbgi.Scene(scene_path)
+try:
+    wpbgi.bake(scene, out + "/cancelled.wpc", points=3000, progress=lambda stage, f: stage == "direct light")
+    raise SystemExit("the bake was not cancelled")
+except wpbgi.Cancelled as e:
+    assert e.status == wpbgi.CANCELLED and str(e) == "the bake was cancelled", str(e)
+class Stop(Exception):
+    pass
+def fail(stage, f):
+    raise Stop(stage)
+try:
+    wpbgi.bake(scene, out + "/raised.wpc", points=3000, progress=fail)
+    raise SystemExit("the exception was lost")
+except Stop as e:
+    assert str(e) == "surfels", str(e)
+assert not os.path.exists(out + "/cancelled.wpc") and not os.path.exists(out + "/raised.wpc")
+cache = wpbgi.Cache(out + "/python.wpc", scene)
+cache.close()
+try:
+    wpbgi.render(scene, cache, 8, 8)
+    raise SystemExit("a closed cache rendered")
+except wpbgi.Error as e:
+    assert e.status == wpbgi.INVALID_ARGUMENT and "cache is NULL" in str(e), str(e)
+print("python errors ok")
+"#;
+    let log = run(Command::new(&python)
+        .args(["-c", check])
+        .arg(scene_path())
+        .arg(&dir)
+        .env("PYTHONPATH", plugin_dir().join("python"))
+        .env("WPBGI_LIBRARY", library_path()));
+    assert!(log.contains("python errors ok"), "{log}");
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+/// A Python with Pixar's USD modules: $WPBGI_USD_PYTHON (scripts/test.sh sets it when it could
+/// install usd-core), else python3 if it has them.
+fn usd_python() -> Option<String> {
+    let candidates = std::env::var("WPBGI_USD_PYTHON")
+        .into_iter()
+        .chain(["python3".to_string()]);
+    for python in candidates {
+        let ok = Command::new(&python)
+            .args(["-c", "import pxr.Sdf"])
+            .output()
+            .is_ok_and(|o| o.status.success());
+        if ok {
+            return Some(python);
+        }
+    }
+    None
+}
+
+/// The pipeline example's JSON line.
+fn pipeline(python: &str, stage: &Path) -> serde_json::Value {
+    let out = Command::new(python)
+        .arg(plugin_dir().join("python/usd_pipeline.py"))
+        .arg(stage)
+        .args(["--points", "1500", "--bounces", "0"])
+        .env("WPBGI_LIBRARY", library_path())
+        .output()
+        .expect("run usd_pipeline.py");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "usd_pipeline.py failed:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_str(stdout.trim()).unwrap_or_else(|e| panic!("{e}: {stdout}"))
+}
+
+fn hash_of(cache: &Path) -> String {
+    let c = wpbgi::bake::store::BakedCache::read(cache, None).expect("a valid cache");
+    c.cache.hash.iter().map(|b| format!("{b:02x}")).collect()
+}
+
+#[test]
+fn usd_pipeline_records_the_cache_and_reuses_it_while_it_is_good() {
+    let Some(python) = usd_python() else {
+        eprintln!(
+            "skipped: Pixar's USD Python modules are not installed (pip install usd-core, or set \
+             WPBGI_USD_PYTHON to a Python that has them)"
+        );
+        return;
+    };
+    let dir = scratch("usd-pipeline");
+    let stage = dir.join("cbox.usda");
+    let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/usd/cbox-diffuse.usda");
+    std::fs::copy(&source, &stage).expect("copy the stage");
+
+    // First run: nothing recorded, so it bakes and records the cache next to the stage.
+    let first = pipeline(&python, &stage);
+    assert_eq!(first["baked"], true, "{first}");
+    assert_eq!(first["reason"], "no record");
+    let cache = PathBuf::from(first["cache"].as_str().expect("cache path"));
+    assert_eq!(cache, dir.join("cbox.wpc"));
+    let hash = first["hash"].as_str().expect("hash").to_string();
+    assert_eq!(hash_of(&cache), hash, "the recorded hash is the cache's");
+    let text = std::fs::read_to_string(&stage).expect("the stage");
+    assert!(
+        text.contains("customLayerData") && text.contains(&hash) && text.contains("cbox.wpc"),
+        "the record is in the root layer:\n{text}"
+    );
+
+    // Second run: the stage and settings are unchanged, so the cache is re-used untouched.
+    let modified = std::fs::metadata(&cache)
+        .and_then(|m| m.modified())
+        .expect("mtime");
+    let second = pipeline(&python, &stage);
+    assert_eq!(second["baked"], false, "{second}");
+    assert_eq!(second["hash"], hash.as_str());
+    assert_eq!(
+        std::fs::metadata(&cache).and_then(|m| m.modified()).ok(),
+        Some(modified)
+    );
+
+    // A changed material: baked again, under a new hash.
+    let text = std::fs::read_to_string(&stage).expect("the stage");
+    let changed = text.replacen("0.885809", "0.5", 1);
+    assert_ne!(
+        changed, text,
+        "the fixture has the colour this test changes"
+    );
+    std::fs::write(&stage, changed).expect("write the stage");
+    let third = pipeline(&python, &stage);
+    assert_eq!(third["baked"], true, "{third}");
+    assert_eq!(third["reason"], "the stage or the settings changed");
+    assert_ne!(third["hash"], hash.as_str());
+    assert_eq!(hash_of(&cache), third["hash"].as_str().expect("hash"));
+
+    // The recorded cache deleted: baked again, under the same hash.
+    std::fs::remove_file(&cache).expect("remove the cache");
+    let fourth = pipeline(&python, &stage);
+    assert_eq!(fourth["baked"], true, "{fourth}");
+    assert_eq!(fourth["reason"], "the recorded cache is missing or stale");
+    assert_eq!(fourth["hash"], third["hash"]);
+    let _ = std::fs::remove_dir_all(dir);
+}
