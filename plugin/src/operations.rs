@@ -66,11 +66,17 @@ fn bake_reporting(
                 cancel.store(true, Ordering::Relaxed);
             }
         }
-        match worker.join() {
-            Ok(result) => Ok(result??),
+        let baked = match worker.join() {
+            Ok(result) => result??,
             // Re-raised here, caught by `call`.
             Err(panic) => std::panic::resume_unwind(panic),
+        };
+        // A cancel asked on the bake's last reports, after its last look at the flag, still
+        // holds: the host said it does not want this cache.
+        if cancel.load(Ordering::Relaxed) {
+            return Err(Failure::Cancelled);
         }
+        Ok(baked)
     })
 }
 

@@ -191,12 +191,15 @@ fn bake_and_render_equal_the_rust_api_byte_for_byte() {
     let _ = std::fs::remove_dir_all(dir);
 }
 
+/// When to ask for a stop, given the stage and its fraction.
+type StopWhen = fn(&str, f32) -> bool;
+
 /// What the progress callback saw, and when it asked to stop.
 struct Watch {
     reports: Vec<(String, f32)>,
     off_thread: bool,
     caller: std::thread::ThreadId,
-    cancel_at: Option<&'static str>,
+    cancel_when: StopWhen,
     cancelled: Option<Instant>,
 }
 
@@ -208,7 +211,7 @@ unsafe extern "C" fn watch(stage: *const c_char, fraction: f32, user_data: *mut 
     let stage = unsafe { CStr::from_ptr(stage) }
         .to_string_lossy()
         .into_owned();
-    let stop = w.cancel_at.is_some_and(|s| s == stage) && fraction > 0.0;
+    let stop = (w.cancel_when)(&stage, fraction);
     w.reports.push((stage, fraction));
     if stop && w.cancelled.is_none() {
         w.cancelled = Some(Instant::now());
@@ -216,14 +219,17 @@ unsafe extern "C" fn watch(stage: *const c_char, fraction: f32, user_data: *mut 
     i32::from(w.cancelled.is_some())
 }
 
-fn watched_bake(cancel_at: Option<&'static str>, path: &std::path::Path) -> (i32, Watch, Duration) {
+fn watched_bake(
+    cancel_when: fn(&str, f32) -> bool,
+    path: &std::path::Path,
+) -> (i32, Watch, Duration) {
     let scene = Scene::load(&scene_path());
     let settings = bake_settings(8000, 2);
     let mut w = Watch {
         reports: Vec::new(),
         off_thread: false,
         caller: std::thread::current().id(),
-        cancel_at,
+        cancel_when,
         cancelled: None,
     };
     let start = Instant::now();
@@ -247,7 +253,7 @@ fn watched_bake(cancel_at: Option<&'static str>, path: &std::path::Path) -> (i32
 fn cancelling_from_the_callback_stops_promptly_and_writes_nothing() {
     let dir = scratch("cancel");
     let full_path = dir.join("full.wpc");
-    let (status, full, full_time) = watched_bake(None, &full_path);
+    let (status, full, full_time) = watched_bake(|_, _| false, &full_path);
     assert_eq!(status, WPBGI_OK, "{}", last_error());
     assert!(!full.off_thread, "the callback runs on the caller's thread");
     let stages: Vec<&str> = full.reports.iter().map(|r| r.0.as_str()).collect();
@@ -266,9 +272,13 @@ fn cancelling_from_the_callback_stops_promptly_and_writes_nothing() {
         full.reports
     );
 
-    for stage in ["direct light", "bounces"] {
+    let within: [(&str, StopWhen); 2] = [
+        ("direct light", |s, f| s == "direct light" && f > 0.0),
+        ("bounces", |s, f| s == "bounces" && f > 0.0),
+    ];
+    for (stage, when) in within {
         let path = dir.join(format!("cancelled-{}.wpc", stage.replace(' ', "-")));
-        let (status, w, after) = watched_bake(Some(stage), &path);
+        let (status, w, after) = watched_bake(when, &path);
         assert_eq!(status, WPBGI_CANCELLED, "cancelled in {stage}");
         assert_eq!(last_error(), "the bake was cancelled");
         assert!(w.cancelled.is_some());
@@ -281,6 +291,13 @@ fn cancelling_from_the_callback_stops_promptly_and_writes_nothing() {
         assert!(!path.exists(), "a cancelled bake writes no cache");
         eprintln!("cancelled in {stage}: returned {after:?} after the request (a full bake: {full_time:?})");
     }
+    // A stop asked on the bake's very last report, when its loops are done, still holds.
+    let path = dir.join("cancelled-last.wpc");
+    let (status, w, _) = watched_bake(|s, f| s == "bounces" && f >= 1.0, &path);
+    assert_eq!(status, WPBGI_CANCELLED);
+    assert_eq!(w.reports.last().map(|r| r.1), Some(1.0));
+    assert!(!path.exists(), "a cancelled bake writes no cache");
+
     // Nothing else was left behind (no temporary file of an atomic write).
     let mut left: Vec<String> = std::fs::read_dir(&dir)
         .expect("list")
@@ -296,7 +313,7 @@ fn a_cancelled_bake_keeps_the_previous_cache() {
     let dir = scratch("keep");
     let path = dir.join("scene.wpc");
     std::fs::write(&path, b"the previous cache").expect("write");
-    let (status, _, _) = watched_bake(Some("direct light"), &path);
+    let (status, _, _) = watched_bake(|s, f| s == "direct light" && f > 0.0, &path);
     assert_eq!(status, WPBGI_CANCELLED);
     assert_eq!(std::fs::read(&path).expect("read"), b"the previous cache");
     let _ = std::fs::remove_dir_all(dir);
