@@ -57,11 +57,7 @@ pub(crate) fn call(body: impl FnOnce() -> Outcome) -> i32 {
         Ok(Err(Failure::Failed(m))) => (WPBGI_FAILED, m),
         Ok(Err(Failure::Cancelled)) => (WPBGI_CANCELLED, "the bake was cancelled".to_string()),
         Err(payload) => {
-            let what = payload
-                .downcast_ref::<&str>()
-                .map(|s| s.to_string())
-                .or_else(|| payload.downcast_ref::<String>().cloned())
-                .unwrap_or_else(|| "a panic without a message".to_string());
+            let what = wpbgi::error::panic_message(payload.as_ref());
             (
                 WPBGI_INTERNAL_ERROR,
                 format!("internal error in wpbgi (please report it): {what}"),

@@ -35,7 +35,7 @@ pub(crate) unsafe fn write_hash(
             "hash_out holds {size} bytes where {HASH_TEXT} are needed (32 digits and the NUL)"
         )));
     }
-    let text: String = hash.iter().map(|b| format!("{b:02x}")).collect();
+    let text = wpbgi::cache::hash_hex(hash);
     // SAFETY: `out` holds at least HASH_TEXT bytes, by the caller's contract and the check.
     let out = unsafe { std::slice::from_raw_parts_mut(out.cast::<u8>(), HASH_TEXT) };
     out[..32].copy_from_slice(text.as_bytes());

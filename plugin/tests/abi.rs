@@ -25,32 +25,29 @@ fn path_c(p: &std::path::Path) -> CString {
     c(p.to_str().expect("UTF-8 path"))
 }
 
-fn bake_settings(points: u64, bounces: i32) -> WpbgiBakeSettings {
-    let mut s = std::mem::MaybeUninit::<WpbgiBakeSettings>::uninit();
-    // SAFETY: a writable struct.
-    assert_eq!(
-        unsafe { wpbgi_bake_settings_init(s.as_mut_ptr()) },
-        WPBGI_OK
-    );
+/// A settings struct as its `_init` function fills it.
+fn initialised<T>(init: unsafe extern "C" fn(*mut T) -> i32) -> T {
+    let mut s = std::mem::MaybeUninit::<T>::uninit();
+    // SAFETY: a writable struct of the type `init` fills.
+    assert_eq!(unsafe { init(s.as_mut_ptr()) }, WPBGI_OK);
     // SAFETY: initialised by the call.
-    let mut s = unsafe { s.assume_init() };
-    s.points = points;
-    s.bounces = bounces;
-    s
+    unsafe { s.assume_init() }
+}
+
+fn bake_settings(points: u64, bounces: i32) -> WpbgiBakeSettings {
+    WpbgiBakeSettings {
+        points,
+        bounces,
+        ..initialised(wpbgi_bake_settings_init)
+    }
 }
 
 fn render_settings(size: u32) -> WpbgiRenderSettings {
-    let mut s = std::mem::MaybeUninit::<WpbgiRenderSettings>::uninit();
-    // SAFETY: a writable struct.
-    assert_eq!(
-        unsafe { wpbgi_render_settings_init(s.as_mut_ptr()) },
-        WPBGI_OK
-    );
-    // SAFETY: initialised by the call.
-    let mut s = unsafe { s.assume_init() };
-    s.width = size;
-    s.height = size;
-    s
+    WpbgiRenderSettings {
+        width: size,
+        height: size,
+        ..initialised(wpbgi_render_settings_init)
+    }
 }
 
 struct Scene(*mut WpbgiScene);

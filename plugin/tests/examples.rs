@@ -197,7 +197,7 @@ fn pipeline(python: &str, stage: &Path) -> serde_json::Value {
 
 fn hash_of(cache: &Path) -> String {
     let c = wpbgi::bake::store::BakedCache::read(cache, None).expect("a valid cache");
-    c.cache.hash.iter().map(|b| format!("{b:02x}")).collect()
+    wpbgi::cache::hash_hex(c.cache.hash)
 }
 
 #[test]

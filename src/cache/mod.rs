@@ -83,6 +83,11 @@ pub fn content_hash(parts: &[&[u8]]) -> [u8; 16] {
     xxh3_128(&all).to_le_bytes()
 }
 
+/// A content hash as 32 lowercase hexadecimal digits (as `wpbgi inspect` prints it).
+pub fn hash_hex(hash: [u8; 16]) -> String {
+    hash.iter().map(|b| format!("{b:02x}")).collect()
+}
+
 /// Write `sections` (name, bytes), in order, to `path` atomically. The layout is computed
 /// first and the sections are streamed to the file, so the whole cache is never copied into
 /// one buffer.

@@ -159,13 +159,27 @@ pub struct Report {
     pub runs: Vec<Run>,
 }
 
+/// Refuse a reference of another size than the render's (`width` × `height`), before any
+/// work, in one sentence.
+pub fn check_size(reference: &Image, width: u32, height: u32) -> std::result::Result<(), String> {
+    if (reference.width, reference.height) == (width, height) {
+        Ok(())
+    } else {
+        Err(size_mismatch(reference, width, height))
+    }
+}
+
+fn size_mismatch(reference: &Image, width: u32, height: u32) -> String {
+    format!(
+        "the reference image is {}x{} but the render is {width}x{height}",
+        reference.width, reference.height
+    )
+}
+
 /// An image's error against the reference: (MSE, relative MSE, MSSIM).
 pub fn errors(image: &Image, reference: &Image) -> Result<(f64, f64, f64)> {
     let (mse, rel) = error_against(image, reference).ok_or_else(|| {
-        Error::InvalidSetting(format!(
-            "the reference image is {}x{} but the render is {}x{}",
-            reference.width, reference.height, image.width, image.height
-        ))
+        Error::InvalidSetting(size_mismatch(reference, image.width, image.height))
     })?;
     Ok((mse, rel, mssim(image, reference)))
 }

@@ -41,17 +41,7 @@ impl Environment {
             return self.scale;
         };
         let uv = direction_to_uv(self.to_local * w);
-        // The texture lookup of materials: repeat in longitude, clamp at the poles.
-        let lookup = TexRef {
-            texture: 0,
-            wrap_s: Wrap::Repeat,
-            wrap_t: Wrap::Clamp,
-            transform: glam::Affine2::IDENTITY,
-            srgb: false,
-            scale: Vec4::ONE,
-            bias: Vec4::ZERO,
-        };
-        self.scale * lookup.sample(std::slice::from_ref(map), uv).truncate()
+        self.scale * MAP_LOOKUP.sample(std::slice::from_ref(map), uv).truncate()
     }
 
     /// The sampling distribution over directions (built once per render or bake).
@@ -106,6 +96,18 @@ fn uv_to_direction(uv: Vec2) -> (Vec3, f32) {
     let (sp, cp) = latitude.sin_cos();
     (Vec3::new(cp * sl, sp, cp * cl), cp.max(0.0))
 }
+
+/// The map's lookup: the bilinear texture lookup of materials, repeating in longitude and
+/// clamped at the poles.
+const MAP_LOOKUP: TexRef = TexRef {
+    texture: 0,
+    wrap_s: Wrap::Repeat,
+    wrap_t: Wrap::Clamp,
+    transform: glam::Affine2::IDENTITY,
+    srgb: false,
+    scale: Vec4::ONE,
+    bias: Vec4::ZERO,
+};
 
 /// Draws directions from an [`Environment`] in proportion to its radiance.
 #[derive(Clone, Debug)]

@@ -462,7 +462,6 @@ fn pbr_scattering(
     })
 }
 
-/// Check that an accessor's elements lie inside its buffer before anything reads them.
 /// What gltf 1.4 reads unchecked and panics on (found by fuzzing): gltf-json's validation
 /// indexes the accessor a primitive's POSITION names without a bounds check, and images are
 /// assumed complete. Checked before validation.
@@ -502,6 +501,7 @@ fn check_unchecked_references(root: &g::json::Root) -> std::result::Result<(), S
     Ok(())
 }
 
+/// Check that an accessor's elements lie inside its buffer before anything reads them.
 fn check_accessor(a: &g::Accessor, buffers: &[Vec<u8>]) -> std::result::Result<(), String> {
     if a.sparse().is_some() {
         return Err(format!(

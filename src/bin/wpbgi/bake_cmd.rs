@@ -221,7 +221,7 @@ pub fn inspect_command(a: InspectArgs) -> Result<()> {
         .iter()
         .map(|s| json!({"name": s.name, "offset": s.offset, "bytes": s.length, "checksum": format!("{:016x}", s.checksum)}))
         .collect();
-    let hash: String = c.cache.hash.iter().map(|b| format!("{b:02x}")).collect();
+    let hash = wpbgi::cache::hash_hex(c.cache.hash);
     let report = json!({
         "file": a.cache,
         "format_version": c.cache.version,

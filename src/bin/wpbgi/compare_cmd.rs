@@ -3,10 +3,10 @@
 
 use crate::bake_cmd::QualityArg;
 use crate::{CameraArgs, StagedBar};
-use anyhow::{bail, Result};
+use anyhow::{anyhow, bail, Result};
 use clap::Args;
 use std::path::PathBuf;
-use wpbgi::compare::{compare, CompareSettings, Reference};
+use wpbgi::compare::{check_size, compare, CompareSettings, Reference};
 use wpbgi::image::{read_exr, write_exr};
 
 #[derive(Args)]
@@ -54,16 +54,8 @@ pub fn compare_command(a: CompareArgs) -> Result<()> {
     let reference = match &a.reference {
         Some(path) => {
             let image = read_exr(path)?;
-            if (image.width, image.height) != (camera.width, camera.height) {
-                bail!(
-                    "the reference {} is {}x{} but the render is {}x{} (set --size)",
-                    path.display(),
-                    image.width,
-                    image.height,
-                    camera.width,
-                    camera.height
-                );
-            }
+            check_size(&image, camera.width, camera.height)
+                .map_err(|m| anyhow!("{}: {m} (set --size)", path.display()))?;
             Reference {
                 image,
                 path: Some(path.clone()),

@@ -154,16 +154,9 @@ pub fn render_command(a: RenderArgs) -> Result<()> {
         ..Default::default()
     };
     let reference = a.reference.as_deref().map(read_exr).transpose()?;
-    if let Some(r) = &reference {
-        if (r.width, r.height) != (camera.width, camera.height) {
-            bail!(
-                "the reference image is {}x{} but the render is {}x{} (set --size)",
-                r.width,
-                r.height,
-                camera.width,
-                camera.height
-            );
-        }
+    if let (Some(r), Some(path)) = (&reference, &a.reference) {
+        wpbgi::compare::check_size(r, camera.width, camera.height)
+            .map_err(|m| anyhow::anyhow!("{}: {m} (set --size)", path.display()))?;
     }
     let out = run_final(&scene, &cache, &camera, &settings)?;
     let all = a.aov.contains(&Aov::All);

@@ -37,20 +37,16 @@ use std::path::Path;
 /// Import the USD stage at `path`, at time code `time` (none: the default time, see the
 /// module docs).
 ///
-/// openusd 0.6's crate (usdc) reader panics on many malformed files (indices past the end of
-/// its tables, lz4 chunking it does not implement, capacity overflows; found by fuzzing). Such
-/// a panic is caught here and reported as the file's error. Its allocations of sizes read from
-/// the file abort the process, which no caller can catch (docs/fuzzing.md).
+/// openusd 0.6's crate (usdc) reader still panics on some malformed files (indices past the
+/// end of its tables, lz4 chunking it does not implement; found by fuzzing). Such a panic is
+/// caught here and reported as the file's error. Its allocations of sizes read from the file,
+/// which aborted the process, are bounded by the patch in vendor/openusd.
 pub fn import(path: &Path, time: Option<f64>) -> Result<Scene> {
     std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
         import_unguarded(path, time)
     }))
     .unwrap_or_else(|payload| {
-        let what = payload
-            .downcast_ref::<&str>()
-            .map(|s| s.to_string())
-            .or_else(|| payload.downcast_ref::<String>().cloned())
-            .unwrap_or_else(|| "no message".into());
+        let what = crate::error::panic_message(payload.as_ref());
         Err(Error::Usd {
             path: path.to_path_buf(),
             reason: format!(
