@@ -1,15 +1,20 @@
-//! Multi-bounce caches against Mitsuba 3's max_depth 8 references (256²), and our path tracer
-//! at equal time: bake (draft, exactly 5 bounces: with the render's emission, direct light and
-//! gather, the paths of max_depth 8) + render with the defaults, then the path tracer at
-//! max_depth 8 for the same wall time; the relMSE and MSE of both, the bounces and the time of
-//! each; and the bounces' time without the view tree (every surfel traversing the whole tree).
+//! The bake's stages on the five Cornell-class scenes (issue 19): seconds of direct light, of
+//! the first bounce (which records the light transport) and of each later one (which replays
+//! it), the transport's bytes per surfel, the peak memory, the cache's bytes per surfel, and
+//! the relMSE at 256² of a default render from the cache against Mitsuba 3's max_depth 8
+//! reference.
 //!
-//! `cargo run --release --example bench_bounces [-- SCENE_NAME]` (cbox-diffuse, cbox-rough or
-//! cbox-glossy from tests/data/mitsuba; default: cbox-diffuse and cbox-rough).
+//! Beside each scene, from the same run, the bounces as they ran before the transport was
+//! recorded: every bounce gathering again (`--transport-memory 0`, which the cache does not
+//! notice: the bench checks that both caches are byte-identical), exactly 3 bounces each.
+//!
+//! `cargo run --release --example bench_bounces [-- SCENE[,SCENE…] [POINTS[,POINTS…]]]`
+//! (default: all five scenes at 20 000 and 100 000 surfels, `--bounces auto`).
 
 use std::time::Instant;
-use wpbgi::bake::{BakeSettings, Quality};
+use wpbgi::bake::{bake, BakeSettings, Quality};
 use wpbgi::bounce::BounceSettings;
+use wpbgi::compare::memory;
 use wpbgi::image::{error_against, read_exr};
 use wpbgi::render::{render_final, FinalSettings};
 use wpbgi::scene::Scene;
@@ -18,59 +23,121 @@ mod common;
 
 use common::data;
 
-fn main() -> Result<(), Box<dyn std::error::Error>> {
-    let names: Vec<String> = match std::env::args().nth(1) {
-        Some(n) => vec![n],
-        None => vec!["cbox-diffuse".into(), "cbox-rough".into()],
+const SCENES: [&str; 5] = [
+    "cbox-diffuse",
+    "cbox-rough",
+    "cbox-glossy",
+    "cbox-mirror",
+    "caustic",
+];
+
+fn main() -> common::Result<()> {
+    let mut args = std::env::args().skip(1);
+    let names: Vec<String> = args.next().map_or(SCENES.map(String::from).to_vec(), |a| {
+        a.split(',').map(String::from).collect()
+    });
+    let points: Vec<usize> = match args.next() {
+        Some(a) => a.split(',').map(|p| p.parse()).collect::<Result<_, _>>()?,
+        None => vec![20_000, 100_000],
     };
     println!("threads: {}", rayon::current_num_threads());
+    println!(
+        "| scene | surfels | direct s | bounce 1 s | later bounces s (mean, max) | bounces | \
+         later / first | stage / first | transport B/surfel | peak MB | cache B/surfel | \
+         render s | relMSE |"
+    );
+    println!("|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|");
+    let mut before_after = Vec::new();
     for name in &names {
         let scene = Scene::load(&data(&format!("{name}.gltf")))?;
-        let reference = read_exr(&data(&format!("{name}_d8_ref.exr")))?;
+        let reference = read_exr(&data(&format!("{name}_d8_ref.exr"))).ok();
         let camera = scene.default_camera(256, 256)?;
-        let settings = BakeSettings {
-            bounces: BounceSettings::exactly(5),
-            ..BakeSettings::from_quality(Quality::Draft)
-        };
-        let (baked, cache, bake_s) =
-            common::bake_cache(&scene, &settings, &format!("bounces-{name}"))?;
-        let t = Instant::now();
-        let out = render_final(
-            &scene,
-            &cache,
-            &camera,
-            &FinalSettings::default(),
-            &|_, _| {},
-        )?;
-        let render_s = t.elapsed().as_secs_f64();
-        let (mse, rel) = error_against(&out.beauty, &reference).ok_or("size")?;
-        let pt = common::path_tracer_for(&scene, &camera, 8, bake_s + render_s)?;
-        let (pt_mse, pt_rel) = error_against(&pt.mean, &reference).ok_or("size")?;
-        let report = baked.bounces.unwrap_or_default();
-        // The same bounces with every surfel traversing the whole tree (no view tree).
-        let alone = BakeSettings {
-            bounces: BounceSettings {
-                view_tree: false,
-                ..settings.bounces
-            },
-            ..settings.clone()
-        };
-        let (alone, _, _) = common::bake_cache(&scene, &alone, &format!("alone-{name}"))?;
-        let bounce_time = |r: &wpbgi::bounce::BounceReport| r.seconds.iter().sum::<f64>();
-        let alone_s = bounce_time(&alone.bounces.unwrap_or_default());
+        for &n in &points {
+            let settings = BakeSettings {
+                points: n,
+                bounces: BounceSettings::auto(),
+                ..BakeSettings::from_quality(Quality::Preview)
+            };
+            memory::reset_peak();
+            let (baked, cache, _) = common::bake_cache(&scene, &settings, &format!("{name}-{n}"))?;
+            let peak = memory::peak().map_or("-".into(), |b| (b / 1_000_000).to_string());
+            let stage = |s: &str| {
+                baked
+                    .timings
+                    .iter()
+                    .find(|(k, _)| *k == s)
+                    .map_or(0.0, |(_, v)| *v)
+            };
+            let report = baked.bounces.clone().unwrap_or_default();
+            let first = report.seconds.first().copied().unwrap_or(0.0);
+            let later = &report.seconds[1.min(report.seconds.len())..];
+            let mean_later = later.iter().sum::<f64>() / later.len().max(1) as f64;
+            let max_later = later.iter().copied().fold(0.0, f64::max);
+            let bounce_stage = report.seconds.iter().sum::<f64>();
+            let cache_bytes = std::fs::metadata(&cache.cache.path)?.len();
+            let t = Instant::now();
+            let out = render_final(
+                &scene,
+                &cache,
+                &camera,
+                &FinalSettings::default(),
+                &|_, _| {},
+            )?;
+            let render_s = t.elapsed().as_secs_f64();
+            let rel = reference
+                .as_ref()
+                .and_then(|r| error_against(&out.beauty, r))
+                .map_or("no reference".into(), |(_, rel)| format!("{rel:.3e}"));
+            let surfels = baked.surfels.len() as f64;
+            println!(
+                "| {name} | {n} | {:.2} | {first:.2} | {mean_later:.3}, {max_later:.3} | {} | \
+                 {:.3} | {:.2} | {:.0} | {peak} | {:.0} | {render_s:.1} | {rel} |",
+                stage("direct light"),
+                report.bounces,
+                max_later / first.max(1e-9),
+                bounce_stage / first.max(1e-9),
+                report.transport.bytes as f64 / surfels,
+                cache_bytes as f64 / surfels,
+            );
+            if n == points[0] {
+                before_after.push((name.clone(), n, regather_ratio(&scene, &settings)?));
+            }
+        }
+    }
+    println!();
+    println!("Every bounce gathering again (as before the transport) against recorded, 3 bounces:");
+    println!(
+        "| scene | surfels | bounces regathered s | bounces recorded s | speed-up | same cache |"
+    );
+    println!("|---|---:|---:|---:|---:|---|");
+    for (name, n, (again, recorded, same)) in before_after {
         println!(
-            "{name}: bake {bake_s:.1} s ({} bounces, {:.1} s each on average) + render {render_s:.1} s: \
-             relMSE {rel:.3e}, MSE {mse:.3e}; path tracer in {:.1} s ({} spp): relMSE {pt_rel:.3e}, \
-             MSE {pt_mse:.3e} ({:.2}× our relMSE, {:.2}× our MSE); bounces per surfel without the \
-             view tree: {alone_s:.1} s ({:.2}× the view tree's)",
-            report.bounces,
-            report.seconds.iter().sum::<f64>() / report.seconds.len().max(1) as f64,
-            pt.seconds,
-            pt.spp,
-            pt_rel / rel,
-            pt_mse / mse,
-            alone_s / bounce_time(&report)
+            "| {name} | {n} | {again:.1} | {recorded:.1} | {:.1}× | {same} |",
+            again / recorded.max(1e-9)
         );
     }
     Ok(())
+}
+
+/// The bounce stage's seconds with every bounce gathering again (a transport budget of 0)
+/// and with the transport recorded, 3 bounces each, and whether their caches are equal.
+fn regather_ratio(scene: &Scene, settings: &BakeSettings) -> common::Result<(f64, f64, bool)> {
+    let run = |budget: Option<u64>| -> common::Result<(f64, Vec<u8>)> {
+        let s = BakeSettings {
+            bounces: BounceSettings {
+                transport_budget: budget,
+                ..BounceSettings::exactly(3)
+            },
+            ..settings.clone()
+        };
+        let baked = bake(scene, &s, &|_, _| {})?;
+        let path = std::env::temp_dir().join("wpbgi-bench-regather.wpc");
+        let hash = wpbgi::bake::store::bake_hash(scene, &s.to_json());
+        wpbgi::bake::store::write(&path, hash, &baked, serde_json::json!({}))?;
+        let seconds = baked.bounces.map_or(0.0, |r| r.seconds.iter().sum());
+        Ok((seconds, std::fs::read(&path)?))
+    };
+    let (again, a) = run(Some(0))?;
+    let (recorded, b) = run(None)?;
+    Ok((again, recorded, a == b))
 }

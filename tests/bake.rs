@@ -277,3 +277,57 @@ fn a_cancelled_bake_stops_in_the_stage_that_sees_the_flag() {
         "the bake was cancelled"
     );
 }
+
+/// Issue 19: the bounces record the light transport once and replay it. The cache of a
+/// multi-bounce bake is byte-identical for 1 and 2 threads, and for any transport budget:
+/// receivers past the budget gather again in every bounce through the same code (none kept,
+/// about half kept, all kept).
+#[test]
+fn multi_bounce_cache_is_identical_for_any_thread_count_and_transport_budget() {
+    use wpbgi::bounce::BounceSettings;
+    let scene = cbox();
+    let dir = std::env::temp_dir().join(format!("wpbgi-transport-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let with_budget = |budget: Option<u64>| BakeSettings {
+        bounces: BounceSettings {
+            transport_budget: budget,
+            ..BounceSettings::exactly(3)
+        },
+        ..settings()
+    };
+    let hash = bake_hash(&scene, &with_budget(None).to_json());
+    let bake_with = |threads: usize, budget: Option<u64>| {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .expect("pool");
+        let baked = pool
+            .install(|| bake(&scene, &with_budget(budget), &|_, _| {}))
+            .expect("bakes");
+        let path = dir.join(format!("t{threads}-{budget:?}.wpc"));
+        write(&path, hash, &baked, serde_json::json!({})).expect("writes");
+        let report = baked.bounces.expect("bounces ran").transport;
+        (std::fs::read(&path).expect("reads"), report)
+    };
+    let (reference, unbounded) = bake_with(1, None);
+    assert_eq!(unbounded.regathered_groups, 0);
+    assert_eq!(unbounded.bytes, unbounded.bytes_unbounded);
+    assert!(unbounded.read_slots > 0 && unbounded.read_slots as u64 <= unbounded.slots);
+    let (two_threads, _) = bake_with(2, None);
+    assert!(
+        reference == two_threads,
+        "1 and 2 threads wrote different caches"
+    );
+    for budget in [0, unbounded.bytes / 2] {
+        let (bounded, report) = bake_with(2, Some(budget));
+        assert!(
+            report.bytes <= budget,
+            "{report:?} over the budget {budget}"
+        );
+        assert!(report.regathered_groups > 0, "{report:?}");
+        assert!(
+            reference == bounded,
+            "a transport budget of {budget} bytes changed the cache"
+        );
+    }
+}

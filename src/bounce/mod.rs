@@ -2,7 +2,8 @@
 
 pub mod bsdf_operator;
 pub mod iterate;
+pub mod transport;
 pub mod view_tree;
 
 pub use bsdf_operator::BsdfOperator;
-pub use iterate::{add_bounces, BounceReport, BounceSettings};
+pub use iterate::{add_bounces, BounceReport, BounceSettings, TransportReport};

@@ -215,11 +215,13 @@ fn split_leaf(
             }
             let omega = piece_area * cos.abs() / d2;
             if omega > 0.0 {
+                let lookup = senders.surfel_lookup(i, -w, cos, mesh);
                 let sender = Sender {
                     offset,
                     radius: piece_radius,
                     normal: ns,
-                    radiance: senders.surfel_radiance(i, -w, cos, mesh),
+                    radiance: senders.evaluated(lookup),
+                    lookup,
                 };
                 splats += u64::from(mb.splat(&sender, omega));
             }

@@ -186,6 +186,9 @@ pub struct ClusterReceivers {
     /// nodes whose bounding sphere comes that near the active's plane are opened (see
     /// [`splat_cut`]'s nodes straddling a receiver's plane). `None`: no plane.
     pub plane_slope: Option<f32>,
+    /// Whether the shared buffer records links (see [`Microbuffer::record_links`]), for
+    /// members that do.
+    pub record_links: bool,
 }
 
 /// The cluster cut for `receivers`, with far threshold `far_eps`, into an `n × n` spherical
@@ -202,8 +205,12 @@ pub fn cluster_cut(
         frame,
         radius,
         plane_slope,
+        record_links,
     } = *receivers;
     let mut buffer = Microbuffer::new(n, true, frame);
+    if record_links {
+        buffer.record_links();
+    }
     let mut near = Vec::new();
     let mut stats = CutStats::default();
     let mut stack = vec![0u32];
@@ -289,6 +296,15 @@ pub fn member_buffer(
     mb.resolve();
     let index = cut.lookup(mb);
     let (lookup, shared) = (&cut.lookups[index].2, &cut.buffer);
+    // For a buffer that records links: the scale of each pixel's own links (radiance,
+    // cosine-weighted) and the shared pixels composited into it, with their weights.
+    let recording = mb.links().is_some();
+    let mut own = if recording {
+        vec![(1.0f32, 1.0f32); mb.pixels.len()]
+    } else {
+        Vec::new()
+    };
+    let mut from_shared = Vec::new();
     for (k, &c) in lookup.iter().enumerate() {
         if c == NO_PIXEL {
             continue;
@@ -313,28 +329,26 @@ pub fn member_buffer(
             }
         };
         let (cover_r, cover_c) = (mb.coverage[k], shared.coverage[c]);
-        let (l, cl, a, cover) = if dr <= dc {
+        // Weights of the member's own light and of the shared light (radiance, cosine).
+        let (own_w, shared_w) = if dr <= dc {
             let f = fill(1.0 - ar, ac);
-            (
-                lr + lc * f,
-                mb.cos_radiance[k] + lc * (cos * f),
-                ar + ac * f,
-                cover_r + cover_c * f,
-            )
+            ((1.0, 1.0), (f, cos * f))
         } else {
             let f = fill(1.0 - ac, ar);
-            (
-                lc + lr * f,
-                lc * cos + mb.cos_radiance[k] * f,
-                ac + ar * f,
-                cover_c + cover_r * f,
-            )
+            ((f, f), (1.0, cos))
         };
-        mb.radiance[k] = l;
-        mb.cos_radiance[k] = cl;
-        mb.alpha[k] = a;
-        mb.coverage[k] = cover;
+        mb.radiance[k] = lr * own_w.0 + lc * shared_w.0;
+        mb.cos_radiance[k] = mb.cos_radiance[k] * own_w.1 + lc * shared_w.1;
+        mb.alpha[k] = ar * own_w.0 + ac * shared_w.0;
+        mb.coverage[k] = cover_r * own_w.0 + cover_c * shared_w.0;
         mb.depth[k] = dr.min(dc);
+        if recording {
+            own[k] = own_w;
+            from_shared.push((k as u32, c as u32, shared_w.0, shared_w.1));
+        }
+    }
+    if recording {
+        mb.composite_links(&own, shared, &from_shared);
     }
     stats
 }

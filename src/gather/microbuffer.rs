@@ -15,6 +15,7 @@
 //! receiver's BSDF gives the outgoing radiance, L_o(ω_o) = Σₖ Lₖ f(ω_o, ωₖ) |cos θₖ| sₖ
 //! (spec Eq. 2.1, with the pixel solid angle sₖ that Eq. 4.9 omits).
 
+use super::lookup::Lookup;
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::geometry::frame::Frame;
 use crate::geometry::warp::{hemisphere_equal_area_to_square, square_to_hemisphere_equal_area};
@@ -67,6 +68,8 @@ pub struct Sender {
     pub normal: Vec3,
     /// Its radiance towards the receiver.
     pub radiance: Rgb,
+    /// Where that radiance is read (what a buffer that records links keeps).
+    pub lookup: Lookup,
 }
 
 impl Sender {
@@ -77,15 +80,34 @@ impl Sender {
             radius,
             normal: Vec3::ZERO,
             radiance,
+            lookup: Lookup::Nothing,
         }
     }
 
+    fn shape(&self) -> Shape {
+        Shape {
+            offset: self.offset,
+            radius: self.radius,
+            normal: self.normal,
+        }
+    }
+}
+
+/// Where a sender lies, as compositing needs it (see [`Shape::same_surface`]).
+#[derive(Clone, Copy, Debug)]
+struct Shape {
+    offset: Vec3,
+    radius: f32,
+    normal: Vec3,
+}
+
+impl Shape {
     /// Whether `b`, no nearer than `self`, lies on the same surface: when their depths are
     /// within their radii and the pixel's depth footprint `spread` (the pixel's angular size
     /// times the distance), which holds a curved surface together, or, with both
     /// orientations known and within 30°, when `b`'s centre is within their radii of
     /// `self`'s plane, which holds a plane seen at a grazing angle together.
-    fn same_surface(&self, b: &Sender, spread: f32) -> bool {
+    fn same_surface(&self, b: &Shape, spread: f32) -> bool {
         let coplanar = self.normal != Vec3::ZERO
             && b.normal != Vec3::ZERO
             && self.normal.dot(b.normal) > 0.866
@@ -104,7 +126,45 @@ struct Splat {
     cos: f32,
     /// The fraction of the pixel it covers.
     coverage: f32,
-    sender: Sender,
+    shape: Shape,
+    radiance: Rgb,
+    /// Its lookup's index in the buffer's [`Links::sources`], or [`NO_SOURCE`].
+    source: u32,
+}
+
+/// A splat whose buffer records no links.
+pub const NO_SOURCE: u32 = u32::MAX;
+
+/// One term of a pixel's light in a buffer that records links: pixel `pixel`'s radiance is
+/// Σ `w` · L(`source`) over its links, and its cosine-weighted radiance Σ `w_cos` · L(`source`),
+/// with L(source) the radiance at [`Links::sources`]`[source]`. The weights are geometry alone
+/// (coverage, compositing, closing), so the same links serve any light the tree sends.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PixelLink {
+    pub pixel: u32,
+    pub source: u32,
+    pub w: f32,
+    pub w_cos: f32,
+}
+
+/// A buffer's light as links (see [`PixelLink`]).
+#[derive(Clone, Debug, Default)]
+pub struct Links {
+    /// The lookups the links read.
+    pub sources: Vec<Lookup>,
+    /// The links, in no particular order once the buffer is closed.
+    pub entries: Vec<PixelLink>,
+    /// Right after [`Microbuffer::resolve`], `entries` run pixel by pixel and pixel k's end
+    /// at `ends[k]`.
+    ends: Vec<u32>,
+}
+
+impl Links {
+    /// The links of pixel `k`, as [`Microbuffer::resolve`] left them.
+    fn of_pixel(&self, k: usize) -> &[PixelLink] {
+        let begin = if k == 0 { 0 } else { self.ends[k - 1] as usize };
+        &self.entries[begin..self.ends[k] as usize]
+    }
 }
 
 /// A receiver's microbuffer.
@@ -135,6 +195,8 @@ pub struct Microbuffer {
     /// Splat order and per-pixel run ends while resolving (kept to save allocations).
     order: Vec<u32>,
     starts: Vec<u32>,
+    /// The light as links, when the buffer records them ([`Microbuffer::record_links`]).
+    links: Option<Box<Links>>,
 }
 
 /// The base grid of one size, built once and copied into every buffer of that size.
@@ -247,6 +309,29 @@ impl Microbuffer {
             scratch: Vec::new(),
             order: Vec::new(),
             starts: Vec::new(),
+            links: None,
+        }
+    }
+
+    /// Keep, beside the radiance, each pixel's light as links to the senders' lookups (see
+    /// [`PixelLink`]): what the bake's transport stores.
+    pub fn record_links(&mut self) {
+        self.links = Some(Box::default());
+    }
+
+    /// The links, if the buffer records them.
+    pub fn links(&self) -> Option<&Links> {
+        self.links.as_deref()
+    }
+
+    /// The index of `lookup` among the links' sources ([`NO_SOURCE`] when not recording).
+    fn source_of(&mut self, lookup: Lookup) -> u32 {
+        match &mut self.links {
+            Some(links) => {
+                links.sources.push(lookup);
+                (links.sources.len() - 1) as u32
+            }
+            None => NO_SOURCE,
         }
     }
 
@@ -272,6 +357,10 @@ impl Microbuffer {
         }
         self.frame = frame;
         self.pending.clear();
+        if let Some(links) = &mut self.links {
+            links.sources.clear();
+            links.entries.clear();
+        }
     }
 
     /// Whether any pixel was split.
@@ -453,6 +542,7 @@ impl Microbuffer {
         if !(area > 0.0) {
             return false;
         }
+        let source = self.source_of(sender.lookup);
         let n = self.n as f32;
         let base = u32::from(lower) * self.n * self.n;
         let (bx0, bx1) = ((x0 * n) as u32, ((x1 * n) as u32).min(self.n - 1));
@@ -477,7 +567,7 @@ impl Microbuffer {
                     // One sender covers a pixel at most once (a huge near one is clamped to
                     // the map).
                     let coverage = (solid_angle * (o / area) / self.pixels[k].solid_angle).min(1.0);
-                    self.record(k, dist, cos, coverage, sender);
+                    self.record(k, (dist, cos, coverage), sender, source);
                 }
             }
         }
@@ -490,17 +580,26 @@ impl Microbuffer {
         let dist = sender.offset.length();
         if coverage > 0.0 && dist > 0.0 && dist.is_finite() {
             let cos = self.frame.to_local(sender.offset / dist).z.abs();
-            self.record(k, dist, cos, coverage, sender);
+            let source = self.source_of(sender.lookup);
+            self.record(k, (dist, cos, coverage), sender, source);
         }
     }
 
-    fn record(&mut self, k: usize, dist: f32, cos: f32, coverage: f32, sender: &Sender) {
+    fn record(
+        &mut self,
+        k: usize,
+        (dist, cos, coverage): (f32, f32, f32),
+        sender: &Sender,
+        source: u32,
+    ) {
         self.pending.push(Splat {
             pixel: k as u32,
             dist,
             cos,
             coverage,
-            sender: *sender,
+            shape: sender.shape(),
+            radiance: sender.radiance,
+            source,
         });
     }
 
@@ -522,12 +621,20 @@ impl Microbuffer {
         self.depth.fill(f32::INFINITY);
         let splats = std::mem::take(&mut self.pending);
         let order = self.order_by_pixel_and_depth(&splats);
+        let mut links = self.links.take();
+        if let Some(l) = &mut links {
+            l.entries.clear();
+            l.ends.clear();
+        }
         let mut begin = 0;
         for k in 0..self.pixels.len() {
             let end = self.starts[k] as usize;
             let run = &order[begin..end];
             begin = end;
             let Some(&first) = run.first() else {
+                if let Some(l) = &mut links {
+                    l.ends.push(l.entries.len() as u32);
+                }
                 continue;
             };
             let footprint = self.pixels[k].solid_angle.sqrt();
@@ -538,16 +645,17 @@ impl Microbuffer {
             self.depth[k] = splats[first as usize].dist;
             let mut i = 0;
             while i < run.len() && open > 0.0 {
-                let front = splats[run[i] as usize].sender;
+                let front = splats[run[i] as usize].shape;
+                let layer_start = i;
                 let mut layer_cover = 0.0;
                 let mut layer_sum = Rgb::ZERO;
                 let mut layer_cos = Rgb::ZERO;
                 while let Some(s) = run.get(i).map(|&j| &splats[j as usize]) {
-                    if !front.same_surface(&s.sender, footprint) {
+                    if !front.same_surface(&s.shape, footprint) {
                         break;
                     }
                     layer_cover += s.coverage;
-                    let l = s.sender.radiance * s.coverage;
+                    let l = s.radiance * s.coverage;
                     layer_sum += l;
                     layer_cos += l * s.cos;
                     i += 1;
@@ -568,6 +676,21 @@ impl Microbuffer {
                 cos_sum += layer_cos * scale;
                 covered += layer_cover * scale;
                 open = (open - layer_cover).max(0.0);
+                if let Some(l) = &mut links {
+                    l.entries.extend(run[layer_start..i].iter().map(|&j| {
+                        let s = &splats[j as usize];
+                        let w = s.coverage * scale;
+                        PixelLink {
+                            pixel: k as u32,
+                            source: s.source,
+                            w,
+                            w_cos: w * s.cos,
+                        }
+                    }));
+                }
+            }
+            if let Some(l) = &mut links {
+                l.ends.push(l.entries.len() as u32);
             }
             self.radiance[k] = sum;
             self.cos_radiance[k] = cos_sum;
@@ -575,6 +698,7 @@ impl Microbuffer {
             self.coverage[k] = covered;
         }
         self.order = order;
+        self.links = links;
         self.pending = splats;
         self.pending.clear();
     }
@@ -620,23 +744,91 @@ impl Microbuffer {
     /// coverage is right on average but not pixel by pixel; in a bake's bounces that error
     /// would be passed on to every further bounce.
     pub fn close_gaps(&mut self, closed: impl Fn(usize) -> bool) {
-        for k in 0..self.pixels.len() {
+        // Per closed pixel: 1/coverage and its mean cosine, for the links.
+        let mut closing = vec![None; self.pixels.len()];
+        for (k, close) in closing.iter_mut().enumerate() {
             let c = self.coverage[k];
             if c > 0.0 && closed(k) {
                 let l = self.radiance[k] / c;
                 self.fill_pixel(k, l);
+                *close = Some((1.0 / c, self.mean_cos(k)));
             }
         }
+        if let Some(links) = &mut self.links {
+            for e in links.entries.iter_mut() {
+                if let Some((inverse, cos)) = closing[e.pixel as usize] {
+                    e.w *= inverse;
+                    e.w_cos = e.w * cos;
+                }
+            }
+        }
+    }
+
+    /// The exact mean |cos θ| over pixel `k`.
+    fn mean_cos(&self, k: usize) -> f32 {
+        let px = &self.pixels[k];
+        px.dir.z.abs() * px.cos_weight
     }
 
     /// Set pixel `k` to full coverage by radiance `l` (a pixel no splat reached, filled from
     /// what a ray through it hits).
     pub fn fill_pixel(&mut self, k: usize, l: Rgb) {
-        let px = &self.pixels[k];
         self.radiance[k] = l;
-        self.cos_radiance[k] = l * (px.dir.z.abs() * px.cos_weight);
+        self.cos_radiance[k] = l * self.mean_cos(k);
         self.alpha[k] = 1.0;
         self.coverage[k] = 1.0;
+    }
+
+    /// [`Microbuffer::fill_pixel`] with the radiance at `lookup`: in a buffer that records
+    /// links, pixel `k`'s links become that one lookup at full weight.
+    pub fn fill_pixel_from(&mut self, k: usize, l: Rgb, lookup: Lookup) {
+        self.fill_pixel(k, l);
+        let cos = self.mean_cos(k);
+        let source = self.source_of(lookup);
+        if let Some(links) = &mut self.links {
+            links.entries.retain(|e| e.pixel as usize != k);
+            links.entries.push(PixelLink {
+                pixel: k as u32,
+                source,
+                w: 1.0,
+                w_cos: cos,
+            });
+        }
+    }
+
+    /// Composite the links of a shared buffer into this one's, as [`member_buffer`]
+    /// composites their radiance: this buffer's links of pixel k scaled by `own[k]`
+    /// (radiance, cosine-weighted), and for each `(k, c, w, w_cos)` of `from_shared` the
+    /// shared links of pixel c added to pixel k, weighted `w` (radiance) and `w_cos` (cosine,
+    /// the member pixel's) times their radiance weight. No-op unless both record links.
+    ///
+    /// [`member_buffer`]: super::fpbgi::member_buffer
+    pub fn composite_links(
+        &mut self,
+        own: &[(f32, f32)],
+        shared: &Microbuffer,
+        from_shared: &[(u32, u32, f32, f32)],
+    ) {
+        let (Some(links), Some(shared)) = (&mut self.links, shared.links()) else {
+            return;
+        };
+        for e in links.entries.iter_mut() {
+            let (w, w_cos) = own[e.pixel as usize];
+            e.w *= w;
+            e.w_cos *= w_cos;
+        }
+        let offset = links.sources.len() as u32;
+        links.sources.extend_from_slice(&shared.sources);
+        for &(k, c, w, w_cos) in from_shared {
+            links
+                .entries
+                .extend(shared.of_pixel(c as usize).iter().map(|e| PixelLink {
+                    pixel: k,
+                    source: e.source + offset,
+                    w: e.w * w,
+                    w_cos: e.w * w_cos,
+                }));
+        }
     }
 
     /// Set every pixel to a uniform, fully covering radiance `l` (a sky).

@@ -2,6 +2,7 @@
 
 pub mod cut;
 pub mod fpbgi;
+pub mod lookup;
 pub mod microbuffer;
 pub mod senders;
 

@@ -11,6 +11,7 @@
 //! every node's emitted intensity E(ω) is rebuilt exactly as the bake built it into I, and
 //! subtracted (emitting surfels still occlude).
 
+use super::lookup::Lookup;
 use super::microbuffer::Sender;
 use crate::bake::pipeline::{intensity_map, SurfelRadiance};
 use crate::bake::store::{BakedCache, NodeRecord, SurfelRecord, BACK_SIDED, CLOSED, NO_MAP, SOLID};
@@ -103,15 +104,21 @@ pub struct Senders {
     emitted: Vec<Option<SparseHaar<Rgb>>>,
     /// Per surfel with a directional map: the map (outgoing radiance over the sphere).
     maps: Vec<Option<SparseHaar<Rgb>>>,
+    /// Whether [`Senders::seen`] evaluates the radiance it looks up (see
+    /// [`Senders::geometry_only`]).
+    evaluates: bool,
 }
 
 /// What a receiver sees of one node.
 #[derive(Clone, Copy, Debug)]
 pub struct Seen {
-    /// Radiance towards the receiver (reflected light only).
+    /// Radiance towards the receiver (reflected light only; zero from
+    /// [`Senders::geometry_only`] senders).
     pub radiance: Rgb,
     /// Projected area towards the receiver (the node covers `projected / d²` steradians).
     pub projected: f32,
+    /// Where the radiance is read.
+    pub lookup: Lookup,
 }
 
 /// What a node keeps of the surfels below it, summed bottom-up (see [`SenderNode`]).
@@ -318,38 +325,63 @@ impl Senders {
             projected,
             emitted,
             maps,
+            evaluates: true,
         })
+    }
+
+    /// The same senders for a gather that only records where radiance is read (the bake's
+    /// transport, which evaluates the lookups against each bounce's light itself):
+    /// [`Senders::seen`] and the splats it feeds carry zero radiance.
+    pub fn geometry_only(mut self) -> Senders {
+        self.evaluates = false;
+        self
     }
 
     /// What a receiver on mesh `receiver_mesh` sees of node `j` along the unit direction `w`
     /// from the node towards it; with `back_hidden` (see [`Senders::back_hidden`]), only the
     /// node's front faces.
     pub fn seen(&self, j: u32, w: Vec3, receiver_mesh: u32, back_hidden: bool) -> Seen {
+        let (lookup, projected) = self.seen_lookup(j, w, receiver_mesh, back_hidden);
+        Seen {
+            radiance: self.evaluated(lookup),
+            projected,
+            lookup,
+        }
+    }
+
+    /// Where [`Senders::seen`] reads node `j`'s radiance along `w`, and its projected area:
+    /// geometry alone (see [`Lookup`]).
+    pub fn seen_lookup(
+        &self,
+        j: u32,
+        w: Vec3,
+        receiver_mesh: u32,
+        back_hidden: bool,
+    ) -> (Lookup, f32) {
         let node = &self.nodes[j as usize];
         if node.is_leaf() {
             let s = &self.surfels[node.surfel as usize];
             let cos = Vec3::from(s.n).dot(w);
             if back_hidden && cos < 0.0 {
-                return Seen {
-                    radiance: Rgb::ZERO,
-                    projected: 0.0,
-                };
+                return (Lookup::Nothing, 0.0);
             }
-            return Seen {
-                radiance: self.surfel_radiance(node.surfel, w, cos, receiver_mesh),
-                projected: s.area * cos.abs(),
-            };
+            return (
+                self.surfel_lookup(node.surfel, w, cos, receiver_mesh),
+                s.area * cos.abs(),
+            );
         }
         // Every surfel below diffuse and facing ω: Σ A L (n·ω) / Σ A (n·ω), exactly. The
         // maps' texels (25° wide at 8²) straddle a wall's edge-on band there and took up to
         // 8 % of a closed room's light (tests/furnace.rs).
         let facing = node.area_normal.dot(w);
         if node.directional == 0.0 && facing > 0.0 && node.axis.dot(w) > node.sin_cone {
-            let [r, g, b] = node.radiance_normal;
-            return Seen {
-                radiance: (Vec3::new(r.dot(w), g.dot(w), b.dot(w)) / facing).max(Rgb::ZERO),
-                projected: facing,
-            };
+            return (
+                Lookup::NodeNormal {
+                    node: j,
+                    u: w / facing,
+                },
+                facing,
+            );
         }
         let levels = self.projected[j as usize].levels();
         let p = direction_to_square(w);
@@ -359,22 +391,17 @@ impl Senders {
         let (front, back) = (0.5 * (projected + n_dot), 0.5 * (projected - n_dot));
         // I's cosine and P are sampled at the centres of P's texels (see `intensity_map`);
         // where the normals allow, P at the centre is exact.
-        let intensity = |p: Vec2| {
-            let mut i = self.intensity[j as usize].eval(p.x, p.y);
-            if let Some(e) = &self.emitted[j as usize] {
-                i -= e.eval(p.x, p.y);
-            }
-            i
+        let intensity = |point: Vec2, denominator: f32| Lookup::NodeMap {
+            node: j,
+            point,
+            scale: 1.0 / denominator,
         };
         let area_at = |p: Vec2, centre: Vec3| {
             self.exact_projected(node, centre)
                 .unwrap_or_else(|| self.projected[j as usize].eval(p.x, p.y).max(0.0))
         };
         if back_hidden && !(front > 0.0) {
-            return Seen {
-                radiance: Rgb::ZERO,
-                projected: 0.0,
-            };
+            return (Lookup::Nothing, 0.0);
         }
         let centre = texel_centre(p, levels);
         if !node.back_sided && (front >= back || back_hidden) {
@@ -400,10 +427,7 @@ impl Senders {
                 } else {
                     (p, front)
                 };
-                return Seen {
-                    radiance: (intensity(q) / denominator).max(Rgb::ZERO),
-                    projected: front.max(0.0),
-                };
+                return (intensity(q, denominator), front.max(0.0));
             }
         }
         // The node covers what faces the receiver, or its back where that is larger (a sheet
@@ -417,14 +441,49 @@ impl Senders {
         } else {
             projected
         };
-        let radiance = if denominator > 0.0 {
-            (intensity(p) / denominator).max(Rgb::ZERO)
+        let lookup = if denominator > 0.0 {
+            intensity(p, denominator)
         } else {
-            Rgb::ZERO
+            Lookup::Nothing
         };
-        Seen {
-            radiance,
-            projected,
+        (lookup, projected)
+    }
+
+    /// The radiance at `lookup` in the light this tree was loaded with (reflected light only:
+    /// emission is subtracted).
+    pub fn radiance_of(&self, lookup: Lookup) -> Rgb {
+        match lookup {
+            Lookup::Nothing => Rgb::ZERO,
+            Lookup::SurfelRgb { surfel } => {
+                let s = &self.surfels[surfel as usize];
+                (Vec3::from(s.rgb) - Vec3::from(s.emitted)).max(Rgb::ZERO)
+            }
+            Lookup::SurfelMap {
+                surfel,
+                point,
+                front,
+            } => {
+                let s = &self.surfels[surfel as usize];
+                let emitted = if front {
+                    Vec3::from(s.emitted)
+                } else {
+                    Rgb::ZERO
+                };
+                self.maps[surfel as usize].as_ref().map_or(Rgb::ZERO, |m| {
+                    (m.eval(point.x, point.y) - emitted).max(Rgb::ZERO)
+                })
+            }
+            Lookup::NodeNormal { node, u } => {
+                let [r, g, b] = self.nodes[node as usize].radiance_normal;
+                Vec3::new(r.dot(u), g.dot(u), b.dot(u)).max(Rgb::ZERO)
+            }
+            Lookup::NodeMap { node, point, scale } => {
+                let mut i = self.intensity[node as usize].eval(point.x, point.y);
+                if let Some(e) = &self.emitted[node as usize] {
+                    i -= e.eval(point.x, point.y);
+                }
+                (i * scale).max(Rgb::ZERO)
+            }
         }
     }
 
@@ -520,6 +579,7 @@ impl Senders {
             radius,
             normal,
             radiance: seen.radiance,
+            lookup: seen.lookup,
         }
     }
 
@@ -564,28 +624,36 @@ impl Senders {
         }
     }
 
-    /// Reflected radiance leaving surfel `i` along `w` (`cos` = n·w) towards a receiver on
-    /// mesh `receiver_mesh` (a solid's inward light reaches only its own surface).
-    pub fn surfel_radiance(&self, i: u32, w: Vec3, cos: f32, receiver_mesh: u32) -> Rgb {
-        let s = &self.surfels[i as usize];
-        if cos < 0.0 && s.flags & SOLID != 0 && s.mesh != receiver_mesh {
-            return Rgb::ZERO;
-        }
-        let emitted = if cos > 0.0 {
-            Vec3::from(s.emitted)
+    /// [`Senders::radiance_of`], or zero from [`Senders::geometry_only`] senders: what a
+    /// splat carries.
+    pub fn evaluated(&self, lookup: Lookup) -> Rgb {
+        if self.evaluates {
+            self.radiance_of(lookup)
         } else {
             Rgb::ZERO
-        };
-        let total = match &self.maps[i as usize] {
+        }
+    }
+
+    /// Where surfel `i`'s reflected radiance along `w` (`cos` = n·w) towards a receiver on mesh
+    /// `receiver_mesh` is read (a solid's inward light reaches only its own surface).
+    pub fn surfel_lookup(&self, i: u32, w: Vec3, cos: f32, receiver_mesh: u32) -> Lookup {
+        let s = &self.surfels[i as usize];
+        if cos < 0.0 && s.flags & SOLID != 0 && s.mesh != receiver_mesh {
+            return Lookup::Nothing;
+        }
+        match &self.maps[i as usize] {
             Some(m) => {
                 let side = Vec3::from(s.n) * cos.signum();
-                let (p, _) = texel_on_side(w, side, 0.0, m.levels());
-                m.eval(p.x, p.y)
+                let (point, _) = texel_on_side(w, side, 0.0, m.levels());
+                Lookup::SurfelMap {
+                    surfel: i,
+                    point,
+                    front: cos > 0.0,
+                }
             }
-            None if cos > 0.0 => Vec3::from(s.rgb),
-            None => Rgb::ZERO,
-        };
-        (total - emitted).max(Rgb::ZERO)
+            None if cos > 0.0 => Lookup::SurfelRgb { surfel: i },
+            None => Lookup::Nothing,
+        }
     }
 }
 

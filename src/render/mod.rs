@@ -441,6 +441,7 @@ fn gather_tile(
                 frame: active.frame,
                 radius: c.radius,
                 plane_slope: None,
+                record_links: false,
             };
             let mut cut = cluster_cut(senders, &receivers, settings.far_eps, settings.mb_size);
             stats.cluster_cut += cut.stats;

@@ -69,6 +69,12 @@ pub struct BakeArgs {
     /// extrapolated once successive bounces lose light at a steady ratio.
     #[arg(long, default_value = "auto", value_parser = parse_bounces)]
     bounces: BounceSettings,
+    /// Memory (MB) the bounces may keep their recorded light transport in: the first bounce
+    /// records which senders every surfel sees and how, and later bounces replay it against
+    /// the new light. Surfels past it gather again in every bounce (slower, same cache).
+    /// Default: 40 % of the machine's memory.
+    #[arg(long, value_name = "MB")]
+    transport_memory: Option<u64>,
     /// Report the plan, progress and summary as JSON lines on standard error.
     #[arg(long)]
     json: bool,
@@ -106,7 +112,10 @@ fn settings_of(a: &BakeArgs) -> BakeSettings {
     s.split_level = a.split_level;
     s.seed = a.seed;
     s.max_cut = a.max_cut;
-    s.bounces = a.bounces;
+    s.bounces = BounceSettings {
+        transport_budget: a.transport_memory.map(|mb| mb.saturating_mul(1_000_000)),
+        ..a.bounces
+    };
     s
 }
 
@@ -166,6 +175,15 @@ pub fn bake_command(a: BakeArgs) -> Result<()> {
     if let Some(r) = &baked.bounces {
         stats["bounces"] = r.to_json();
         stats["bounces"]["seconds"] = json!(r.seconds);
+        let t = &r.transport;
+        stats["bounces"]["transport"] = json!({
+            "bytes": t.bytes,
+            "bytes_unbounded": t.bytes_unbounded,
+            "kept_groups": t.kept_groups,
+            "regathered_groups": t.regathered_groups,
+            "read_slots": t.read_slots,
+            "slots": t.slots,
+        });
     }
     let peak = wpbgi::compare::memory::peak();
     let per_surfel = bytes as f64 / baked.surfels.len().max(1) as f64;
@@ -201,6 +219,23 @@ pub fn bake_command(a: BakeArgs) -> Result<()> {
                 r.extrapolated.map_or(String::new(), |t| format!(
                     ", tail extrapolated (× {t:.2} of the last bounce)"
                 )),
+            );
+            let t = &r.transport;
+            let regathered = if t.regathered_groups > 0 {
+                format!(
+                    "; {} of {} receiver groups past the budget gathered again in every bounce",
+                    t.regathered_groups,
+                    t.kept_groups + t.regathered_groups
+                )
+            } else {
+                String::new()
+            };
+            eprintln!(
+                "  transport: {} MB ({:.0} bytes per surfel), {} of {} slots read{regathered}",
+                t.bytes / 1_000_000,
+                t.bytes as f64 / baked.surfels.len().max(1) as f64,
+                t.read_slots,
+                t.slots,
             );
         }
     }
