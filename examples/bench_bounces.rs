@@ -4,7 +4,8 @@
 //! the relMSE at 256² of a default render from the cache against Mitsuba 3's max_depth 8
 //! reference.
 //!
-//! Beside each scene, from the same run, the bounces as they ran before the transport was
+//! Beside each run, our path tracer (max_depth 8) given the same wall time as bake + render,
+//! and its relMSE. Beside each scene, from the same run, the bounces as they ran before the transport was
 //! recorded: every bounce gathering again (`--transport-memory 0`, which the cache does not
 //! notice: the bench checks that both caches are byte-identical), exactly 3 bounces each.
 //!
@@ -44,9 +45,9 @@ fn main() -> common::Result<()> {
     println!(
         "| scene | surfels | direct s | bounce 1 s | later bounces s (mean, max) | bounces | \
          later / first | stage / first | transport B/surfel | peak MB | cache B/surfel | \
-         render s | relMSE |"
+         render s | relMSE | path tracer, same time: relMSE |"
     );
-    println!("|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|");
+    println!("|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     let mut before_after = Vec::new();
     for name in &names {
         let scene = Scene::load(&data(&format!("{name}.gltf")))?;
@@ -59,7 +60,8 @@ fn main() -> common::Result<()> {
                 ..BakeSettings::from_quality(Quality::Preview)
             };
             memory::reset_peak();
-            let (baked, cache, _) = common::bake_cache(&scene, &settings, &format!("{name}-{n}"))?;
+            let (baked, cache, bake_s) =
+                common::bake_cache(&scene, &settings, &format!("{name}-{n}"))?;
             let peak = memory::peak().map_or("-".into(), |b| (b / 1_000_000).to_string());
             let stage = |s: &str| {
                 baked
@@ -84,20 +86,26 @@ fn main() -> common::Result<()> {
                 &|_, _| {},
             )?;
             let render_s = t.elapsed().as_secs_f64();
-            let rel = reference
-                .as_ref()
-                .and_then(|r| error_against(&out.beauty, r))
-                .map_or("no reference".into(), |(_, rel)| format!("{rel:.3e}"));
+            let rel_of = |image: &wpbgi::image::Image| {
+                reference
+                    .as_ref()
+                    .and_then(|r| error_against(image, r))
+                    .map_or("no reference".into(), |(_, rel)| format!("{rel:.3e}"))
+            };
+            let rel = rel_of(&out.beauty);
+            let pt = common::path_tracer_for(&scene, &camera, 8, bake_s + render_s)?;
+            let pt_rel = rel_of(&pt.mean);
             let surfels = baked.surfels.len() as f64;
             println!(
                 "| {name} | {n} | {:.2} | {first:.2} | {mean_later:.3}, {max_later:.3} | {} | \
-                 {:.3} | {:.2} | {:.0} | {peak} | {:.0} | {render_s:.1} | {rel} |",
+                 {:.3} | {:.2} | {:.0} | {peak} | {:.0} | {render_s:.1} | {rel} | {pt_rel} ({} spp) |",
                 stage("direct light"),
                 report.bounces,
                 max_later / first.max(1e-9),
                 bounce_stage / first.max(1e-9),
                 report.transport.bytes as f64 / surfels,
                 cache_bytes as f64 / surfels,
+                pt.spp,
             );
             if n == points[0] {
                 before_after.push((name.clone(), n, regather_ratio(&scene, &settings)?));

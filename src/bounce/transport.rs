@@ -349,7 +349,7 @@ pub fn slot_values(
     // Then inner nodes, in node order: S = Σ A L n over the diffuse surfels below (exact, as
     // the render sums it), and the texels of the coded intensity.
     let s_sums = normal_sums(tree, surfels, sent);
-    let mut per_node: Vec<(u32, Vec<Rgb>)> = Vec::new();
+    let mut per_node: Vec<NodeValues> = Vec::new();
     for_each_coded_intensity(
         tree,
         coded,
@@ -409,14 +409,17 @@ fn normal_sums(
     sums
 }
 
+/// An inner node's read slots' values.
+type NodeValues = (u32, Vec<Rgb>);
+
 /// Call `read` with every inner node and its coded intensity G (stored at or above the split
 /// level, rebuilt below it from the parent's G and H, spec §6.5), level by level so that only
 /// two levels of maps exist at once; what it returns is collected into `out`.
 fn for_each_coded_intensity(
     tree: &SurfelTree,
     coded: &CodedTree<Rgb>,
-    read: impl Fn(u32, &Haar2d<Rgb>) -> Option<(u32, Vec<Rgb>)> + Sync,
-    out: &mut Vec<(u32, Vec<Rgb>)>,
+    read: impl Fn(u32, &Haar2d<Rgb>) -> Option<NodeValues> + Sync,
+    out: &mut Vec<NodeValues>,
 ) {
     // Nodes are breadth-first: each level is a run, after its parents'.
     let mut above: Vec<Option<Haar2d<Rgb>>> = Vec::new();
@@ -429,7 +432,7 @@ fn for_each_coded_intensity(
                 .iter()
                 .take_while(|n| n.level == level)
                 .count();
-        let maps: Vec<(Option<Haar2d<Rgb>>, Option<(u32, Vec<Rgb>)>)> = (start..end)
+        let maps: Vec<(Option<Haar2d<Rgb>>, Option<NodeValues>)> = (start..end)
             .into_par_iter()
             .map(|j| {
                 let node = &tree.nodes[j];
