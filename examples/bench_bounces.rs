@@ -2,18 +2,24 @@
 //! the first bounce (which records the light transport) and of each later one (which replays
 //! it), the transport's bytes per surfel, the peak memory, the cache's bytes per surfel, and
 //! the relMSE at 256² of a default render from the cache against Mitsuba 3's max_depth 8
-//! reference.
+//! reference; beside it, our path tracer (max_depth 8) given the same wall time.
 //!
-//! Beside each run, our path tracer (max_depth 8) given the same wall time as bake + render,
-//! and its relMSE. Beside each scene, from the same run, the bounces as they ran before the transport was
-//! recorded: every bounce gathering again (`--transport-memory 0`, which the cache does not
-//! notice: the bench checks that both caches are byte-identical), exactly 3 bounces each.
+//! At the first surfel count, from the same run, the anchors:
+//! - the bounces before the transport was recorded, 3 of them: every bounce gathering again
+//!   (`--transport-memory 0`; the bench checks that the cache is byte-identical), and, with
+//!   `WPBGI_PREVIOUS=/path/to/an/older/wpbgi`, that binary's own `bake --bounces 3`;
+//! - with `WPBGI_ANCHOR_PYTHON` naming a Python with mitsuba, numpy and pyoidn
+//!   (`scripts/anchor/README.md`): Mitsuba 3 at 16 and 256 spp, raw and denoised by OIDN,
+//!   and the ratios of wpbgi's bake + render time and relMSE to Mitsuba + OIDN's.
 //!
 //! `cargo run --release --example bench_bounces [-- SCENE[,SCENE…] [POINTS[,POINTS…]]]`
 //! (default: all five scenes at 20 000 and 100 000 surfels, `--bounces auto`).
 
+use serde_json::Value;
+use std::path::Path;
+use std::process::Command;
 use std::time::Instant;
-use wpbgi::bake::{bake, BakeSettings, Quality};
+use wpbgi::bake::{BakeSettings, Quality};
 use wpbgi::bounce::BounceSettings;
 use wpbgi::compare::memory;
 use wpbgi::image::{error_against, read_exr};
@@ -32,6 +38,24 @@ const SCENES: [&str; 5] = [
     "caustic",
 ];
 
+/// Samples per pixel of the Mitsuba anchor.
+const ANCHOR_SPP: [u32; 2] = [16, 256];
+
+/// One scene's anchors, at the first surfel count.
+struct Anchors {
+    name: String,
+    points: usize,
+    /// wpbgi's default bake + render seconds and relMSE.
+    ours: (f64, f64),
+    /// Bounce seconds (3 bounces): gathering again, recorded, the previous binary's.
+    regathered: f64,
+    recorded: f64,
+    previous: Option<f64>,
+    same_cache: bool,
+    /// Per spp of [`ANCHOR_SPP`]: Mitsuba's seconds and relMSE, raw and with OIDN.
+    mitsuba: Vec<(u32, Value)>,
+}
+
 fn main() -> common::Result<()> {
     let mut args = std::env::args().skip(1);
     let names: Vec<String> = args.next().map_or(SCENES.map(String::from).to_vec(), |a| {
@@ -41,6 +65,8 @@ fn main() -> common::Result<()> {
         Some(a) => a.split(',').map(|p| p.parse()).collect::<Result<_, _>>()?,
         None => vec![20_000, 100_000],
     };
+    let previous = std::env::var_os("WPBGI_PREVIOUS");
+    let python = std::env::var_os("WPBGI_ANCHOR_PYTHON");
     println!("threads: {}", rayon::current_num_threads());
     println!(
         "| scene | surfels | direct s | bounce 1 s | later bounces s (mean, max) | bounces | \
@@ -48,11 +74,19 @@ fn main() -> common::Result<()> {
          render s | relMSE | path tracer, same time: relMSE |"
     );
     println!("|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
-    let mut before_after = Vec::new();
+    let mut anchors = Vec::new();
     for name in &names {
-        let scene = Scene::load(&data(&format!("{name}.gltf")))?;
-        let reference = read_exr(&data(&format!("{name}_d8_ref.exr"))).ok();
+        let scene_path = data(&format!("{name}.gltf"));
+        let reference_path = data(&format!("{name}_d8_ref.exr"));
+        let scene = Scene::load(&scene_path)?;
+        let reference = read_exr(&reference_path).ok();
         let camera = scene.default_camera(256, 256)?;
+        let rel_of = |image: &wpbgi::image::Image| {
+            reference
+                .as_ref()
+                .and_then(|r| error_against(image, r))
+                .map_or(f64::NAN, |(_, rel)| rel)
+        };
         for &n in &points {
             let settings = BakeSettings {
                 points: n,
@@ -63,13 +97,11 @@ fn main() -> common::Result<()> {
             let (baked, cache, bake_s) =
                 common::bake_cache(&scene, &settings, &format!("{name}-{n}"))?;
             let peak = memory::peak().map_or("-".into(), |b| (b / 1_000_000).to_string());
-            let stage = |s: &str| {
-                baked
-                    .timings
-                    .iter()
-                    .find(|(k, _)| *k == s)
-                    .map_or(0.0, |(_, v)| *v)
-            };
+            let direct = baked
+                .timings
+                .iter()
+                .find(|(k, _)| *k == "direct light")
+                .map_or(0.0, |(_, v)| *v);
             let report = baked.bounces.clone().unwrap_or_default();
             let first = report.seconds.first().copied().unwrap_or(0.0);
             let later = &report.seconds[1.min(report.seconds.len())..];
@@ -86,45 +118,104 @@ fn main() -> common::Result<()> {
                 &|_, _| {},
             )?;
             let render_s = t.elapsed().as_secs_f64();
-            let rel_of = |image: &wpbgi::image::Image| {
-                reference
-                    .as_ref()
-                    .and_then(|r| error_against(image, r))
-                    .map_or("no reference".into(), |(_, rel)| format!("{rel:.3e}"))
-            };
             let rel = rel_of(&out.beauty);
             let pt = common::path_tracer_for(&scene, &camera, 8, bake_s + render_s)?;
-            let pt_rel = rel_of(&pt.mean);
             let surfels = baked.surfels.len() as f64;
             println!(
-                "| {name} | {n} | {:.2} | {first:.2} | {mean_later:.3}, {max_later:.3} | {} | \
-                 {:.3} | {:.2} | {:.0} | {peak} | {:.0} | {render_s:.1} | {rel} | {pt_rel} ({} spp) |",
-                stage("direct light"),
+                "| {name} | {n} | {direct:.2} | {first:.2} | {mean_later:.3}, {max_later:.3} | {} | \
+                 {:.3} | {:.2} | {:.0} | {peak} | {:.0} | {render_s:.1} | {rel:.3e} | {:.3e} ({} spp) |",
                 report.bounces,
                 max_later / first.max(1e-9),
                 bounce_stage / first.max(1e-9),
                 report.transport.bytes as f64 / surfels,
                 cache_bytes as f64 / surfels,
+                rel_of(&pt.mean),
                 pt.spp,
             );
-            if n == points[0] {
-                before_after.push((name.clone(), n, regather_ratio(&scene, &settings)?));
+            if n != points[0] {
+                continue;
             }
+            let (regathered, recorded, same_cache) = regather_ratio(&scene, &settings)?;
+            let previous = previous
+                .as_ref()
+                .map(|bin| previous_bounces(Path::new(bin), &scene_path, n))
+                .transpose()?;
+            let mitsuba = python
+                .as_ref()
+                .map(|py| mitsuba_anchor(Path::new(py), &scene_path, &reference_path))
+                .transpose()?
+                .unwrap_or_default();
+            anchors.push(Anchors {
+                name: name.clone(),
+                points: n,
+                ours: (bake_s + render_s, rel),
+                regathered,
+                recorded,
+                previous,
+                same_cache,
+                mitsuba,
+            });
         }
     }
+    print_anchors(&anchors, previous.is_some(), python.is_some());
+    Ok(())
+}
+
+fn print_anchors(anchors: &[Anchors], previous: bool, python: bool) {
     println!();
-    println!("Every bounce gathering again (as before the transport) against recorded, 3 bounces:");
+    println!("The bounces before and after the transport, 3 bounces, same run:");
     println!(
-        "| scene | surfels | bounces regathered s | bounces recorded s | speed-up | same cache |"
+        "| scene | surfels | previous version s | gathering again s | recorded s | \
+         previous / recorded | again / recorded | same cache |"
     );
-    println!("|---|---:|---:|---:|---:|---|");
-    for (name, n, (again, recorded, same)) in before_after {
+    println!("|---|---:|---:|---:|---:|---:|---:|---|");
+    for a in anchors {
+        let prev = a.previous.map_or("-".into(), |p| format!("{p:.1}"));
+        let ratio = a
+            .previous
+            .map_or("-".into(), |p| format!("{:.1}×", p / a.recorded.max(1e-9)));
         println!(
-            "| {name} | {n} | {again:.1} | {recorded:.1} | {:.1}× | {same} |",
-            again / recorded.max(1e-9)
+            "| {} | {} | {prev} | {:.1} | {:.1} | {ratio} | {:.1}× | {} |",
+            a.name,
+            a.points,
+            a.regathered,
+            a.recorded,
+            a.regathered / a.recorded.max(1e-9),
+            a.same_cache
         );
     }
-    Ok(())
+    if !previous {
+        println!("(previous version not run: set WPBGI_PREVIOUS to an older wpbgi binary)");
+    }
+    println!();
+    println!("Against Mitsuba 3 and Mitsuba + OIDN (max_depth 8, 256²), same run:");
+    if !python {
+        println!("(not run: set WPBGI_ANCHOR_PYTHON, see scripts/anchor/README.md)");
+        return;
+    }
+    println!(
+        "| scene | wpbgi bake + render s, relMSE | Mitsuba spp: s, relMSE | + OIDN: s, relMSE | \
+         wpbgi time / OIDN's | wpbgi relMSE / OIDN's |"
+    );
+    println!("|---|---|---|---|---:|---:|");
+    for a in anchors {
+        for (spp, m) in &a.mitsuba {
+            let f = |k: &str| m[k].as_f64().unwrap_or(f64::NAN);
+            let rel = |k: &str| m[k][1].as_f64().unwrap_or(f64::NAN);
+            println!(
+                "| {} | {:.1}, {:.2e} | {spp}: {:.2}, {:.2e} | {:.2}, {:.2e} | {:.1} | {:.2} |",
+                a.name,
+                a.ours.0,
+                a.ours.1,
+                f("pt_s"),
+                rel("pt"),
+                f("oidn_total_s"),
+                rel("oidn"),
+                a.ours.0 / f("oidn_total_s"),
+                a.ours.1 / rel("oidn"),
+            );
+        }
+    }
 }
 
 /// The bounce stage's seconds with every bounce gathering again (a transport budget of 0)
@@ -138,14 +229,69 @@ fn regather_ratio(scene: &Scene, settings: &BakeSettings) -> common::Result<(f64
             },
             ..settings.clone()
         };
-        let baked = bake(scene, &s, &|_, _| {})?;
-        let path = std::env::temp_dir().join("wpbgi-bench-regather.wpc");
-        let hash = wpbgi::bake::store::bake_hash(scene, &s.to_json());
-        wpbgi::bake::store::write(&path, hash, &baked, serde_json::json!({}))?;
+        let (baked, cache, _) = common::bake_cache(scene, &s, "regather")?;
         let seconds = baked.bounces.map_or(0.0, |r| r.seconds.iter().sum());
-        Ok((seconds, std::fs::read(&path)?))
+        Ok((seconds, std::fs::read(&cache.cache.path)?))
     };
     let (again, a) = run(Some(0))?;
     let (recorded, b) = run(None)?;
     Ok((again, recorded, a == b))
+}
+
+/// The bounce seconds of an older wpbgi binary's `bake --bounces 3` at `points` surfels (from
+/// its `--json` summary).
+fn previous_bounces(bin: &Path, scene: &Path, points: usize) -> common::Result<f64> {
+    let out = std::env::temp_dir().join("wpbgi-bench-previous.wpc");
+    let run = Command::new(bin)
+        .arg("bake")
+        .arg(scene)
+        .arg("-o")
+        .arg(&out)
+        .args(["--points", &points.to_string(), "--bounces", "3", "--json"])
+        .output()?;
+    if !run.status.success() {
+        return Err(format!(
+            "{} failed: {}",
+            bin.display(),
+            String::from_utf8_lossy(&run.stderr)
+        )
+        .into());
+    }
+    let done = String::from_utf8_lossy(&run.stderr)
+        .lines()
+        .filter_map(|l| serde_json::from_str::<Value>(l).ok())
+        .find(|v| v["event"] == "done")
+        .ok_or("no summary from the previous binary")?;
+    let seconds = done["stats"]["bounces"]["seconds"]
+        .as_array()
+        .ok_or("the previous binary reported no bounce times")?;
+    Ok(seconds.iter().filter_map(Value::as_f64).sum())
+}
+
+/// `scripts/anchor/mitsuba_oidn.py` on one scene: one JSON object per spp of [`ANCHOR_SPP`].
+fn mitsuba_anchor(
+    python: &Path,
+    scene: &Path,
+    reference: &Path,
+) -> common::Result<Vec<(u32, Value)>> {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/anchor/mitsuba_oidn.py");
+    let run = Command::new(python)
+        .arg(script)
+        .arg(scene)
+        .arg(reference)
+        .arg("8")
+        .args(ANCHOR_SPP.map(|s| s.to_string()))
+        .output()?;
+    if !run.status.success() {
+        return Err(format!(
+            "the Mitsuba anchor failed: {}",
+            String::from_utf8_lossy(&run.stderr)
+        )
+        .into());
+    }
+    Ok(String::from_utf8_lossy(&run.stdout)
+        .lines()
+        .filter_map(|l| serde_json::from_str::<Value>(l).ok())
+        .filter_map(|v| Some((v["spp"].as_u64()? as u32, v)))
+        .collect())
 }

@@ -233,7 +233,8 @@ pub fn add_bounces(
     if settings.max == 0 || baked.surfels.is_empty() {
         return Ok(report);
     }
-    let start = std::time::Instant::now();
+    // The first bounce's time includes recording the transport.
+    let mut start = std::time::Instant::now();
     let tau = baked.settings.tau;
     let accel = Accel::build(scene);
     let bsdfs: Vec<Bsdf> = baked
@@ -339,7 +340,6 @@ pub fn add_bounces(
     let mut total_energy = energy(baked, &reflected_direct);
     let mut emit: Option<Vec<SurfelRadiance>> = None;
     let mut ratios: Vec<f64> = Vec::new();
-    let mut start = start;
     for bounce in 1..=settings.max {
         let done_before = (bounce - 1) as f32 / settings.max as f32;
         let sent = emit.as_deref().unwrap_or(&reflected_direct);
@@ -696,8 +696,10 @@ mod tests {
     /// The recorded links, replayed against the light the senders were loaded with, give
     /// what the gather itself composites: per pixel for directional receivers, and the cosine
     /// convolution for diffuse ones. Both sides are computed from the same splats, so they
-    /// differ only by the order of f32 sums (the links are merged by slot): 1e-4 of the
-    /// buffer's brightest pixel bounds that with a wide margin (measured: below 1e-6).
+    /// differ only by the order of f32 sums (the links are merged by slot): for n terms the
+    /// rounding of either order is at most n·2⁻²⁴ of the sum of their magnitudes, about 1e-4
+    /// for the ≈ 2 000 terms of a buffer, hence 1e-4 of the brightest pixel. Measured: at most
+    /// 5.7e-7 of it over 335 diffuse and 93 directional receivers.
     /// Groups of cbox-rough (diffuse walls, a rough conductor, a glass sphere) exercise the
     /// shared far buffer, the closing rays and the holes filled from the nearest surfel.
     #[test]

@@ -31,12 +31,3 @@ pub enum Lookup {
     /// the projected area it is divided by).
     NodeMap { node: u32, point: Vec2, scale: f32 },
 }
-
-/// The texel (row-major) of a `2^levels`-texel-per-side map that holds `point` of the unit
-/// square: the one a Haar map's evaluation at `point` reads.
-#[inline]
-pub fn texel_index(point: Vec2, levels: u32) -> u32 {
-    let n = 1u32 << levels;
-    let cell = |c: f32| ((c * n as f32) as u32).min(n - 1);
-    cell(point.y) * n + cell(point.x)
-}

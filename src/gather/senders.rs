@@ -18,7 +18,9 @@ use crate::bake::store::{BakedCache, NodeRecord, SurfelRecord, BACK_SIDED, CLOSE
 use crate::bake::surfels::Surfel;
 use crate::bake::tree::NONE;
 use crate::cache::CacheError;
-use crate::haar::{direction_to_square, square_to_direction, Coefficient, Haar2d, SparseHaar};
+use crate::haar::{
+    direction_to_square, square_to_direction, texel_at, Coefficient, Haar2d, SparseHaar,
+};
 use crate::spectrum::Rgb;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
@@ -660,9 +662,9 @@ impl Senders {
 /// The centre of the texel of the `2^levels`-texel sphere map that holds point `p` of its
 /// unit square.
 fn texel_centre(p: Vec2, levels: u32) -> Vec3 {
-    let texels = (1u32 << levels) as f32;
-    let texel = (p * texels).floor().min(Vec2::splat(texels - 1.0));
-    square_to_direction((texel + 0.5) / texels)
+    let n = 1u32 << levels;
+    let (x, y) = texel_at(p, n);
+    square_to_direction((Vec2::new(x as f32, y as f32) + 0.5) / n as f32)
 }
 
 /// Where to read a sphere map of `levels` for direction `w` seen on the side `side` (a unit

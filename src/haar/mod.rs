@@ -8,6 +8,6 @@ pub mod transform;
 
 pub use sparse::SparseHaar;
 pub use sphere_map::{
-    direction_to_square, square_to_direction, texel_centre, texel_directions, texel_of,
+    direction_to_square, square_to_direction, texel_at, texel_centre, texel_directions, texel_of,
 };
 pub use transform::{detail_index, Coefficient, Haar2d};

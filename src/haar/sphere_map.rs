@@ -84,7 +84,13 @@ pub fn texel_directions(levels: u32) -> &'static [Vec3] {
 
 /// The texel `(x, y)` of an `n × n` grid that holds direction `w`.
 pub fn texel_of(w: Vec3, n: u32) -> (u32, u32) {
-    let p = direction_to_square(w);
+    texel_at(direction_to_square(w), n)
+}
+
+/// The texel `(x, y)` of an `n × n` grid that holds point `p` of the unit square: the one a
+/// Haar map's evaluation at `p` reads.
+#[inline]
+pub fn texel_at(p: Vec2, n: u32) -> (u32, u32) {
     let cell = |c: f32| ((c * n as f32) as u32).min(n - 1);
     (cell(p.x), cell(p.y))
 }
