@@ -362,13 +362,16 @@ pub fn slot_values(
         .par_iter()
         .enumerate()
         .map(|(i, r)| {
+            let count = slots.surfel_levels[i].map_or(1, |l| 1 << (2 * l));
+            let read: Vec<u32> = index.read_in(slots.surfel_base[i], count).collect();
+            // A map nobody reads is not decoded.
             let texels = match r {
+                _ if read.is_empty() => Vec::new(),
                 SurfelRadiance::Rgb(c) => vec![*c],
                 SurfelRadiance::Map(m) => m.to_dense().inverse(),
             };
-            index
-                .read_in(slots.surfel_base[i], texels.len() as u32)
-                .map(|t| texels[t as usize].max(Rgb::ZERO))
+            read.iter()
+                .map(|&t| texels[t as usize].max(Rgb::ZERO))
                 .collect()
         })
         .collect();
@@ -377,12 +380,19 @@ pub fn slot_values(
     // the render sums it), and the texels of the coded intensity.
     let s_sums = normal_sums(tree, surfels, sent);
     let mut per_node: Vec<NodeValues> = Vec::new();
+    let side = 1u32 << slots.tree_levels;
+    let intensity_read = |j: u32| {
+        index
+            .read_in(slots.node_base[j as usize] + 3, side * side)
+            .next()
+            .is_some()
+    };
     for_each_coded_intensity(
         tree,
         coded,
+        intensity_read,
         |j, intensity| {
             let j = j as usize;
-            let side = 1u32 << slots.tree_levels;
             let mut texels: Option<Vec<Rgb>> = None;
             let read: Vec<Rgb> = index
                 .read_in(slots.node_base[j], 3 + side * side)
@@ -390,8 +400,12 @@ pub fn slot_values(
                     if k < 3 {
                         s_sums[j][k as usize]
                     } else {
-                        let t = texels.get_or_insert_with(|| intensity.inverse());
-                        t[(k - 3) as usize].max(Rgb::ZERO)
+                        // `intensity` is there whenever one of its texels is read.
+                        let t = texels.get_or_insert_with(|| {
+                            intensity.map_or_else(Vec::new, Haar2d::inverse)
+                        });
+                        t.get((k - 3) as usize)
+                            .map_or(Rgb::ZERO, |l| l.max(Rgb::ZERO))
                     }
                 })
                 .collect();
@@ -441,11 +455,14 @@ type NodeValues = (u32, Vec<Rgb>);
 
 /// Call `read` with every inner node and its coded intensity G (stored at or above the split
 /// level, rebuilt below it from the parent's G and H, spec §6.5), level by level so that only
-/// two levels of maps exist at once; what it returns is collected into `out`.
+/// two levels of maps exist at once; what it returns is collected into `out`. G is expanded
+/// only for the nodes `wanted` names and those a child is rebuilt from; the others are passed
+/// over (`read` sees only S then).
 fn for_each_coded_intensity(
     tree: &SurfelTree,
     coded: &CodedTree<Rgb>,
-    read: impl Fn(u32, &Haar2d<Rgb>) -> Option<NodeValues> + Sync,
+    wanted: impl Fn(u32) -> bool + Sync,
+    read: impl Fn(u32, Option<&Haar2d<Rgb>>) -> Option<NodeValues> + Sync,
     out: &mut Vec<NodeValues>,
 ) {
     // Nodes are breadth-first: each level is a run, after its parents'.
@@ -465,6 +482,14 @@ fn for_each_coded_intensity(
                 let node = &tree.nodes[j];
                 if node.is_leaf() {
                     return (None, None);
+                }
+                let rebuilds_child = node.children.iter().any(|&c| {
+                    c != NONE
+                        && !tree.nodes[c as usize].is_leaf()
+                        && coded.nodes[c as usize].g.is_none()
+                });
+                if !wanted(j as u32) && !rebuilds_child {
+                    return (None, read(j as u32, None));
                 }
                 let g = match &coded.nodes[j].g {
                     Some(g) => g.to_dense(),
@@ -488,7 +513,7 @@ fn for_each_coded_intensity(
                         }
                     }
                 };
-                let r = read(j as u32, &g);
+                let r = read(j as u32, Some(&g));
                 (Some(g), r)
             })
             .collect();
