@@ -9,8 +9,8 @@
 
 use std::sync::Arc;
 use std::time::Instant;
-use wpbgi::bake::store::BakedCache;
 use wpbgi::bake::{bake, BakeSettings, Quality};
+use wpbgi::cache::store::BakedCache;
 use wpbgi::preview::device::Gpu;
 use wpbgi::preview::window::MOVING_COARSENESS;
 use wpbgi::preview::{Preview, Show, DEFAULT_CUT_PIXELS};

@@ -11,8 +11,8 @@
 //! cbox-glossy from tests/data/mitsuba; default: all three for 1 and 2, glossy for 3).
 
 use std::time::Instant;
-use wpbgi::bake::store::BakedCache;
 use wpbgi::bake::{BakeSettings, Quality};
+use wpbgi::cache::store::BakedCache;
 use wpbgi::image::{error_against, read_exr};
 use wpbgi::render::{render_final, FinalOutput, FinalSettings, GatherMode, GatherStats};
 use wpbgi::scene::camera::Camera;

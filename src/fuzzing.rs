@@ -3,7 +3,7 @@
 //! Each takes arbitrary bytes, runs the real reader on them, and must return (with or without
 //! an error) rather than panic, hang or exhaust memory.
 
-use crate::bake::store::NO_MAP;
+use crate::cache::store::NO_MAP;
 use std::path::{Path, PathBuf};
 
 /// glTF JSON or GLB bytes through the importer.
@@ -24,7 +24,7 @@ pub fn usd(data: &[u8], ext: &str) {
 /// Cache file bytes through the reader, then every map the cache holds through the decoder.
 pub fn cache(data: &[u8]) {
     let Ok(cache) =
-        crate::bake::store::BakedCache::from_bytes(Path::new("fuzz.wpc"), data.to_vec())
+        crate::cache::store::BakedCache::from_bytes(Path::new("fuzz.wpc"), data.to_vec())
     else {
         return;
     };

@@ -38,6 +38,7 @@ pub mod gather;
 pub mod geometry;
 pub mod haar;
 pub mod image;
+pub mod machine;
 pub mod preview;
 pub mod reference;
 pub mod render;

@@ -2,8 +2,8 @@
 //! the cache written from it read back.
 
 use std::path::Path;
-use wpbgi::bake::store::{bake_hash, write, BakedCache, NO_MAP};
 use wpbgi::bake::{bake, BakeSettings, Baked, SurfelRadiance};
+use wpbgi::cache::store::{bake_hash, write, BakedCache, NO_MAP};
 use wpbgi::haar::Haar2d;
 use wpbgi::scene::Scene;
 use wpbgi::spectrum::Rgb;
@@ -276,6 +276,40 @@ fn a_cancelled_bake_stops_in_the_stage_that_sees_the_flag() {
         wpbgi::Error::Cancelled.to_string(),
         "the bake was cancelled"
     );
+}
+
+/// A bake that cannot fit says so before any work, naming the figure: no progress is
+/// reported. cbox-rough's glass (α = 0.1) needs 16² maps, so 259 transport slots per inner
+/// node: 20 million surfels would need 5.2 billion, past 32-bit slots (16 519 105 points at
+/// most: p·260 − 259 < 2³² − 1); 10¹² surfels need more memory than any machine has.
+#[test]
+fn a_bake_that_cannot_fit_is_refused_before_any_work() {
+    use std::sync::Mutex;
+    let scene = cbox();
+    for (points, bounces, says) in [
+        (20_000_000, 1, "bake at most about 16519105 points"),
+        (
+            1_000_000_000_000,
+            0,
+            "a bake of 1000000000000 surfels needs at least",
+        ),
+        (1_000_000_000_000, 3, "more than 2^32"),
+    ] {
+        let s = BakeSettings {
+            points,
+            bounces: wpbgi::bounce::BounceSettings::exactly(bounces),
+            ..settings()
+        };
+        let seen = Mutex::new(Vec::new());
+        let progress = |stage: &str, _: f32| seen.lock().expect("lock").push(stage.to_string());
+        let message = match bake(&scene, &s, &progress) {
+            Err(e @ wpbgi::Error::InvalidSetting(_)) => e.to_string(),
+            Err(e) => panic!("{points} points, {bounces} bounces: {e}"),
+            Ok(_) => panic!("{points} points, {bounces} bounces: baked"),
+        };
+        assert!(message.contains(says), "{message}");
+        assert_eq!(seen.into_inner().expect("lock"), Vec::<String>::new());
+    }
 }
 
 /// Issue 19: the bounces record the light transport once and replay it. The cache of a

@@ -306,8 +306,8 @@ fn open_room_gathers_what_its_rays_hit() {
 /// microbuffer collects as a bounce builds it.
 fn uniform_gather(scene: &Scene, settings: &BakeSettings, step: usize) -> (Baked, Vec<f64>) {
     use wpbgi::bake::pipeline::intensity_map;
-    use wpbgi::bake::store::BakedCache;
     use wpbgi::bounce::iterate::close_buffer;
+    use wpbgi::cache::store::BakedCache;
     use wpbgi::gather::cut::splat_cut;
     use wpbgi::gather::microbuffer::Microbuffer;
     use wpbgi::gather::senders::Senders;
@@ -336,9 +336,15 @@ fn uniform_gather(scene: &Scene, settings: &BakeSettings, step: usize) -> (Baked
     baked.emitted.fill(Rgb::ZERO);
     let leaf = |i: u32| {
         let s = &baked.surfels[i as usize];
-        intensity_map(s, &baked.radiance[i as usize], levels, true)
+        intensity_map(s, &baked.radiance[i as usize], true)
     };
-    baked.coded = wpbgi::bake::encode(&baked.tree, &leaf, baked.coded.split_level, settings.tau);
+    baked.coded = wpbgi::bake::encode(
+        &baked.tree,
+        &leaf,
+        levels,
+        baked.coded.split_level,
+        settings.tau,
+    );
     let cache = BakedCache::in_memory("furnace".as_ref(), &baked).expect("cache");
     let senders = Senders::from_cache(&cache).expect("senders");
     let accel = wpbgi::accel::Accel::build(scene);

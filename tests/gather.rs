@@ -16,9 +16,9 @@ mod common;
 
 use common::b64;
 use glam::Vec3;
-use wpbgi::bake::store::{bake_hash, write, BakedCache};
 use wpbgi::bake::{bake, BakeSettings};
 use wpbgi::bsdf::{Bsdf, Diffuse};
+use wpbgi::cache::store::{bake_hash, write, BakedCache};
 use wpbgi::gather::{splat_cut, Microbuffer, Senders};
 use wpbgi::geometry::frame::Frame;
 use wpbgi::scene::Scene;

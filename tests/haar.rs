@@ -189,6 +189,55 @@ fn sparse_tree_without_threshold_is_the_full_decomposition() {
     }
 }
 
+/// A thresholded map decodes the same, bit for bit, through the dense decomposition, through
+/// its trimmed decomposition (coarser where the finer details were all dropped) and straight
+/// from the sparse tree; and combining a trimmed map with a full one is combining the full
+/// ones. The bounces read maps these shorter ways (src/bounce/transport.rs, bake/coding.rs).
+#[test]
+fn sparse_decodes_agree_bit_for_bit() {
+    for (n, tau) in [
+        (1usize, 0.0),
+        (2, 0.0),
+        (16, 0.0),
+        (16, 0.05),
+        (64, 0.01),
+        (64, 0.3),
+    ] {
+        // An image constant over blocks of 4 × 4 texels has no finest two levels of detail.
+        let coarse = random_image(n.div_ceil(4), 32);
+        let blocky: Vec<Vec3> = (0..n * n)
+            .map(|t| coarse[((t / n) / 4) * n.div_ceil(4) + (t % n) / 4])
+            .collect();
+        for (image, is_blocky) in [
+            (random_image(n, 30), false),
+            (lobe_image(n), false),
+            (blocky, true),
+        ] {
+            let sparse = SparseHaar::compress(&Haar2d::forward(&image, n), tau);
+            let full = sparse.to_dense();
+            let texels = full.inverse();
+            let trimmed = sparse.to_dense_trimmed();
+            assert!(trimmed.levels <= full.levels);
+            if is_blocky && n >= 16 {
+                assert!(trimmed.levels <= full.levels - 2, "n {n}, tau {tau}");
+            }
+            assert_eq!(trimmed.refined_to(full.levels), full, "n {n}, tau {tau}");
+            let mut direct = Vec::new();
+            sparse.texels_into(&mut direct);
+            assert_eq!(direct, texels, "n {n}, tau {tau}");
+            let other = Haar2d::forward(&random_image(n, 31), n);
+            assert_eq!(
+                Haar2d::combine(&trimmed, 0.5, &other, -0.5),
+                Haar2d::combine(&full, 0.5, &other, -0.5)
+            );
+            assert_eq!(
+                SparseHaar::compress_below(&trimmed, 1e-3).refined_to(full.levels),
+                SparseHaar::compress_below(&full, 1e-3)
+            );
+        }
+    }
+}
+
 #[test]
 fn thresholding_error_is_bounded_and_scale_free() {
     let n = 32;

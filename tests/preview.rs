@@ -8,8 +8,8 @@
 use glam::Vec3;
 use std::sync::Arc;
 use wpbgi::accel::Accel;
-use wpbgi::bake::store::BakedCache;
 use wpbgi::bake::{BakeSettings, Quality};
+use wpbgi::cache::store::BakedCache;
 use wpbgi::image::{error_against, Image};
 use wpbgi::preview::cut::Splat;
 use wpbgi::preview::device::Gpu;

@@ -13,8 +13,8 @@
 
 mod common;
 
-use wpbgi::bake::store::BakedCache;
 use wpbgi::bake::{BakeSettings, Quality};
+use wpbgi::cache::store::BakedCache;
 use wpbgi::image::error_against;
 use wpbgi::render::{render_final, FinalOutput, FinalSettings, GatherMode};
 use wpbgi::scene::Scene;

@@ -19,13 +19,13 @@ mod common;
 
 use glam::{Vec2, Vec3};
 use std::path::{Path, PathBuf};
-use wpbgi::bake::store::BakedCache;
 use wpbgi::bake::{bake, BakeSettings, Quality};
 use wpbgi::bounce::BounceSettings;
 use wpbgi::bsdf::{
     Bsdf, Diffuse, Distribution, Lobe, Microfacet, RoughConductor, RoughDielectric, ThinDielectric,
     TransportMode,
 };
+use wpbgi::cache::store::BakedCache;
 use wpbgi::image::{error_against, Image};
 use wpbgi::reference::{render, RenderSettings};
 use wpbgi::render::{render_final, FinalSettings};

@@ -28,6 +28,8 @@ fn surfels(n: usize) -> Vec<Surfel> {
 }
 
 const N: usize = 8;
+/// The maps' levels (log2 of N).
+const LEVELS: u32 = N.trailing_zeros();
 
 /// A surfel's radiant-intensity map: A max(0, n·ω) L(ω) with a glossy-ish L that differs per
 /// surfel.
@@ -109,7 +111,7 @@ fn lossless_coding_reconstructs_every_node_exactly() {
     let tree = SurfelTree::build(&s);
     let maps = leaf_maps(&s);
     for eps in [0, 3, tree.depth()] {
-        let coded = encode(&tree, &|i| maps[i as usize].clone(), eps, 0.0);
+        let coded = encode(&tree, &|i| maps[i as usize].clone(), LEVELS, eps, 0.0);
         for j in 0..tree.nodes.len() {
             let exact = aggregate(&tree, &maps, j);
             let ours = coded.reconstruct(&tree, j as u32).expect("reconstructs");
@@ -130,7 +132,7 @@ fn thresholded_coding_error_is_bounded() {
     let tree = SurfelTree::build(&s);
     let maps = leaf_maps(&s);
     let (eps, tau) = (3u32, 2e-3f32);
-    let coded = encode(&tree, &|i| maps[i as usize].clone(), eps, tau);
+    let coded = encode(&tree, &|i| maps[i as usize].clone(), LEVELS, eps, tau);
     let total = 1 + 3 * maps[0].details.len();
     let dropped = |m: &Option<SparseHaar<Rgb>>| {
         (total - m.as_ref().expect("stored").coefficient_count()) as f32
@@ -179,6 +181,56 @@ fn thresholded_coding_error_is_bounded() {
     assert!(kept < dense / 2, "hierarchical coding saves memory");
 }
 
+/// Leaves at their own, coarser resolutions (a diffuse surfel's 8² lobe in a tree of 64² maps)
+/// code exactly as the same leaves refined to the tree's: the same stored coefficients, at the
+/// tree's resolution.
+#[test]
+fn coarse_leaves_code_as_refined_ones() {
+    let s = surfels(300);
+    let tree = SurfelTree::build(&s);
+    // Every third leaf at a coarser resolution: its texels averaged over 2 × 2 or 4 × 4 blocks.
+    let coarse: Vec<Haar2d<Rgb>> = s
+        .iter()
+        .enumerate()
+        .map(|(i, x)| {
+            let down = (i % 3) as u32;
+            let fine = texels(x, i as u32);
+            let side = N >> down;
+            let block = 1usize << down;
+            let texels: Vec<Rgb> = (0..side * side)
+                .map(|t| {
+                    let (cx, cy) = (t % side, t / side);
+                    let mut sum = Rgb::ZERO;
+                    for y in cy * block..(cy + 1) * block {
+                        for x in cx * block..(cx + 1) * block {
+                            sum += fine[y * N + x];
+                        }
+                    }
+                    sum / (block * block) as f32
+                })
+                .collect();
+            Haar2d::forward(&texels, side)
+        })
+        .collect();
+    for (eps, tau) in [(3, 0.0), (3, 2e-3), (tree.depth(), 1e-2)] {
+        let ours = encode(&tree, &|i| coarse[i as usize].clone(), LEVELS, eps, tau);
+        let refined = encode(
+            &tree,
+            &|i| coarse[i as usize].refined_to(LEVELS),
+            LEVELS,
+            eps,
+            tau,
+        );
+        assert_eq!(ours, refined, "eps {eps}, tau {tau}");
+        assert!(ours
+            .nodes
+            .iter()
+            .flat_map(|n| [&n.g, &n.h])
+            .flatten()
+            .all(|m| m.levels() == LEVELS));
+    }
+}
+
 #[test]
 fn coding_is_independent_of_thread_count() {
     let s = surfels(500);
@@ -189,7 +241,7 @@ fn coding_is_independent_of_thread_count() {
             .num_threads(threads)
             .build()
             .expect("pool")
-            .install(|| encode(&tree, &|i| maps[i as usize].clone(), 2, 1e-3))
+            .install(|| encode(&tree, &|i| maps[i as usize].clone(), LEVELS, 2, 1e-3))
     };
     assert_eq!(run(1), run(2));
 }

@@ -3,8 +3,8 @@
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
-use wpbgi::bake::store::{bake_hash, write, BakedCache};
 use wpbgi::bake::{bake, BakeSettings, Baked};
+use wpbgi::cache::store::{bake_hash, write, BakedCache};
 use wpbgi::reference::{render, RenderOutput, RenderSettings};
 use wpbgi::scene::camera::Camera;
 use wpbgi::scene::Scene;

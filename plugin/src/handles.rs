@@ -2,7 +2,7 @@
 
 use crate::guard::{call, checked_mut, checked_path, checked_ref, Failure};
 use std::ffi::c_char;
-use wpbgi::bake::store::BakedCache;
+use wpbgi::cache::store::BakedCache;
 use wpbgi::scene::Scene;
 
 /// A scene loaded from a glTF or USD file. Free it with `wpbgi_scene_free`.

@@ -583,7 +583,7 @@ fn headless_preview_equals_the_rust_api() {
     assert_eq!(status, WPBGI_OK, "{}", last_error());
 
     let lib_scene = wpbgi::scene::Scene::load(&scene_path()).expect("load");
-    let lib_cache = wpbgi::bake::store::BakedCache::open_fresh(&lib_scene, &path).expect("open");
+    let lib_cache = wpbgi::cache::store::BakedCache::open_fresh(&lib_scene, &path).expect("open");
     let gpu = Arc::new(Gpu::from_env().expect("Vulkan (lavapipe in CI)"));
     let mut preview = Preview::new(
         gpu,

@@ -196,7 +196,7 @@ fn pipeline(python: &str, stage: &Path) -> serde_json::Value {
 }
 
 fn hash_of(cache: &Path) -> String {
-    let c = wpbgi::bake::store::BakedCache::read(cache, None).expect("a valid cache");
+    let c = wpbgi::cache::store::BakedCache::read(cache, None).expect("a valid cache");
     wpbgi::cache::hash_hex(c.cache.hash)
 }
 

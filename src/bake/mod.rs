@@ -5,7 +5,6 @@ pub mod direct;
 pub mod lightcuts;
 pub mod pipeline;
 pub mod plan;
-pub mod store;
 pub mod surfels;
 pub mod tree;
 

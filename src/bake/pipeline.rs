@@ -9,12 +9,12 @@ use super::coding::{encode, CodedTree};
 use super::direct::DirectLight;
 use super::lightcuts::LightTree;
 use super::plan::{map_levels, Plan};
-use super::store::{BACK_SIDED, CLOSED, SOLID};
 use super::surfels::{sample_surfels, Surfel};
 use super::tree::SurfelTree;
 use crate::accel::Accel;
 use crate::bounce::{add_bounces, BounceReport, BounceSettings};
 use crate::bsdf::Bsdf;
+use crate::cache::store::{BACK_SIDED, CLOSED, SOLID};
 use crate::emitters::EmitterSampler;
 use crate::error::{Error, Result};
 use crate::haar::{texel_directions, Haar2d, SparseHaar};
@@ -115,6 +115,44 @@ impl BakeSettings {
     }
 }
 
+/// Refuse, before any work, a bake that cannot fit: bounces whose transport slots overflow
+/// 32 bits, or a floor of what the bake must hold (surfels, their radiance, the tree and its
+/// coding, the cache's records, and for bounces the tree as senders and the slots' bitmap,
+/// with no transport kept: that part gives way, see [`BounceSettings::transport_budget`])
+/// above the memory the machine has available. The floor counts the structures only, not
+/// the maps' coefficients, so a bake it lets through may still need more.
+fn check_fits(settings: &BakeSettings, map_levels: u32) -> Result<()> {
+    let points = settings.points as u64;
+    let bounces = settings.bounces.max > 0;
+    if bounces {
+        crate::bounce::iterate::check_slots(points, map_levels)?;
+    }
+    let per_surfel = size_of::<Surfel>()
+        + size_of::<SurfelRadiance>()
+        + size_of::<Rgb>()
+        + 2 * (size_of::<super::tree::Node>()
+            + size_of::<super::coding::NodeCoding<Rgb>>()
+            + size_of::<super::coding::NodeCoding<f32>>()
+            + size_of::<crate::cache::store::NodeRecord>())
+        + size_of::<crate::cache::store::SurfelRecord>();
+    let floor = points
+        .saturating_mul(per_surfel as u64)
+        .saturating_add(if bounces {
+            crate::bounce::iterate::memory_floor(points, map_levels)
+        } else {
+            0
+        });
+    match crate::machine::available_memory() {
+        Some(available) if floor > available => Err(Error::InvalidSetting(format!(
+            "a bake of {points} surfels needs at least {} MB, and this machine has {} MB \
+             available; bake fewer points (--points)",
+            floor / 1_000_000,
+            available / 1_000_000
+        ))),
+        _ => Ok(()),
+    }
+}
+
 /// A surfel's direct-lit outgoing radiance.
 #[derive(Clone, Debug, PartialEq)]
 pub enum SurfelRadiance {
@@ -189,6 +227,7 @@ pub fn bake_cancellable(
     let t = Instant::now();
     let mut plan = Plan::new(scene);
     plan.note_bounces(&settings.bounces);
+    check_fits(settings, plan.map_levels)?;
     let accel = Accel::build(scene);
     // Many point and spot lights go through a light tree; a few are sampled with the rest.
     let punctual = scene
@@ -258,12 +297,12 @@ pub fn bake_cancellable(
     let leaf = |i: u32| {
         let s = &surfels[i as usize];
         let back = mesh_flags[s.mesh as usize] & SOLID == 0;
-        intensity_map(s, &radiance[i as usize], levels, back)
+        intensity_map(s, &radiance[i as usize], back)
     };
     progress("coding", 0.0);
-    let coded = encode(&tree, &leaf, eps, settings.tau);
+    let coded = encode(&tree, &leaf, levels, eps, settings.tau);
     let area_leaf = |i: u32| projected_area_map(&surfels[i as usize]);
-    let projected = encode(&tree, &area_leaf, eps, settings.tau);
+    let projected = encode(&tree, &area_leaf, PROJECTED_AREA_LEVELS, eps, settings.tau);
     progress("coding", 1.0);
     stage("coding", t);
     stop()?;
@@ -345,7 +384,7 @@ fn surfel_radiance(
     (radiance, emitted)
 }
 
-/// Per mesh, the flags of its surfels' records ([`super::store::SurfelRecord::flags`]), from
+/// Per mesh, the flags of its surfels' records ([`crate::cache::store::SurfelRecord::flags`]), from
 /// its BSDF at texture coordinate (0, 0) and its geometry:
 /// - [`SOLID`]: it bounds a solid (a `roughdielectric`: Mitsuba's dielectric is the interface
 ///   of a solid). Light a surfel of a solid sends into it can reach only the solid's own
@@ -376,7 +415,8 @@ pub fn mesh_flags(scene: &Scene) -> Vec<u32> {
         .collect()
 }
 
-/// A surfel's radiant intensity A |n·ω| L(ω) as a map at `levels`; with `back` false, only
+/// A surfel's radiant intensity A |n·ω| L(ω) as a map at its own resolution (the diffuse
+/// cosine lobe's [`PROJECTED_AREA_LEVELS`], or its radiance map's); with `back` false, only
 /// towards the front hemisphere (see [`mesh_flags`]).
 ///
 /// The cosine is taken at the centre of the projected-area map's texel
@@ -385,7 +425,7 @@ pub fn mesh_flags(scene: &Scene) -> Vec<u32> {
 /// surfels' radiance, exactly: a 16² glossy I over the 8² P strayed by 3 % in a closed room,
 /// and sampling P as finely as I tripled a glossy cache (P and the cosine lobes of diffuse
 /// nodes at 64²).
-pub fn intensity_map(s: &Surfel, r: &SurfelRadiance, levels: u32, back: bool) -> Haar2d<Rgb> {
+pub fn intensity_map(s: &Surfel, r: &SurfelRadiance, back: bool) -> Haar2d<Rgb> {
     let (own, radiance): (u32, Vec<Rgb>) = match r {
         // Diffuse radiance is constant, so its intensity is a cosine lobe on P's grid.
         SurfelRadiance::Rgb(c) => (
@@ -411,7 +451,7 @@ pub fn intensity_map(s: &Surfel, r: &SurfelRadiance, levels: u32, back: bool) ->
             *l * (s.area * projected)
         })
         .collect();
-    Haar2d::forward(&texels, 1 << own).refined_to(levels.max(own))
+    Haar2d::forward(&texels, 1 << own)
 }
 
 /// The resolution of projected-area maps, and of the cosine in intensity maps: P(ω) is a sum

@@ -31,20 +31,20 @@
 //! the same code, so the cache does not depend on the budget.
 
 use super::bsdf_operator::BsdfOperator;
-use super::transport::{slot_values, ReceiverLinks, SlotIndex, Slots};
-use super::view_tree::{receiver_groups, ReceiverGroup, VIEW_EPS};
+use super::transport::{slot_values, ReceiverLinks, SlotIndex, Slots, NO_TEXEL};
+use super::view_tree::{receiver_groups, VIEW_EPS};
 use crate::accel::Accel;
 use crate::bake::coding::{encode, CodedTree};
 use crate::bake::pipeline::{intensity_map, surfel_bsdf, Baked, Progress, SurfelRadiance};
 use crate::bake::plan::map_levels;
-use crate::bake::store::{BakedCache, SOLID};
 use crate::bake::surfels::Surfel;
 use crate::bsdf::Bsdf;
+use crate::cache::store::{records_of, NodeRecord, SurfelRecord, SOLID};
 use crate::error::{Error, Result};
 use crate::gather::cut::splat_cut;
-use crate::gather::fpbgi::{cluster_cut, member_buffer, ClusterReceivers};
+use crate::gather::fpbgi::{cluster_cut, member_buffer, Cluster, ClusterReceivers};
 use crate::gather::microbuffer::Microbuffer;
-use crate::gather::senders::Senders;
+use crate::gather::senders::{SenderNode, Senders};
 use crate::geometry::frame::Frame;
 use crate::geometry::offset::offset_origin;
 use crate::haar::{texel_directions, Haar2d, SparseHaar};
@@ -86,13 +86,36 @@ pub struct BounceSettings {
 /// where the machine does not say.
 pub fn default_transport_budget() -> u64 {
     const FRACTION: f64 = 0.4;
-    let total = std::fs::read_to_string("/proc/meminfo").ok().and_then(|m| {
-        m.lines()
-            .find_map(|l| l.strip_prefix("MemTotal:"))
-            .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<u64>().ok())
-            .map(|kb| kb * 1024)
-    });
-    total.map_or(4 << 30, |b| (b as f64 * FRACTION) as u64)
+    crate::machine::total_memory().map_or(4 << 30, |b| (b as f64 * FRACTION) as u64)
+}
+
+/// The least memory (bytes) the bounces of a bake of `points` surfels, whose tree's maps have
+/// `levels`, hold besides the bake itself, with no transport kept: the tree as senders (a
+/// node record and a sender node per node, a surfel record per surfel, two nodes per surfel)
+/// and the bitmap of the transport's slots.
+pub fn memory_floor(points: u64, levels: u32) -> u64 {
+    let nodes = 2 * points;
+    let senders = nodes * (size_of::<NodeRecord>() + size_of::<SenderNode>()) as u64
+        + points * size_of::<SurfelRecord>() as u64;
+    senders + Slots::fewest(points, levels) / 8
+}
+
+/// Refuse bounces whose transport slots cannot be numbered in 32 bits, before any work (see
+/// [`Slots`]), naming the largest point count that fits.
+pub fn check_slots(points: u64, levels: u32) -> Result<()> {
+    let slots = Slots::fewest(points, levels);
+    if slots < u64::from(u32::MAX) {
+        return Ok(());
+    }
+    // fewest(p) = p (4 + k) − (3 + k) with k = 4^levels, below 2^32 − 1.
+    let k = 1u64 << (2 * levels);
+    let most = (u64::from(u32::MAX) + 2 + k) / (4 + k);
+    Err(Error::InvalidSetting(format!(
+        "the bounces of {points} surfels with {side} × {side} maps would read at least {slots} \
+         values of the tree, more than 2^32; bake at most about {most} points (--points), or \
+         rougher materials (coarser maps)",
+        side = 1u32 << levels
+    )))
 }
 
 impl BounceSettings {
@@ -182,9 +205,10 @@ fn energy(baked: &Baked, radiance: &[SurfelRadiance]) -> f64 {
 fn add_scaled(a: &SurfelRadiance, b: &SurfelRadiance, k: f32, tau: f32) -> SurfelRadiance {
     match (a, b) {
         (SurfelRadiance::Rgb(x), SurfelRadiance::Rgb(y)) => SurfelRadiance::Rgb(*x + *y * k),
-        (SurfelRadiance::Map(x), SurfelRadiance::Map(y)) => SurfelRadiance::Map(
-            SparseHaar::compress(&Haar2d::combine(&x.to_dense(), 1.0, &y.to_dense(), k), tau),
-        ),
+        (SurfelRadiance::Map(x), SurfelRadiance::Map(y)) => {
+            let sum = Haar2d::combine(&x.to_dense_trimmed(), 1.0, &y.to_dense_trimmed(), k);
+            SurfelRadiance::Map(SparseHaar::compress(&sum, tau).refined_to(x.levels()))
+        }
         // Surfels keep their kind from the direct light on; nothing else is produced.
         _ => a.clone(),
     }
@@ -254,19 +278,18 @@ pub fn add_bounces(
         .zip(&baked.surfels)
         .map(|((r, e), s)| without_emission(r, *e, s.n, tau))
         .collect();
-    // The gather's geometry: the tree as senders, read once (the radiance each bounce sends
-    // comes from the transport's slots, not from these maps).
-    let path = Path::new("(the bake's tree, in memory)");
-    let senders = Senders::from_cache(&BakedCache::in_memory(path, baked)?)?.geometry_only();
+    // The gather's geometry: the tree as senders, read once from the bake in memory (the
+    // radiance each bounce sends comes from the transport's slots).
+    let senders = geometry_senders(baked)?;
     let groups = if settings.view_tree {
         receiver_groups(&baked.tree, &baked.surfels)
     } else {
         (0..baked.surfels.len() as u32)
-            .map(|i| ReceiverGroup {
+            .map(|i| Cluster {
                 members: vec![i],
                 active: i,
                 radius: 0.0,
-                cone: 0.0,
+                cone: Some(0.0),
             })
             .collect()
     };
@@ -338,11 +361,14 @@ pub fn add_bounces(
     let regathered = &groups[kept.len()..];
 
     let mut total_energy = energy(baked, &reflected_direct);
-    let mut emit: Option<Vec<SurfelRadiance>> = None;
+    // What the next bounce sends: the reflected direct light, then each bounce's light (the
+    // previous one dropped as soon as it is replaced, so the heap does not grow past the
+    // second bounce).
+    let mut emit: Vec<SurfelRadiance> = reflected_direct;
     let mut ratios: Vec<f64> = Vec::new();
     for bounce in 1..=settings.max {
         let done_before = (bounce - 1) as f32 / settings.max as f32;
-        let sent = emit.as_deref().unwrap_or(&reflected_direct);
+        let sent = &emit;
         let coded = coded_light(baked, sent);
         let values = slot_values(&slots, &index, &baked.tree, &baked.surfels, sent, &coded);
         let light = gather.evaluate(&kept, regathered, &index, &values, cancel)?;
@@ -387,12 +413,37 @@ pub fn add_bounces(
             }
             break;
         }
-        emit = Some(light);
+        emit = light;
     }
     progress("bounces", 1.0);
     baked.coded = coded_for(baked);
     baked.plan.json["bounces"] = report.to_json();
     Ok(report)
+}
+
+/// The tree of `baked` as senders of geometry alone ([`Senders::geometry_of`]), from its
+/// records in memory: what the cache would hold, without encoding a byte.
+fn geometry_senders(baked: &Baked) -> Result<Senders> {
+    let (records, surfel_records) = records_of(baked);
+    let surfel_maps = baked
+        .radiance
+        .iter()
+        .map(|r| match r {
+            SurfelRadiance::Map(m) => Some(m.clone()),
+            SurfelRadiance::Rgb(_) => None,
+        })
+        .collect();
+    let projected = &baked.projected.nodes;
+    Ok(Senders::geometry_of(
+        Path::new("(the bake in memory)"),
+        &records,
+        surfel_records,
+        &baked.tree.order,
+        [&|j| projected[j as usize].g.clone(), &|j| {
+            projected[j as usize].h.clone()
+        }],
+        surfel_maps,
+    )?)
 }
 
 /// A surfel's direct-lit radiance less its emission (on the front, where it leaves): the light
@@ -431,11 +482,12 @@ fn coded_light(baked: &Baked, light: &[SurfelRadiance]) -> CodedTree<Rgb> {
     let leaf = |i: u32| {
         let s = &baked.surfels[i as usize];
         let back = baked.mesh_flags[s.mesh as usize] & SOLID == 0;
-        intensity_map(s, &light[i as usize], levels, back)
+        intensity_map(s, &light[i as usize], back)
     };
     encode(
         &baked.tree,
         &leaf,
+        levels,
         baked.coded.split_level,
         baked.settings.tau,
     )
@@ -533,19 +585,26 @@ struct Gather<'a> {
 
 impl Gather<'_> {
     /// The links of every member of `group` (see [`Gather::buffers`]).
-    fn record(&self, group: &ReceiverGroup, stack: &mut Vec<u32>) -> Vec<ReceiverLinks> {
+    fn record(&self, group: &Cluster, stack: &mut Vec<u32>) -> Vec<ReceiverLinks> {
         self.buffers(group, stack)
             .into_iter()
             .map(|(i, mb)| {
-                let diffuse = self.ops[i as usize].is_none();
-                ReceiverLinks::of_buffer(i, &mb, diffuse, self.slots)
+                let op = &self.ops[i as usize];
+                let links = ReceiverLinks::of_buffer(i, &mb, op.is_none(), self.slots);
+                match op {
+                    Some(op) => {
+                        let levels = map_levels(&self.bsdfs[i as usize]).unwrap_or(3);
+                        links.with_map_texels(map_texels(op, mb.frame, levels))
+                    }
+                    None => links,
+                }
             })
             .collect()
     }
 
     /// The closed microbuffer of every member of `group`, recording links: gathered with the
     /// group's far senders shared (spec §8.3), and closed.
-    fn buffers(&self, group: &ReceiverGroup, stack: &mut Vec<u32>) -> Vec<(u32, Microbuffer)> {
+    fn buffers(&self, group: &Cluster, stack: &mut Vec<u32>) -> Vec<(u32, Microbuffer)> {
         let surfels = self.surfels;
         let side = |i: u32| {
             self.ops[i as usize]
@@ -578,7 +637,7 @@ impl Gather<'_> {
             mesh: a.mesh,
             frame: Frame::from_normal(a.n),
             radius: group.radius,
-            plane_slope: (!spherical).then(|| group.cone.sin()),
+            plane_slope: group.cone.filter(|_| !spherical).map(f32::sin),
             record_links: true,
         };
         let n = group
@@ -606,7 +665,7 @@ impl Gather<'_> {
     fn evaluate(
         &self,
         kept: &[Vec<ReceiverLinks>],
-        regathered: &[ReceiverGroup],
+        regathered: &[Cluster],
         index: &SlotIndex,
         values: &[Rgb],
         cancel: &AtomicBool,
@@ -652,14 +711,7 @@ impl Gather<'_> {
             (Some(op), _) => {
                 let radiance = links.pixel_radiance(values);
                 let local = op.outgoing(&radiance, INCOMING_TAU);
-                let frame = Frame::from_normal(self.surfels[i].n);
-                SurfelRadiance::Map(resample(
-                    &local,
-                    op,
-                    frame,
-                    map_levels(bsdf).unwrap_or(3),
-                    tau,
-                ))
+                SurfelRadiance::Map(resample(&local, links.map_texels(), tau))
             }
             (None, Bsdf::Diffuse(d)) => {
                 SurfelRadiance::Rgb((d.reflectance * links.diffuse_sum(values)).max(Rgb::ZERO))
@@ -669,29 +721,80 @@ impl Gather<'_> {
     }
 }
 
-/// The surfel's global sphere map (2^levels texels per side) of its outgoing radiance on the
-/// operator's local grid, by nearest texel (spec §8.2: "the filter is unspecified").
-fn resample(
-    local: &[Rgb],
-    op: &BsdfOperator,
-    frame: Frame,
-    levels: u32,
-    tau: f32,
-) -> SparseHaar<Rgb> {
-    let texels: Vec<Rgb> = texel_directions(levels)
+/// Per texel of a surfel's global sphere map (2^levels texels per side), the texel of its
+/// operator's local grid (in the surfel's `frame`) it takes its radiance from, by nearest
+/// texel (spec §8.2: "the filter is unspecified"), or [`NO_TEXEL`]. An operator grid has at
+/// most 2 × 32² texels ([`operator_side`]), well within `u16`.
+fn map_texels(op: &BsdfOperator, frame: Frame, levels: u32) -> Vec<u16> {
+    texel_directions(levels)
         .iter()
         .map(|&w| {
             op.texel_of(frame.to_local(w))
-                .map_or(Rgb::ZERO, |t| local[t as usize])
+                .and_then(|t| u16::try_from(t).ok())
+                .unwrap_or(NO_TEXEL)
         })
+        .collect()
+}
+
+/// The surfel's global sphere map of its outgoing radiance `local` on the operator's grid,
+/// through its [`map_texels`].
+fn resample(local: &[Rgb], map_texels: &[u16], tau: f32) -> SparseHaar<Rgb> {
+    let texels: Vec<Rgb> = map_texels
+        .iter()
+        .map(|&t| local.get(t as usize).copied().unwrap_or(Rgb::ZERO))
         .collect();
-    SparseHaar::compress(&Haar2d::forward(&texels, 1 << levels), tau)
+    // The map has 4^levels texels.
+    let side = 1 << (map_texels.len().trailing_zeros() / 2);
+    SparseHaar::compress(&Haar2d::forward(&texels, side), tau)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::bake::{bake, BakeSettings};
+    use crate::cache::store::BakedCache;
+
+    /// The bundled cbox-rough (diffuse walls, a rough conductor, a glass sphere) and its bake
+    /// of `points` surfels with `light_samples` each, threshold `tau`, direct light only.
+    fn rough_box(points: usize, light_samples: u32, tau: f32) -> (Scene, Baked) {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/data/mitsuba/cbox-rough.gltf");
+        let scene = Scene::load(&path).expect("bundled scene");
+        let settings = BakeSettings {
+            points,
+            light_samples,
+            tau,
+            ..BakeSettings::from_quality(crate::bake::Quality::Draft)
+        };
+        let baked = bake(&scene, &settings, &|_, _| {}).expect("bakes");
+        (scene, baked)
+    }
+
+    /// The senders the bounces build from the bake in memory look up what those read back
+    /// from its cache file do: the same lookup and projected area, node by node, along
+    /// directions all round (exact: both rebuild the same maps from the same records).
+    #[test]
+    fn senders_in_memory_are_the_cache_senders() {
+        let (_, baked) = rough_box(2000, 4, 2e-3);
+        let from_file =
+            Senders::from_cache(&BakedCache::in_memory(Path::new("test"), &baked).expect("cache"))
+                .expect("senders");
+        let in_memory = geometry_senders(&baked).expect("senders");
+        assert_eq!(from_file.nodes.len(), in_memory.nodes.len());
+        let directions = crate::haar::texel_directions(3);
+        let mut compared = 0;
+        for j in 0..from_file.nodes.len() as u32 {
+            for &w in directions {
+                for hidden in [false, true] {
+                    let a = from_file.seen_lookup(j, w, 0, hidden);
+                    let b = in_memory.seen_lookup(j, w, 0, hidden);
+                    assert_eq!(a, b, "node {j} along {w}");
+                    compared += 1;
+                }
+            }
+        }
+        assert!(compared > 100_000, "{compared}");
+    }
 
     /// The recorded links, replayed against the light the senders were loaded with, give
     /// what the gather itself composites: per pixel for directional receivers, and the cosine
@@ -704,16 +807,7 @@ mod tests {
     /// shared far buffer, the closing rays and the holes filled from the nearest surfel.
     #[test]
     fn links_replay_the_gather() {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("tests/data/mitsuba/cbox-rough.gltf");
-        let scene = Scene::load(&path).expect("bundled scene");
-        let settings = BakeSettings {
-            points: 3000,
-            light_samples: 16,
-            tau: 0.0,
-            ..BakeSettings::from_quality(crate::bake::Quality::Draft)
-        };
-        let baked = bake(&scene, &settings, &|_, _| {}).expect("bakes");
+        let (scene, baked) = rough_box(3000, 16, 0.0);
         let accel = Accel::build(&scene);
         let bsdfs: Vec<Bsdf> = baked
             .surfels
@@ -739,7 +833,7 @@ mod tests {
             slots: &slots,
         };
         let groups = receiver_groups(&baked.tree, &baked.surfels);
-        let picked: Vec<&ReceiverGroup> = groups.iter().step_by(7).collect();
+        let picked: Vec<&Cluster> = groups.iter().step_by(7).collect();
         assert!(picked.iter().any(|g| g.members.len() > 1));
         let mut index = SlotIndex::new(&slots);
         let mut stack = Vec::new();

@@ -94,6 +94,13 @@ impl Slots {
         })
     }
 
+    /// The fewest slots a tree of `points` surfels with maps of `levels` has: one per surfel,
+    /// and S's three and I's texels per inner node (a binary tree of one surfel per leaf has
+    /// `points − 1`).
+    pub fn fewest(points: u64, levels: u32) -> u64 {
+        points + points.saturating_sub(1) * (3 + (1u64 << (2 * levels)))
+    }
+
     /// How many slots there are.
     pub fn total(&self) -> u64 {
         self.total
@@ -227,13 +234,33 @@ struct Term {
     w: f32,
 }
 
+/// Append `terms` to `out` sorted by slot, the weights of equal slots summed. Ties are
+/// broken by the weight's bits, so the sums' order, and with it every rounding, depends on the
+/// set of terms alone, never on the order they were produced in.
+fn merge_by_slot(terms: &mut [Term], out: &mut Vec<Term>) {
+    terms.sort_unstable_by_key(|t| (t.slot, t.w.to_bits()));
+    let begin = out.len();
+    for &t in terms.iter() {
+        match out[begin..].last_mut() {
+            Some(last) if last.slot == t.slot => last.w += t.w,
+            _ => out.push(t),
+        }
+    }
+}
+
 /// A receiver's recorded gather.
 pub struct ReceiverLinks {
     pub surfel: u32,
     /// For a directional receiver, the end of each pixel's terms; empty for a diffuse one.
     pixel_ends: Box<[u32]>,
     terms: Box<[Term]>,
+    /// For a directional receiver: per texel of its outgoing map, the texel of its operator's
+    /// grid it takes its radiance from, or [`NO_TEXEL`] (geometry alone, so recorded once).
+    map_texels: Box<[u16]>,
 }
+
+/// A map texel no operator texel reaches.
+pub const NO_TEXEL: u16 = u16::MAX;
 
 impl ReceiverLinks {
     /// The links of surfel `surfel`'s closed buffer `mb` (which recorded links): merged by
@@ -244,59 +271,89 @@ impl ReceiverLinks {
                 surfel,
                 pixel_ends: Box::default(),
                 terms: Box::default(),
+                map_texels: Box::default(),
             };
         };
-        // The diffuse convolution's weight of each pixel (ρ = 1): f(Z, ωₖ) sₖ / |cos θₖ|.
-        let unit = Diffuse {
-            reflectance: Rgb::ONE,
-        };
-        let pixel_weight: Vec<f32> = if diffuse {
-            mb.pixels
+        if diffuse {
+            // The diffuse convolution's weight of each pixel (ρ = 1): f(Z, ωₖ) sₖ / |cos θₖ|,
+            // folded into its source first (a node splat covers many pixels), then each
+            // source expanded to its slots once.
+            let unit = Diffuse {
+                reflectance: Rgb::ONE,
+            };
+            let pixel_weight: Vec<f32> = mb
+                .pixels
                 .iter()
                 .map(|px| unit.eval(Vec3::Z, px.dir).x * (px.solid_angle / px.dir.z.abs()))
-                .collect()
-        } else {
-            Vec::new()
-        };
-        let mut raw: Vec<(u32, u32, f32)> = Vec::with_capacity(links.entries.len());
-        for e in &links.entries {
-            let lookup = links.sources[e.source as usize];
-            let (pixel, w) = if diffuse {
-                (0, e.w_cos * pixel_weight[e.pixel as usize])
-            } else {
-                (e.pixel, e.w)
-            };
-            if w != 0.0 {
-                slots.terms(lookup, |slot, f| raw.push((pixel, slot, w * f)));
+                .collect();
+            let mut per_source = vec![0.0f32; links.sources.len()];
+            for e in &links.entries {
+                per_source[e.source as usize] += e.w_cos * pixel_weight[e.pixel as usize];
             }
-        }
-        raw.sort_by_key(|&(pixel, slot, _)| (pixel, slot));
-        let mut terms: Vec<Term> = Vec::with_capacity(raw.len());
-        let pixels = if diffuse { 0 } else { mb.pixels.len() };
-        let mut pixel_ends = vec![0u32; pixels];
-        let mut last = None;
-        for (pixel, slot, w) in raw {
-            if last == Some((pixel, slot)) {
-                if let Some(t) = terms.last_mut() {
-                    t.w += w;
+            let mut raw: Vec<Term> = Vec::with_capacity(links.sources.len());
+            for (&lookup, &w) in links.sources.iter().zip(&per_source) {
+                if w != 0.0 {
+                    slots.terms(lookup, |slot, f| raw.push(Term { slot, w: w * f }));
                 }
-                continue;
             }
-            last = Some((pixel, slot));
-            terms.push(Term { slot, w });
-            if !diffuse {
-                pixel_ends[pixel as usize] = terms.len() as u32;
-            }
+            let mut terms = Vec::with_capacity(raw.len());
+            merge_by_slot(&mut raw, &mut terms);
+            return ReceiverLinks {
+                surfel,
+                pixel_ends: Box::default(),
+                terms: terms.into_boxed_slice(),
+                map_texels: Box::default(),
+            };
         }
-        // Pixels without terms end where the one before them does.
-        for k in 1..pixel_ends.len() {
-            pixel_ends[k] = pixel_ends[k].max(pixel_ends[k - 1]);
+        // Directional: the entries counted into pixel runs, each run merged by slot.
+        let pixels = mb.pixels.len();
+        let mut starts = vec![0u32; pixels + 1];
+        for e in &links.entries {
+            starts[e.pixel as usize + 1] += 1;
+        }
+        for k in 0..pixels {
+            starts[k + 1] += starts[k];
+        }
+        let mut by_pixel = vec![(0u32, 0.0f32); links.entries.len()];
+        let mut next = starts.clone();
+        for e in &links.entries {
+            let at = &mut next[e.pixel as usize];
+            by_pixel[*at as usize] = (e.source, e.w);
+            *at += 1;
+        }
+        let mut terms: Vec<Term> = Vec::with_capacity(links.entries.len());
+        let mut pixel_ends = vec![0u32; pixels];
+        let mut run: Vec<Term> = Vec::new();
+        for k in 0..pixels {
+            run.clear();
+            for &(source, w) in &by_pixel[starts[k] as usize..starts[k + 1] as usize] {
+                if w != 0.0 {
+                    let lookup = links.sources[source as usize];
+                    slots.terms(lookup, |slot, f| run.push(Term { slot, w: w * f }));
+                }
+            }
+            merge_by_slot(&mut run, &mut terms);
+            pixel_ends[k] = terms.len() as u32;
         }
         ReceiverLinks {
             surfel,
             pixel_ends: pixel_ends.into_boxed_slice(),
             terms: terms.into_boxed_slice(),
+            map_texels: Box::default(),
         }
+    }
+
+    /// The same links with the directional receiver's map texels (see
+    /// [`ReceiverLinks::map_texels`]).
+    pub fn with_map_texels(mut self, texels: Vec<u16>) -> ReceiverLinks {
+        self.map_texels = texels.into_boxed_slice();
+        self
+    }
+
+    /// Per texel of a directional receiver's outgoing map, its operator texel or
+    /// [`NO_TEXEL`].
+    pub fn map_texels(&self) -> &[u16] {
+        &self.map_texels
     }
 
     /// Mark the slots these links read.
@@ -318,6 +375,7 @@ impl ReceiverLinks {
         std::mem::size_of::<Self>()
             + std::mem::size_of_val(&*self.pixel_ends)
             + std::mem::size_of_val(&*self.terms)
+            + std::mem::size_of_val(&*self.map_texels)
     }
 
     /// Σ w·L over the terms of a diffuse receiver (light from `values`, indexed by compact
@@ -361,18 +419,18 @@ pub fn slot_values(
     let per_surfel: Vec<Vec<Rgb>> = sent
         .par_iter()
         .enumerate()
-        .map(|(i, r)| {
+        .map_init(Vec::new, |texels, (i, r)| {
             let count = slots.surfel_levels[i].map_or(1, |l| 1 << (2 * l));
-            let read: Vec<u32> = index.read_in(slots.surfel_base[i], count).collect();
-            // A map nobody reads is not decoded.
-            let texels = match r {
-                _ if read.is_empty() => Vec::new(),
-                SurfelRadiance::Rgb(c) => vec![*c],
-                SurfelRadiance::Map(m) => m.to_dense().inverse(),
-            };
-            read.iter()
-                .map(|&t| texels[t as usize].max(Rgb::ZERO))
-                .collect()
+            let mut read = index.read_in(slots.surfel_base[i], count).peekable();
+            match r {
+                // A map nobody reads is not decoded.
+                _ if read.peek().is_none() => Vec::new(),
+                SurfelRadiance::Rgb(c) => vec![c.max(Rgb::ZERO)],
+                SurfelRadiance::Map(m) => {
+                    m.texels_into(texels);
+                    read.map(|t| texels[t as usize].max(Rgb::ZERO)).collect()
+                }
+            }
         })
         .collect();
     values.extend(per_surfel.into_iter().flatten());
@@ -393,22 +451,17 @@ pub fn slot_values(
         intensity_read,
         |j, intensity| {
             let j = j as usize;
-            let mut texels: Option<Vec<Rgb>> = None;
-            let read: Vec<Rgb> = index
-                .read_in(slots.node_base[j], 3 + side * side)
-                .map(|k| {
-                    if k < 3 {
-                        s_sums[j][k as usize]
-                    } else {
-                        // `intensity` is there whenever one of its texels is read.
-                        let t = texels.get_or_insert_with(|| {
-                            intensity.map_or_else(Vec::new, Haar2d::inverse)
-                        });
-                        t.get((k - 3) as usize)
-                            .map_or(Rgb::ZERO, |l| l.max(Rgb::ZERO))
-                    }
-                })
+            let offsets: Vec<u32> = index.read_in(slots.node_base[j], 3 + side * side).collect();
+            let s_read = offsets.iter().take_while(|&&k| k < 3).count();
+            let mut read: Vec<Rgb> = offsets[..s_read]
+                .iter()
+                .map(|&k| s_sums[j][k as usize])
                 .collect();
+            let texels: Vec<u32> = offsets[s_read..].iter().map(|&k| k - 3).collect();
+            // `intensity` is there whenever one of its texels is read.
+            if let Some(g) = intensity.filter(|_| !texels.is_empty()) {
+                read.extend(read_texels(&texels, slots.tree_levels, g));
+            }
             (!read.is_empty()).then_some((j as u32, read))
         },
         &mut per_node,
@@ -416,6 +469,31 @@ pub fn slot_values(
     per_node.sort_by_key(|(j, _)| *j);
     values.extend(per_node.into_iter().flat_map(|(_, v)| v));
     values
+}
+
+/// The texels `read` (row-major) of a map of `levels` texels a side, from `map` (whose own
+/// resolution may be coarser: its finer details are zero), clamped at zero (a thresholded map
+/// rings a little below it; a lookup's read is clamped, as in the render). The decode goes
+/// through buffers kept per thread.
+fn read_texels(read: &[u32], levels: u32, map: &Haar2d<Rgb>) -> Vec<Rgb> {
+    thread_local! {
+        static BUFFERS: std::cell::RefCell<(Vec<Rgb>, Vec<Rgb>)> = const {
+            std::cell::RefCell::new((Vec::new(), Vec::new()))
+        };
+    }
+    BUFFERS.with_borrow_mut(|(texels, scratch)| {
+        map.inverse_into(texels, scratch);
+        let shift = levels - map.levels.min(levels);
+        let side = 1u32 << levels;
+        read.iter()
+            .map(|&t| {
+                let (x, y) = ((t % side) >> shift, (t / side) >> shift);
+                texels
+                    .get(((y << map.levels) + x) as usize)
+                    .map_or(Rgb::ZERO, |l| l.max(Rgb::ZERO))
+            })
+            .collect()
+    })
 }
 
 /// Per node, S = Σ A L n over the diffuse surfels below, per axis (RGB).
@@ -492,7 +570,7 @@ fn for_each_coded_intensity(
                     return (None, read(j as u32, None));
                 }
                 let g = match &coded.nodes[j].g {
-                    Some(g) => g.to_dense(),
+                    Some(g) => g.to_dense_trimmed(),
                     None => {
                         let p = node.parent as usize;
                         let parent = above
@@ -506,7 +584,7 @@ fn for_each_coded_intensity(
                                 } else {
                                     -1.0
                                 };
-                                Haar2d::combine(parent, 0.5, &h.to_dense(), sign)
+                                Haar2d::combine(parent, 0.5, &h.to_dense_trimmed(), sign)
                             }
                             // The coder stores every node's G or its parent's H.
                             _ => return (None, None),

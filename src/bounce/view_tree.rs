@@ -32,6 +32,7 @@
 
 use crate::bake::surfels::Surfel;
 use crate::bake::tree::{SurfelTree, NONE};
+use crate::gather::fpbgi::Cluster;
 
 /// The most surfels in one receiver group.
 pub const GROUP_SURFELS: u32 = 32;
@@ -42,21 +43,10 @@ pub const GROUP_CONE: f32 = 1e-3;
 /// The far threshold r_V/d of a receiver group's shared senders (see the module docs).
 pub const VIEW_EPS: f32 = 0.1;
 
-/// Surfels that share the far part of their gather.
-#[derive(Clone, Debug, PartialEq)]
-pub struct ReceiverGroup {
-    /// Surfel indices.
-    pub members: Vec<u32>,
-    /// The member nearest the node's centre.
-    pub active: u32,
-    /// The largest distance from the active member to another.
-    pub radius: f32,
-    /// The node's normal cone (radians).
-    pub cone: f32,
-}
-
-/// The receiver groups of `tree` (see the module docs), covering every surfel once.
-pub fn receiver_groups(tree: &SurfelTree, surfels: &[Surfel]) -> Vec<ReceiverGroup> {
+/// The receiver groups of `tree` (see the module docs), covering every surfel once: clusters
+/// of surfel indices whose active member is the one nearest the node's centre and whose cone
+/// is the node's normal cone.
+pub fn receiver_groups(tree: &SurfelTree, surfels: &[Surfel]) -> Vec<Cluster> {
     let mut groups = Vec::new();
     let mut stack = if tree.nodes.is_empty() {
         vec![]
@@ -89,11 +79,11 @@ pub fn receiver_groups(tree: &SurfelTree, surfels: &[Surfel]) -> Vec<ReceiverGro
             .iter()
             .map(|&i| (surfels[i as usize].p - pa).length())
             .fold(0.0, f32::max);
-        groups.push(ReceiverGroup {
+        groups.push(Cluster {
             members: members.to_vec(),
             active,
             radius,
-            cone: node.cone_angle,
+            cone: Some(node.cone_angle),
         });
     }
     groups

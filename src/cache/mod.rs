@@ -21,6 +21,12 @@
 //! Writing goes to a temporary file in the same directory, is synced, then renamed over the
 //! target: a killed bake leaves the previous file or none, never a half-written one. Reading
 //! checks everything before handing out a byte and says exactly what is wrong.
+//!
+//! [`store`] lays a bake out in those sections and reads it back typed: the one place that
+//! knows the records, so that the render, the preview and the plugin read a bake without
+//! the bake's code.
+
+pub mod store;
 
 use crate::atomic::write_atomically;
 use std::io::Write;

@@ -13,9 +13,9 @@ pub mod memory;
 mod plot;
 
 use crate::atomic::write_atomically;
-use crate::bake::store::BakedCache;
 use crate::bake::{bake, BakeSettings, Quality};
 use crate::bounce::BounceSettings;
+use crate::cache::store::BakedCache;
 use crate::error::{Error, Result};
 use crate::image::{error_against, srgb8, Image};
 use crate::reference::{render, RenderSettings};

@@ -34,15 +34,20 @@ pub const KMEANS_ITERATIONS: u32 = 16;
 /// module docs for the measured trade-off).
 pub const DIRECTIONAL_FAR: f32 = 0.3;
 
-/// One cluster of receivers.
+/// One cluster of receivers: the render's k-means clusters of primary hits ([`cluster`]) and
+/// the bake's receiver groups of surfels (`bounce::view_tree`) alike.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Cluster {
-    /// Indices into the clustered points.
+    /// Indices into the clustered receivers.
     pub members: Vec<u32>,
     /// The member nearest the centre.
     pub active: u32,
     /// The largest distance from the active receiver to a member.
     pub radius: f32,
+    /// For members on one surface: the widest angle (radians) between a member's normal and
+    /// the surface's axis (see [`ClusterReceivers::plane_slope`]); `None` where members may
+    /// face any way.
+    pub cone: Option<f32>,
 }
 
 /// Cluster `points` (position, unit normal) into at most `k` clusters.
@@ -94,6 +99,7 @@ pub fn cluster(points: &[(Vec3, Vec3)], k: usize) -> Vec<Cluster> {
             members: Vec::new(),
             active: 0,
             radius: 0.0,
+            cone: None,
         })
         .collect();
     for (i, &a) in assign.iter().enumerate() {

@@ -14,9 +14,11 @@
 use super::lookup::Lookup;
 use super::microbuffer::Sender;
 use crate::bake::pipeline::{intensity_map, SurfelRadiance};
-use crate::bake::store::{BakedCache, NodeRecord, SurfelRecord, BACK_SIDED, CLOSED, NO_MAP, SOLID};
 use crate::bake::surfels::Surfel;
 use crate::bake::tree::NONE;
+use crate::cache::store::{
+    BakedCache, NodeRecord, SurfelRecord, BACK_SIDED, CLOSED, NO_MAP, SOLID,
+};
 use crate::cache::CacheError;
 use crate::haar::{
     direction_to_square, square_to_direction, texel_at, Coefficient, Haar2d, SparseHaar,
@@ -24,6 +26,7 @@ use crate::haar::{
 use crate::spectrum::Rgb;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
+use std::path::Path;
 
 /// Nodes whose normals lie within this angle (radians) of their axis are flat enough to
 /// have a plane, which tells the surface they lie on from occluders (30°).
@@ -107,7 +110,7 @@ pub struct Senders {
     /// Per surfel with a directional map: the map (outgoing radiance over the sphere).
     maps: Vec<Option<SparseHaar<Rgb>>>,
     /// Whether [`Senders::seen`] evaluates the radiance it looks up (see
-    /// [`Senders::geometry_only`]).
+    /// [`Senders::geometry_of`]).
     evaluates: bool,
 }
 
@@ -115,7 +118,7 @@ pub struct Senders {
 #[derive(Clone, Copy, Debug)]
 pub struct Seen {
     /// Radiance towards the receiver (reflected light only; zero from
-    /// [`Senders::geometry_only`] senders).
+    /// [`Senders::geometry_of`] senders).
     pub radiance: Rgb,
     /// Projected area towards the receiver (the node covers `projected / d²` steradians).
     pub projected: f32,
@@ -205,54 +208,87 @@ impl Below {
 impl Senders {
     /// Load the tree of `cache`, rebuilding every inner node's G.
     pub fn from_cache(cache: &BakedCache) -> Result<Senders, CacheError> {
+        let path = &cache.cache.path;
         let records = &cache.nodes;
         let levels = cache.plan["plan"]["map_resolution"]
             .as_u64()
             .map_or(3, |r| r.max(1).ilog2());
-        let nodes: Vec<SenderNode> = records
-            .iter()
-            .map(|r| SenderNode {
-                center: Vec3::from(r.center),
-                radius: r.radius,
-                children: r.children,
-                surfel: if r.children[0] == NONE {
-                    cache.order.get(r.first as usize).copied().unwrap_or(NONE)
-                } else {
-                    NONE
-                },
-                axis: Vec3::from(r.axis),
-                cone_angle: r.cone_angle,
-                sin_cone: if r.cone_angle < std::f32::consts::FRAC_PI_2 {
-                    r.cone_angle.sin()
-                } else {
-                    2.0
-                },
-                area_normal: Vec3::ZERO,
-                directional: 0.0,
-                radiance_normal: [Vec3::ZERO; 3],
-                solid: false,
-                back_sided: false,
-                closed_mesh: NONE,
-                slab: [f32::NEG_INFINITY, f32::INFINITY],
-            })
-            .collect();
-        if nodes
-            .iter()
-            .any(|n| n.is_leaf() && n.surfel as usize >= cache.surfels.len())
-        {
-            return Err(CacheError::Malformed {
-                path: cache.cache.path.clone(),
-                what: "a leaf has no surfel".into(),
-            });
-        }
-        let mut nodes = nodes;
+        let at = |j: u32| &records[j as usize];
+        let intensity = rebuild(
+            path,
+            records,
+            |j| decoded(cache, at(j).g),
+            |j| decoded(cache, at(j).h),
+        )?;
+        let projected = rebuild(
+            path,
+            records,
+            |j| decoded(cache, at(j).area_g),
+            |j| decoded(cache, at(j).area_h),
+        )?;
+        let maps: Vec<Option<SparseHaar<Rgb>>> = cache
+            .surfels
+            .par_iter()
+            .map(|s| decoded(cache, s.map))
+            .collect::<Result<_, _>>()?;
+        let nodes = sender_nodes(path, records, &cache.surfels, &cache.order)?;
+        let emitted = emitted_intensities(records, &nodes, &cache.surfels, &maps, levels);
+        Ok(Senders::assemble(
+            nodes,
+            records,
+            cache.surfels.clone(),
+            (intensity, projected),
+            emitted,
+            maps,
+        ))
+    }
+
+    /// The geometry of a bake still in memory, for a gather that only records where radiance
+    /// is read (the bake's transport, which evaluates the lookups against each bounce's light
+    /// itself: [`Senders::seen`] and the splats it feeds carry zero radiance): its records
+    /// ([`crate::cache::store::records_of`]), the stored projected-area maps of each node (G,
+    /// H) and its surfels' maps (their resolution says where a lookup reads). `path` names
+    /// the bake in errors.
+    pub fn geometry_of(
+        path: &Path,
+        records: &[NodeRecord],
+        surfels: Vec<SurfelRecord>,
+        order: &[u32],
+        projected: [&(dyn Fn(u32) -> Option<SparseHaar<f32>> + Sync); 2],
+        maps: Vec<Option<SparseHaar<Rgb>>>,
+    ) -> Result<Senders, CacheError> {
+        let [g, h] = projected;
+        let projected = rebuild(path, records, |j| Ok(g(j)), |j| Ok(h(j)))?;
+        let nodes = sender_nodes(path, records, &surfels, order)?;
+        let none = SparseHaar::compress(&Haar2d::forward(&[Rgb::ZERO], 1), 0.0);
+        let mut senders = Senders::assemble(
+            nodes,
+            records,
+            surfels,
+            (vec![none; records.len()], projected),
+            vec![None; records.len()],
+            maps,
+        );
+        senders.evaluates = false;
+        Ok(senders)
+    }
+
+    /// The senders of `nodes` (see [`sender_nodes`]) with their maps.
+    fn assemble(
+        mut nodes: Vec<SenderNode>,
+        records: &[NodeRecord],
+        surfels: Vec<SurfelRecord>,
+        (intensity, projected): (Vec<SparseHaar<Rgb>>, Vec<SparseHaar<f32>>),
+        emitted: Vec<Option<SparseHaar<Rgb>>>,
+        maps: Vec<Option<SparseHaar<Rgb>>>,
+    ) -> Senders {
         // Children come after their parents: what a node keeps of the surfels below is summed
         // bottom-up (the directional area as an area, turned into a fraction further down).
         let mut directional_area = vec![0.0f32; nodes.len()];
         for j in (0..nodes.len()).rev() {
             let node = nodes[j];
             let below = if node.is_leaf() {
-                Below::of_surfel(&cache.surfels[node.surfel as usize], node)
+                Below::of_surfel(&surfels[node.surfel as usize], node)
             } else {
                 node.children
                     .iter()
@@ -284,7 +320,7 @@ impl Senders {
         }
         let mut solid_meshes = Vec::new();
         let mut closed_boxes: Vec<Option<[Vec3; 2]>> = Vec::new();
-        for s in &cache.surfels {
+        for s in &surfels {
             let m = s.mesh as usize;
             if m >= solid_meshes.len() {
                 solid_meshes.resize(m + 1, false);
@@ -306,37 +342,17 @@ impl Senders {
                 0.0
             };
         }
-        let intensity = rebuild(cache, records, |r| (r.g, r.h))?;
-        let projected = rebuild(cache, records, |r| (r.area_g, r.area_h))?;
-        let maps: Vec<Option<SparseHaar<Rgb>>> = cache
-            .surfels
-            .par_iter()
-            .map(|s| {
-                (s.map != NO_MAP)
-                    .then(|| cache.map::<Rgb>(s.map))
-                    .transpose()
-            })
-            .collect::<Result<_, _>>()?;
-        let emitted = emitted_intensities(records, &nodes, &cache.surfels, &maps, levels);
-        Ok(Senders {
+        Senders {
             solid_meshes,
             closed_boxes,
             nodes,
-            surfels: cache.surfels.clone(),
+            surfels,
             intensity,
             projected,
             emitted,
             maps,
             evaluates: true,
-        })
-    }
-
-    /// The same senders for a gather that only records where radiance is read (the bake's
-    /// transport, which evaluates the lookups against each bounce's light itself):
-    /// [`Senders::seen`] and the splats it feeds carry zero radiance.
-    pub fn geometry_only(mut self) -> Senders {
-        self.evaluates = false;
-        self
+        }
     }
 
     /// What a receiver on mesh `receiver_mesh` sees of node `j` along the unit direction `w`
@@ -626,7 +642,7 @@ impl Senders {
         }
     }
 
-    /// [`Senders::radiance_of`], or zero from [`Senders::geometry_only`] senders: what a
+    /// [`Senders::radiance_of`], or zero from [`Senders::geometry_of`] senders: what a
     /// splat carries.
     pub fn evaluated(&self, lookup: Lookup) -> Rgb {
         if self.evaluates {
@@ -695,15 +711,72 @@ fn texel_on_side(w: Vec3, side: Vec3, min_cos: f32, levels: u32) -> (Vec2, Vec3)
     (p, centre)
 }
 
-/// Every inner node's G, from the stored G (at and above the split level) or from the
-/// parent's G and H (below it). Nodes are breadth-first, so a level depends on the one above.
-fn rebuild<T: Coefficient + Send + Sync>(
-    cache: &BakedCache,
+/// The tree's nodes from their records, without what is summed from the surfels below
+/// (see [`Senders::assemble`]); refused if a leaf names no surfel.
+fn sender_nodes(
+    path: &Path,
     records: &[NodeRecord],
-    maps: impl Fn(&NodeRecord) -> (u32, u32) + Sync,
+    surfels: &[SurfelRecord],
+    order: &[u32],
+) -> Result<Vec<SenderNode>, CacheError> {
+    let nodes: Vec<SenderNode> = records
+        .iter()
+        .map(|r| SenderNode {
+            center: Vec3::from(r.center),
+            radius: r.radius,
+            children: r.children,
+            surfel: if r.children[0] == NONE {
+                order.get(r.first as usize).copied().unwrap_or(NONE)
+            } else {
+                NONE
+            },
+            axis: Vec3::from(r.axis),
+            cone_angle: r.cone_angle,
+            sin_cone: if r.cone_angle < std::f32::consts::FRAC_PI_2 {
+                r.cone_angle.sin()
+            } else {
+                2.0
+            },
+            area_normal: Vec3::ZERO,
+            directional: 0.0,
+            radiance_normal: [Vec3::ZERO; 3],
+            solid: false,
+            back_sided: false,
+            closed_mesh: NONE,
+            slab: [f32::NEG_INFINITY, f32::INFINITY],
+        })
+        .collect();
+    if nodes
+        .iter()
+        .any(|n| n.is_leaf() && n.surfel as usize >= surfels.len())
+    {
+        return Err(CacheError::Malformed {
+            path: path.to_path_buf(),
+            what: "a leaf has no surfel".into(),
+        });
+    }
+    Ok(nodes)
+}
+
+/// A node's stored map (G or H), decoded; `None` where the node stores none.
+type StoredMap<T> = Result<Option<SparseHaar<T>>, CacheError>;
+
+/// Map `index` of `cache`'s pool, or `None` for [`NO_MAP`].
+fn decoded<T: Coefficient>(cache: &BakedCache, index: u32) -> StoredMap<T> {
+    (index != NO_MAP).then(|| cache.map(index)).transpose()
+}
+
+/// Every inner node's G, from the stored G (`g(j)`, at and above the split level) or from the
+/// parent's G and H (`h(parent)`, below it). Nodes are breadth-first, so a level depends on the
+/// one above. `path` names the bake in errors.
+fn rebuild<T: Coefficient + Send + Sync>(
+    path: &Path,
+    records: &[NodeRecord],
+    g: impl Fn(u32) -> StoredMap<T> + Sync,
+    h: impl Fn(u32) -> StoredMap<T> + Sync,
 ) -> Result<Vec<SparseHaar<T>>, CacheError> {
     let bad = |what: &str| CacheError::Malformed {
-        path: cache.cache.path.clone(),
+        path: path.to_path_buf(),
         what: what.into(),
     };
     let empty = || SparseHaar::compress(&Haar2d::forward(&[T::default()], 1), 0.0);
@@ -724,31 +797,24 @@ fn rebuild<T: Coefficient + Send + Sync>(
                 if r.children[0] == NONE {
                     return Ok(empty());
                 }
-                let (g, _) = maps(r);
-                if g != NO_MAP {
-                    return cache.map::<T>(g);
+                if let Some(g) = g(j)? {
+                    return Ok(g);
                 }
                 let parent = r.parent as usize;
                 if parent >= start {
                     return Err(bad("a node's parent does not come before it"));
                 }
-                let (_, h) = maps(&records[parent]);
-                if h == NO_MAP {
+                let Some(h) = h(parent as u32)? else {
                     return Err(bad(
                         "a node below the split level has no detail to rebuild it",
                     ));
-                }
+                };
                 let sign = if records[parent].children[0] == j {
                     1.0
                 } else {
                     -1.0
                 };
-                let g = Haar2d::combine(
-                    &out[parent].to_dense(),
-                    0.5,
-                    &cache.map::<T>(h)?.to_dense(),
-                    sign,
-                );
+                let g = Haar2d::combine(&out[parent].to_dense(), 0.5, &h.to_dense(), sign);
                 Ok(SparseHaar::compress_below(&g, 0.0))
             })
             .collect::<Result<_, CacheError>>()?;
@@ -760,7 +826,7 @@ fn rebuild<T: Coefficient + Send + Sync>(
 
 /// The emitted intensity of every node with emitting surfels below, built as the bake built
 /// the emission into I: each emitting surfel's intensity map of its emission alone, at its own
-/// resolution, refined to the tree's, summed up the tree.
+/// resolution, summed up the tree (at the finest below each node), at the tree's resolution.
 fn emitted_intensities(
     records: &[NodeRecord],
     nodes: &[SenderNode],
@@ -800,7 +866,7 @@ fn emitted_intensities(
                     ))
                 }
             };
-            dense[j] = Some(intensity_map(&surfel, &emission, levels, true));
+            dense[j] = Some(intensity_map(&surfel, &emission, true));
         } else {
             let [l, r] = records[j].children.map(|c| dense[c as usize].as_ref());
             dense[j] = match (l, r) {
@@ -816,7 +882,7 @@ fn emitted_intensities(
         .zip(nodes)
         .map(|(d, n)| {
             d.filter(|_| !n.is_leaf())
-                .map(|d| SparseHaar::compress_below(&d, 0.0))
+                .map(|d| SparseHaar::compress_below(&d, 0.0).refined_to(levels))
         })
         .collect()
 }

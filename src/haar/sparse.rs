@@ -15,6 +15,34 @@ use super::transform::{detail_index, detail_value, locate, Coefficient, Details,
 
 const NONE: u32 = u32::MAX;
 
+/// Whether a coefficient survives the absolute threshold `cut`.
+#[inline]
+fn keeps<T: Coefficient>(c: T, cut: f32) -> bool {
+    c != T::default() && c.magnitude() >= cut
+}
+
+/// Per cell of `h` (in [`detail_index`] order), whether it or a cell below it keeps a detail:
+/// one pass from the finest level up, so that the tree is built without visiting the cells
+/// of dropped subtrees twice (most of a thresholded map).
+fn kept_subtrees<T: Coefficient>(h: &Haar2d<T>, cut: f32) -> Vec<bool> {
+    let mut alive: Vec<bool> = h
+        .details
+        .iter()
+        .map(|d| d.iter().any(|&c| keeps(c, cut)))
+        .collect();
+    for l in (0..h.levels.saturating_sub(1)).rev() {
+        for j in 0..1u32 << l {
+            for i in 0..1u32 << l {
+                let below = [(0, 0), (1, 0), (0, 1), (1, 1)]
+                    .iter()
+                    .any(|&(a, b)| alive[detail_index(l + 1, 2 * i + a, 2 * j + b)]);
+                alive[detail_index(l, i, j)] |= below;
+            }
+        }
+    }
+    alive
+}
+
 #[derive(Clone, Debug, PartialEq)]
 struct Node<T> {
     details: Details<T>,
@@ -46,17 +74,20 @@ impl<T: Coefficient> SparseHaar<T> {
             nodes: Vec::new(),
         };
         if h.levels > 0 {
-            out.build(h, cut, 0, 0, 0);
+            let alive = kept_subtrees(h, cut);
+            if alive[0] {
+                out.build(h, cut, &alive, 0, 0, 0);
+            }
         }
         out
     }
 
-    /// Append the subtree of cell (l, i, j) if it keeps anything; returns its index or NONE.
-    fn build(&mut self, h: &Haar2d<T>, cut: f32, l: u32, i: u32, j: u32) -> u32 {
-        let keep = |c: T| c != T::default() && c.magnitude() >= cut;
+    /// Append cell (l, i, j), which keeps something in its subtree (`alive`), and the live
+    /// cells below it; returns its index.
+    fn build(&mut self, h: &Haar2d<T>, cut: f32, alive: &[bool], l: u32, i: u32, j: u32) -> u32 {
         let mut details = h.details[detail_index(l, i, j)];
         for c in &mut details {
-            if !keep(*c) {
+            if !keeps(*c, cut) {
                 *c = T::default();
             }
         }
@@ -65,18 +96,13 @@ impl<T: Coefficient> SparseHaar<T> {
             details,
             children: [NONE; 4],
         });
-        let mut any_child = false;
         if l + 1 < h.levels {
             for (q, (a, b)) in [(0, 0), (1, 0), (0, 1), (1, 1)].into_iter().enumerate() {
-                let c = self.build(h, cut, l + 1, 2 * i + a, 2 * j + b);
-                self.nodes[at].children[q] = c;
-                any_child |= c != NONE;
+                let (ci, cj) = (2 * i + a, 2 * j + b);
+                if alive[detail_index(l + 1, ci, cj)] {
+                    self.nodes[at].children[q] = self.build(h, cut, alive, l + 1, ci, cj);
+                }
             }
-        }
-        if !any_child && details.iter().all(|c| *c == T::default()) {
-            // Nothing below or here: drop the node (it is the last one pushed).
-            self.nodes.truncate(at);
-            return NONE;
         }
         at as u32
     }
@@ -110,6 +136,71 @@ impl<T: Coefficient> SparseHaar<T> {
         h
     }
 
+    /// The decomposition back at the coarsest resolution that holds every stored detail (the
+    /// finer ones are all zero): the same function as [`SparseHaar::to_dense`], smaller where
+    /// the map is smooth (a diffuse subtree's intensity in a tree of 64² maps is 8²).
+    pub fn to_dense_trimmed(&self) -> Haar2d<T> {
+        let levels = self.stored_depth(0, 0);
+        let mut h = Haar2d {
+            levels,
+            scale: self.scale,
+            details: vec![[T::default(); 3]; ((1usize << (2 * levels)) - 1) / 3],
+        };
+        if !self.nodes.is_empty() {
+            self.fill(&mut h, 0, 0, 0, 0);
+        }
+        h
+    }
+
+    /// The map's texels (row-major, `2^levels` a side) into `out`, as
+    /// `to_dense().inverse()` gives them, bit for bit (the same sums, and scalings by powers
+    /// of two), without the dense decomposition: a dropped subtree fills its block at once.
+    pub fn texels_into(&self, out: &mut Vec<T>) {
+        let n = 1usize << self.levels;
+        out.clear();
+        out.resize(n * n, T::default());
+        let root = if self.nodes.is_empty() { NONE } else { 0 };
+        self.decode(out, root, 0, (0, 0), self.scale);
+    }
+
+    /// Cell `(i, j)` of level `l`, whose (scaled) mean is `m`, and below.
+    fn decode(&self, out: &mut [T], node: u32, l: u32, (i, j): (usize, usize), m: T) {
+        if node == NONE || l == self.levels {
+            // m is the mean over 4^(levels − l) texels, scaled by 2^−l: each texel is m 2^l.
+            let v = m * (1u32 << l) as f32;
+            let size = 1usize << (self.levels - l);
+            let side = 1usize << self.levels;
+            for y in j * size..(j + 1) * size {
+                out[y * side + i * size..y * side + (i + 1) * size].fill(v);
+            }
+            return;
+        }
+        let n = &self.nodes[node as usize];
+        let [dx, dy, dxy] = n.details;
+        let means = [
+            (m + dx + dy + dxy) * 0.5,
+            (m - dx + dy - dxy) * 0.5,
+            (m + dx - dy - dxy) * 0.5,
+            (m - dx - dy + dxy) * 0.5,
+        ];
+        for (q, (a, b)) in [(0, 0), (1, 0), (0, 1), (1, 1)].into_iter().enumerate() {
+            self.decode(out, n.children[q], l + 1, (2 * i + a, 2 * j + b), means[q]);
+        }
+    }
+
+    /// The levels below and including `node` (at level `l`) that hold stored details.
+    fn stored_depth(&self, node: u32, l: u32) -> u32 {
+        match self.nodes.get(node as usize) {
+            None => l,
+            Some(n) => n
+                .children
+                .iter()
+                .filter(|&&c| c != NONE)
+                .map(|&c| self.stored_depth(c, l + 1))
+                .fold(l + 1, u32::max),
+        }
+    }
+
     fn fill(&self, h: &mut Haar2d<T>, node: u32, l: u32, i: u32, j: u32) {
         let n = &self.nodes[node as usize];
         h.details[detail_index(l, i, j)] = n.details;
@@ -128,6 +219,14 @@ impl<T: Coefficient> SparseHaar<T> {
     /// The resolution (log2 of the map side).
     pub fn levels(&self) -> u32 {
         self.levels
+    }
+
+    /// The same function on a grid of `levels` (finer or the same): its finer details are
+    /// zero, so no node changes (as [`Haar2d::refined_to`]).
+    pub fn refined_to(mut self, levels: u32) -> Self {
+        assert!(levels >= self.levels, "refining to a coarser grid");
+        self.levels = levels;
+        self
     }
 
     /// Stored detail triples (nodes), for memory accounting.

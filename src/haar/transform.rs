@@ -161,27 +161,29 @@ impl<T: Coefficient> Haar2d<T> {
         }
     }
 
-    /// `a·x + b·y` coefficient by coefficient (both of the same size).
+    /// `a·x + b·y` coefficient by coefficient, at the finer of the two resolutions: the
+    /// coarser map counts as refined to it ([`Haar2d::refined_to`], zero finer details), so
+    /// maps of a subtree that never needs fine detail stay small, with the same result.
     pub fn combine(x: &Self, a: f32, y: &Self, b: f32) -> Self {
-        assert_eq!(
-            x.levels, y.levels,
-            "combining maps of different resolutions"
-        );
+        let scaled = |c: &[T; 3], k: f32| [c[0] * k, c[1] * k, c[2] * k];
+        let shared = x.details.len().min(y.details.len());
+        let mut details: Vec<Details<T>> = x.details[..shared]
+            .iter()
+            .zip(&y.details[..shared])
+            .map(|(p, q)| {
+                [
+                    p[0] * a + q[0] * b,
+                    p[1] * a + q[1] * b,
+                    p[2] * a + q[2] * b,
+                ]
+            })
+            .collect();
+        details.extend(x.details[shared..].iter().map(|p| scaled(p, a)));
+        details.extend(y.details[shared..].iter().map(|q| scaled(q, b)));
         Haar2d {
-            levels: x.levels,
+            levels: x.levels.max(y.levels),
             scale: x.scale * a + y.scale * b,
-            details: x
-                .details
-                .iter()
-                .zip(&y.details)
-                .map(|(p, q)| {
-                    [
-                        p[0] * a + q[0] * b,
-                        p[1] * a + q[1] * b,
-                        p[2] * a + q[2] * b,
-                    ]
-                })
-                .collect(),
+            details,
         }
     }
 
@@ -197,10 +199,27 @@ impl<T: Coefficient> Haar2d<T> {
 
     /// The image back (exact up to rounding).
     pub fn inverse(&self) -> Vec<T> {
-        let mut s = vec![self.scale];
+        let mut out = Vec::new();
+        self.inverse_into(&mut out, &mut Vec::new());
+        out
+    }
+
+    /// [`Haar2d::inverse`] into `out`, with `scratch` for the coarser levels: a caller that
+    /// decodes many maps keeps both and allocates nothing (fresh buffers per map fault in
+    /// fresh pages, most of a bounce's slot fill before).
+    pub fn inverse_into(&self, out: &mut Vec<T>, scratch: &mut Vec<T>) {
+        // Level by level, ping-ponging so that the finest lands in `out`.
+        let (mut s, mut next) = if self.levels.is_multiple_of(2) {
+            (out, scratch)
+        } else {
+            (scratch, out)
+        };
+        s.clear();
+        s.push(self.scale);
         for l in 0..self.levels {
             let side = 1usize << l;
-            let mut next = vec![T::default(); 4 * side * side];
+            next.clear();
+            next.resize(4 * side * side, T::default());
             for j in 0..side {
                 for i in 0..side {
                     let m = s[j * side + i];
@@ -212,10 +231,12 @@ impl<T: Coefficient> Haar2d<T> {
                     next[(2 * j + 1) * w + 2 * i + 1] = (m - dx - dy + dxy) * 0.5;
                 }
             }
-            s = next;
+            std::mem::swap(&mut s, &mut next);
         }
-        let n = 1usize << self.levels;
-        s.iter().map(|&v| v * n as f32).collect()
+        let n = (1usize << self.levels) as f32;
+        for v in s.iter_mut() {
+            *v = *v * n;
+        }
     }
 
     /// f at the point `(x, y)` of the unit square, from the root down to the finest cell

@@ -21,7 +21,7 @@ mod transfer;
 pub mod view;
 pub mod window;
 
-use crate::bake::store::BakedCache;
+use crate::cache::store::BakedCache;
 use crate::cache::CacheError;
 use crate::gather::senders::Senders;
 use crate::image::Image;

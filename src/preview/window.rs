@@ -16,7 +16,7 @@ use super::device::Gpu;
 use super::renderer::PresentTarget;
 use super::swapchain::Swapchain;
 use super::{Preview, PreviewError, Show};
-use crate::bake::store::BakedCache;
+use crate::cache::store::BakedCache;
 use crate::scene::{Camera, Scene};
 use ash::vk;
 use glam::{Quat, Vec3};

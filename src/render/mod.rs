@@ -17,7 +17,7 @@
 
 pub mod primary;
 
-use crate::bake::store::BakedCache;
+use crate::cache::store::BakedCache;
 use crate::error::{Error, Result};
 use crate::gather::fpbgi::{cluster, cluster_cut, member_buffer, ClusterReceivers};
 use crate::gather::{splat_cut, CutStats, Microbuffer, Senders};
@@ -440,7 +440,7 @@ fn gather_tile(
                 mesh: active.mesh,
                 frame: active.frame,
                 radius: c.radius,
-                plane_slope: None,
+                plane_slope: c.cone.map(f32::sin),
                 record_links: false,
             };
             let mut cut = cluster_cut(senders, &receivers, settings.far_eps, settings.mb_size);

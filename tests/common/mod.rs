@@ -100,11 +100,11 @@ pub fn bake_to_cache(
     scene: &wpbgi::scene::Scene,
     settings: &wpbgi::bake::BakeSettings,
     path: &std::path::Path,
-) -> wpbgi::bake::store::BakedCache {
+) -> wpbgi::cache::store::BakedCache {
     let baked = wpbgi::bake::bake(scene, settings, &|_, _| {}).expect("bake");
-    let hash = wpbgi::bake::store::bake_hash(scene, &settings.to_json());
-    wpbgi::bake::store::write(path, hash, &baked, serde_json::json!({})).expect("write");
-    wpbgi::bake::store::BakedCache::read(path, None).expect("read")
+    let hash = wpbgi::cache::store::bake_hash(scene, &settings.to_json());
+    wpbgi::cache::store::write(path, hash, &baked, serde_json::json!({})).expect("write");
+    wpbgi::cache::store::BakedCache::read(path, None).expect("read")
 }
 
 /// A scene of `meshes`, all of one grey (albedo 0.5) diffuse material.

@@ -6,9 +6,9 @@ use serde_json::{json, Value};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-use wpbgi::bake::store::{bake_hash, BakedCache};
 use wpbgi::bake::{bake, BakeSettings, Quality};
 use wpbgi::bounce::BounceSettings;
+use wpbgi::cache::store::{bake_hash, BakedCache};
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
 pub enum QualityArg {
@@ -161,9 +161,9 @@ pub fn bake_command(a: BakeArgs) -> Result<()> {
     bar.as_ref().map(crate::StagedBar::finish);
     let coefficients = baked.coded.stored_counts().1;
     let t = Instant::now();
-    wpbgi::bake::store::save(&a.output, &scene, &baked)?;
+    wpbgi::cache::store::save(&a.output, &scene, &baked)?;
     // The cache holds what the inputs determine; times and memory are reported here.
-    let mut stats = wpbgi::bake::store::cache_stats(&baked);
+    let mut stats = wpbgi::cache::store::cache_stats(&baked);
     let bytes = std::fs::metadata(&a.output).map(|m| m.len()).unwrap_or(0);
     stats["seconds"] = baked
         .timings

@@ -291,10 +291,10 @@ fn demo(a: DemoArgs) -> Result<()> {
     let baked = wpbgi::bake::bake(&scene, &settings, &|stage, f| bar.update(stage, f))?;
     bar.finish();
     let cache_path = a.output.join("demo.wpc");
-    wpbgi::bake::store::save(&cache_path, &scene, &baked)?;
+    wpbgi::cache::store::save(&cache_path, &scene, &baked)?;
     let bake_seconds = start.elapsed().as_secs_f64();
     // Render from the cache.
-    let cache = wpbgi::bake::store::BakedCache::open_fresh(&scene, &cache_path)?;
+    let cache = wpbgi::cache::store::BakedCache::open_fresh(&scene, &cache_path)?;
     let camera = scene.default_camera(256, 256)?;
     let t = std::time::Instant::now();
     let out = render_cmd::run_final(&scene, &cache, &camera, &Default::default())?;

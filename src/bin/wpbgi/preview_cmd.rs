@@ -5,7 +5,7 @@ use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
 use std::path::PathBuf;
 use std::sync::Arc;
-use wpbgi::bake::store::BakedCache;
+use wpbgi::cache::store::BakedCache;
 use wpbgi::image::{write_exr, write_png};
 use wpbgi::preview::device::Gpu;
 use wpbgi::preview::window::{run_window, WindowSettings};

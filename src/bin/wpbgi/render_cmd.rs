@@ -5,7 +5,7 @@ use anyhow::{bail, Result};
 use clap::{Args, ValueEnum};
 use std::path::PathBuf;
 use std::time::Instant;
-use wpbgi::bake::store::BakedCache;
+use wpbgi::cache::store::BakedCache;
 use wpbgi::image::{read_exr, write_exr_layers, write_png, Image};
 use wpbgi::render::{render_final, FinalOutput, FinalSettings, GatherMode};
 use wpbgi::scene::{Camera, Scene};

@@ -5,7 +5,7 @@
 //! wavelet maps), `surfels`, `order`. Records are little-endian `#[repr(C)]` structs of 4-byte
 //! fields, readable in place from a memory map.
 
-use super::pipeline::{Baked, SurfelRadiance};
+use crate::bake::pipeline::{Baked, SurfelRadiance};
 use crate::cache::{self, Cache, CacheError};
 use crate::haar::{Coefficient, SparseHaar};
 use crate::scene::Scene;
@@ -75,6 +75,11 @@ pub struct NodeRecord {
     pub area_h: u32,
 }
 
+/// Where the records' maps go: each gets the next index of the `maps` section.
+trait MapSink {
+    fn push<T: Coefficient>(&mut self, m: &SparseHaar<T>) -> u32;
+}
+
 /// The `maps` section under construction and its index.
 #[derive(Default)]
 struct MapPool {
@@ -82,12 +87,86 @@ struct MapPool {
     index: Vec<u64>,
 }
 
-impl MapPool {
+impl MapSink for MapPool {
     fn push<T: Coefficient>(&mut self, m: &SparseHaar<T>) -> u32 {
         self.index.push(self.bytes.len() as u64);
         m.write_to(&mut self.bytes);
         (self.index.len() - 1) as u32
     }
+}
+
+/// Maps numbered as the file would number them, without encoding them.
+#[derive(Default)]
+struct MapCount(u32);
+
+impl MapSink for MapCount {
+    fn push<T: Coefficient>(&mut self, _: &SparseHaar<T>) -> u32 {
+        self.0 += 1;
+        self.0 - 1
+    }
+}
+
+/// The node and surfel records of `baked`, as the cache holds them (map fields: the index each
+/// map has in the file), without writing anything: what the bounces read the bake's tree
+/// through while it is still in memory.
+pub fn records_of(baked: &Baked) -> (Vec<NodeRecord>, Vec<SurfelRecord>) {
+    records(baked, &mut MapCount::default())
+}
+
+/// The records of `baked`, their maps pushed to `maps` (nodes' G, H, projected G, H, then the
+/// surfels').
+fn records(baked: &Baked, maps: &mut impl MapSink) -> (Vec<NodeRecord>, Vec<SurfelRecord>) {
+    let mut nodes = Vec::with_capacity(baked.tree.nodes.len());
+    for ((n, c), a) in baked
+        .tree
+        .nodes
+        .iter()
+        .zip(&baked.coded.nodes)
+        .zip(&baked.projected.nodes)
+    {
+        nodes.push(NodeRecord {
+            center: n.center.to_array(),
+            radius: n.radius,
+            axis: n.axis.to_array(),
+            cone_angle: n.cone_angle,
+            area: n.area,
+            level: n.level,
+            parent: n.parent,
+            children: n.children,
+            first: n.first,
+            count: n.count,
+            g: c.g.as_ref().map_or(NO_MAP, |m| maps.push(m)),
+            h: c.h.as_ref().map_or(NO_MAP, |m| maps.push(m)),
+            area_g: a.g.as_ref().map_or(NO_MAP, |m| maps.push(m)),
+            area_h: a.h.as_ref().map_or(NO_MAP, |m| maps.push(m)),
+        });
+    }
+    let mut surfels = Vec::with_capacity(baked.surfels.len());
+    for ((s, r), e) in baked
+        .surfels
+        .iter()
+        .zip(&baked.radiance)
+        .zip(&baked.emitted)
+    {
+        let (rgb, map) = match r {
+            SurfelRadiance::Rgb(c) => (*c, NO_MAP),
+            SurfelRadiance::Map(m) => {
+                let at = crate::haar::direction_to_square(s.n);
+                (m.eval(at.x, at.y), maps.push(m))
+            }
+        };
+        surfels.push(SurfelRecord {
+            p: s.p.to_array(),
+            n: s.n.to_array(),
+            area: s.area,
+            mesh: s.mesh,
+            rgb: rgb.to_array(),
+            map,
+            emitted: e.to_array(),
+            flags: baked.mesh_flags[s.mesh as usize],
+        });
+    }
+    (nodes, surfels)
 }
 
 /// The content hash of a bake: everything the importer read from the scene (geometry,
@@ -190,56 +269,7 @@ impl Sections {
 
     fn of(baked: &Baked, stats: Value) -> Result<Sections, String> {
         let mut pool = MapPool::default();
-        let mut nodes = Vec::with_capacity(baked.tree.nodes.len());
-        for ((n, c), a) in baked
-            .tree
-            .nodes
-            .iter()
-            .zip(&baked.coded.nodes)
-            .zip(&baked.projected.nodes)
-        {
-            nodes.push(NodeRecord {
-                center: n.center.to_array(),
-                radius: n.radius,
-                axis: n.axis.to_array(),
-                cone_angle: n.cone_angle,
-                area: n.area,
-                level: n.level,
-                parent: n.parent,
-                children: n.children,
-                first: n.first,
-                count: n.count,
-                g: c.g.as_ref().map_or(NO_MAP, |m| pool.push(m)),
-                h: c.h.as_ref().map_or(NO_MAP, |m| pool.push(m)),
-                area_g: a.g.as_ref().map_or(NO_MAP, |m| pool.push(m)),
-                area_h: a.h.as_ref().map_or(NO_MAP, |m| pool.push(m)),
-            });
-        }
-        let mut surfels = Vec::with_capacity(baked.surfels.len());
-        for ((s, r), e) in baked
-            .surfels
-            .iter()
-            .zip(&baked.radiance)
-            .zip(&baked.emitted)
-        {
-            let (rgb, map) = match r {
-                SurfelRadiance::Rgb(c) => (*c, NO_MAP),
-                SurfelRadiance::Map(m) => {
-                    let at = crate::haar::direction_to_square(s.n);
-                    (m.eval(at.x, at.y), pool.push(m))
-                }
-            };
-            surfels.push(SurfelRecord {
-                p: s.p.to_array(),
-                n: s.n.to_array(),
-                area: s.area,
-                mesh: s.mesh,
-                rgb: rgb.to_array(),
-                map,
-                emitted: e.to_array(),
-                flags: baked.mesh_flags[s.mesh as usize],
-            });
-        }
+        let (nodes, surfels) = records(baked, &mut pool);
         let plan = json!({
             "format": "wpbgi bake",
             "bake_format": BAKE_FORMAT,
