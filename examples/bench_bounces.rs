@@ -1,6 +1,9 @@
-//! The bake's stages on the five Cornell-class scenes (issue 19): seconds of direct light, of
-//! the first bounce (which records the light transport) and of each later one (which replays
-//! it), the transport's bytes per surfel, the peak memory, the cache's bytes per surfel, and
+//! The bake's stages on the five Cornell-class scenes (issue 19): seconds of the whole bake (at
+//! 100 000 surfels, what `wpbgi bake` does by default), of direct light, of the first bounce
+//! (which records the light transport) and of each later one (which replays it), the
+//! transport's bytes per surfel, the peak memory (the process's high-water mark reset before
+//! each bake, so it includes the heap earlier rows left behind), the cache's bytes per surfel,
+//! and
 //! the relMSE at 256² of a default render from the cache against Mitsuba 3's max_depth 8
 //! reference; beside it, our path tracer (max_depth 8) given the same wall time.
 //!
@@ -69,11 +72,11 @@ fn main() -> common::Result<()> {
     let python = std::env::var_os("WPBGI_ANCHOR_PYTHON");
     println!("threads: {}", rayon::current_num_threads());
     println!(
-        "| scene | surfels | direct s | bounce 1 s | later bounces s (mean, max) | bounces | \
+        "| scene | surfels | bake s | direct s | bounce 1 s | later bounces s (mean, max) | bounces | \
          later / first | stage / first | transport B/surfel | peak MB | cache B/surfel | \
          render s | relMSE | path tracer, same time: relMSE |"
     );
-    println!("|---|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    println!("|---|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     let mut anchors = Vec::new();
     for name in &names {
         let scene_path = data(&format!("{name}.gltf"));
@@ -122,7 +125,7 @@ fn main() -> common::Result<()> {
             let pt = common::path_tracer_for(&scene, &camera, 8, bake_s + render_s)?;
             let surfels = baked.surfels.len() as f64;
             println!(
-                "| {name} | {n} | {direct:.2} | {first:.2} | {mean_later:.3}, {max_later:.3} | {} | \
+                "| {name} | {n} | {bake_s:.1} | {direct:.2} | {first:.2} | {mean_later:.3}, {max_later:.3} | {} | \
                  {:.3} | {:.2} | {:.0} | {peak} | {:.0} | {render_s:.1} | {rel:.3e} | {:.3e} ({} spp) |",
                 report.bounces,
                 max_later / first.max(1e-9),
