@@ -325,12 +325,13 @@ pub fn add_bounces(
     };
     let mut full = false;
     for (c, chunk) in groups.chunks(RECORD_CHUNK).enumerate() {
-        if cancel.load(Ordering::Relaxed) {
-            return Err(Error::Cancelled);
-        }
+        // The flag is looked at per group: a chunk takes up to a second or so.
         let recorded: Vec<Vec<ReceiverLinks>> = chunk
             .par_iter()
             .map_init(Vec::new, |stack, group| {
+                if cancel.load(Ordering::Relaxed) {
+                    return Vec::new();
+                }
                 let links = gather.record(group, stack);
                 for l in &links {
                     l.mark(&index);
@@ -338,6 +339,9 @@ pub fn add_bounces(
                 links
             })
             .collect();
+        if cancel.load(Ordering::Relaxed) {
+            return Err(Error::Cancelled);
+        }
         for links in recorded {
             let bytes: u64 = links.iter().map(|l| l.bytes() as u64).sum();
             transport.bytes_unbounded += bytes;

@@ -16,6 +16,10 @@ use std::path::Path;
 /// No map.
 pub const NO_MAP: u32 = u32::MAX;
 
+/// No node: a leaf's children, the root's parent, as the records store them (the surfel
+/// tree's own sentinel, so that readers of a cache need not import the bake).
+pub const NO_NODE: u32 = crate::bake::tree::NONE;
+
 /// One surfel in the `surfels` section.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]

@@ -18,7 +18,7 @@
 
 use super::microbuffer::{Microbuffer, Sender};
 use super::senders::Senders;
-use crate::bake::tree::NONE;
+use crate::cache::store::NO_NODE;
 use crate::geometry::frame::Frame;
 use crate::geometry::warp::square_to_uniform_disk_concentric;
 use glam::{Vec2, Vec3};
@@ -115,7 +115,7 @@ pub fn splat_cut(
         // is that surface itself: it sends nothing towards the receiver and does not occlude.
         if !mb.spherical && n.dot(v).abs() < node.radius {
             if !node.holds_plane_of(p, n) {
-                stack.extend(node.children.into_iter().filter(|&c| c != NONE));
+                stack.extend(node.children.into_iter().filter(|&c| c != NO_NODE));
             }
             continue;
         }
@@ -133,7 +133,7 @@ pub fn splat_cut(
             stats.splats += u64::from(mb.splat(&senders.sender(j, v, seen), seen.projected / d2));
         } else {
             for c in node.children {
-                if c != NONE {
+                if c != NO_NODE {
                     stack.push(c);
                 }
             }

@@ -23,7 +23,7 @@
 use super::cut::{fits_pixel, splat_cut, CutStats};
 use super::microbuffer::Microbuffer;
 use super::senders::Senders;
-use crate::bake::tree::NONE;
+use crate::cache::store::NO_NODE;
 use crate::geometry::frame::Frame;
 use glam::Vec3;
 
@@ -251,7 +251,7 @@ pub fn cluster_cut(
             if node.is_leaf() {
                 near.push(j);
             } else if !node.holds_plane_of(p, frame.n) {
-                stack.extend(node.children.into_iter().filter(|&c| c != NONE));
+                stack.extend(node.children.into_iter().filter(|&c| c != NO_NODE));
             }
             continue;
         }
@@ -273,7 +273,7 @@ pub fn cluster_cut(
             stats.splats += u64::from(buffer.splat(&senders.sender(j, v, seen), omega));
         } else {
             for c in node.children {
-                if c != NONE {
+                if c != NO_NODE {
                     stack.push(c);
                 }
             }

@@ -9,7 +9,9 @@
 //!
 //! The final render lights emitters directly, so the gather must see only reflected light:
 //! every node's emitted intensity E(ω) is rebuilt exactly as the bake built it into I, and
-//! subtracted (emitting surfels still occlude).
+//! subtracted (emitting surfels still occlude). That is why this module, alone of the readers
+//! of a cache, imports the bake: its `intensity_map` (with its surfel and radiance types), so
+//! that E is I's emission bit for bit.
 
 use super::lookup::Lookup;
 use super::microbuffer::Sender;

@@ -9,11 +9,15 @@
 //! this keeps the coefficient trees off the GPU: a splat carries three floats of radiance.
 
 use super::view::View;
-use crate::bake::tree::NONE;
+use crate::cache::store::NO_NODE;
 use crate::gather::senders::{Senders, FLAT_CONE};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use rayon::prelude::*;
+
+/// The mesh the eye stands on, for [`Senders::seen`]'s rule that a solid's inward light
+/// reaches only its own surface: none (no mesh has this index).
+const EYE_MESH: u32 = u32::MAX;
 
 /// How far a splat's footprint reaches beyond its node's bounding sphere, in radii of the
 /// node's surfels' discs. A surfel's disc has its share of the surface's area, so discs leave
@@ -83,7 +87,7 @@ pub fn view_cut(senders: &Senders, view: &View, max_pixels: f32) -> Vec<u32> {
             continue;
         }
         let [a, b] = node.children;
-        stack.extend([b, a].into_iter().filter(|&c| c != NONE));
+        stack.extend([b, a].into_iter().filter(|&c| c != NO_NODE));
     }
     cut
 }
@@ -103,9 +107,9 @@ pub fn splats(
             let node = &senders.nodes[j as usize];
             let w = view.towards_eye(node.center);
             let radiance = match colouring {
-                Colouring::Reflected => senders.seen(j, w, NONE, false).radiance,
+                Colouring::Reflected => senders.seen(j, w, EYE_MESH, false).radiance,
                 Colouring::Outgoing => {
-                    senders.seen(j, w, NONE, false).radiance + senders.emitted_radiance(j, w)
+                    senders.seen(j, w, EYE_MESH, false).radiance + senders.emitted_radiance(j, w)
                 }
                 Colouring::Emitted => senders.emitted_radiance(j, w),
                 Colouring::NodeId => node_colour(j),
