@@ -429,11 +429,13 @@ pub fn add_bounces(
 /// records in memory: what the cache would hold, without encoding a byte.
 fn geometry_senders(baked: &Baked) -> Result<Senders> {
     let (records, surfel_records) = records_of(baked);
+    // A lookup reads only a surfel map's resolution: each map stands in as an empty one.
+    let empty = SparseHaar::compress(&Haar2d::forward(&[Rgb::ZERO], 1), 0.0);
     let surfel_maps = baked
         .radiance
         .iter()
         .map(|r| match r {
-            SurfelRadiance::Map(m) => Some(m.clone()),
+            SurfelRadiance::Map(m) => Some(empty.clone().refined_to(m.levels())),
             SurfelRadiance::Rgb(_) => None,
         })
         .collect();

@@ -31,7 +31,7 @@ use crate::bake::pipeline::SurfelRadiance;
 use crate::bake::tree::{SurfelTree, NONE};
 use crate::bsdf::Diffuse;
 use crate::gather::lookup::Lookup;
-use crate::gather::microbuffer::Microbuffer;
+use crate::gather::microbuffer::{group_by_pixel, Microbuffer};
 use crate::haar::{texel_at, Haar2d};
 use crate::spectrum::Rgb;
 use glam::Vec3;
@@ -305,35 +305,33 @@ impl ReceiverLinks {
                 map_texels: Box::default(),
             };
         }
-        // Directional: the entries counted into pixel runs, each run merged by slot.
+        // Directional: the entries grouped into pixel runs, each run merged by slot.
         let pixels = mb.pixels.len();
-        let mut starts = vec![0u32; pixels + 1];
-        for e in &links.entries {
-            starts[e.pixel as usize + 1] += 1;
-        }
-        for k in 0..pixels {
-            starts[k + 1] += starts[k];
-        }
-        let mut by_pixel = vec![(0u32, 0.0f32); links.entries.len()];
-        let mut next = starts.clone();
-        for e in &links.entries {
-            let at = &mut next[e.pixel as usize];
-            by_pixel[*at as usize] = (e.source, e.w);
-            *at += 1;
-        }
-        let mut terms: Vec<Term> = Vec::with_capacity(links.entries.len());
+        let (mut order, mut ends) = (Vec::new(), Vec::new());
+        let entries = &links.entries;
+        group_by_pixel(
+            entries.len(),
+            pixels,
+            |i| entries[i].pixel,
+            &mut order,
+            &mut ends,
+        );
+        let mut terms: Vec<Term> = Vec::with_capacity(entries.len());
         let mut pixel_ends = vec![0u32; pixels];
         let mut run: Vec<Term> = Vec::new();
-        for k in 0..pixels {
+        let mut begin = 0;
+        for (k, &end) in ends[..pixels].iter().enumerate() {
             run.clear();
-            for &(source, w) in &by_pixel[starts[k] as usize..starts[k + 1] as usize] {
-                if w != 0.0 {
-                    let lookup = links.sources[source as usize];
-                    slots.terms(lookup, |slot, f| run.push(Term { slot, w: w * f }));
+            for &i in &order[begin..end as usize] {
+                let e = &entries[i as usize];
+                if e.w != 0.0 {
+                    let lookup = links.sources[e.source as usize];
+                    slots.terms(lookup, |slot, f| run.push(Term { slot, w: e.w * f }));
                 }
             }
             merge_by_slot(&mut run, &mut terms);
             pixel_ends[k] = terms.len() as u32;
+            begin = end as usize;
         }
         ReceiverLinks {
             surfel,
@@ -473,27 +471,19 @@ pub fn slot_values(
 
 /// The texels `read` (row-major) of a map of `levels` texels a side, from `map` (whose own
 /// resolution may be coarser: its finer details are zero), clamped at zero (a thresholded map
-/// rings a little below it; a lookup's read is clamped, as in the render). The decode goes
-/// through buffers kept per thread.
+/// rings a little below it; a lookup's read is clamped, as in the render).
 fn read_texels(read: &[u32], levels: u32, map: &Haar2d<Rgb>) -> Vec<Rgb> {
-    thread_local! {
-        static BUFFERS: std::cell::RefCell<(Vec<Rgb>, Vec<Rgb>)> = const {
-            std::cell::RefCell::new((Vec::new(), Vec::new()))
-        };
-    }
-    BUFFERS.with_borrow_mut(|(texels, scratch)| {
-        map.inverse_into(texels, scratch);
-        let shift = levels - map.levels.min(levels);
-        let side = 1u32 << levels;
-        read.iter()
-            .map(|&t| {
-                let (x, y) = ((t % side) >> shift, (t / side) >> shift);
-                texels
-                    .get(((y << map.levels) + x) as usize)
-                    .map_or(Rgb::ZERO, |l| l.max(Rgb::ZERO))
-            })
-            .collect()
-    })
+    let texels = map.inverse();
+    let shift = levels - map.levels.min(levels);
+    let side = 1u32 << levels;
+    read.iter()
+        .map(|&t| {
+            let (x, y) = ((t % side) >> shift, (t / side) >> shift);
+            texels
+                .get(((y << map.levels) + x) as usize)
+                .map_or(Rgb::ZERO, |l| l.max(Rgb::ZERO))
+        })
+        .collect()
 }
 
 /// Per node, S = Σ A L n over the diffuse surfels below, per axis (RGB).

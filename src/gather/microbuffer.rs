@@ -709,21 +709,13 @@ impl Microbuffer {
     fn order_by_pixel_and_depth(&mut self, splats: &[Splat]) -> Vec<u32> {
         let mut order = std::mem::take(&mut self.order);
         let starts = &mut self.starts;
-        starts.clear();
-        starts.resize(self.pixels.len() + 1, 0);
-        for s in splats {
-            starts[s.pixel as usize + 1] += 1;
-        }
-        for k in 1..starts.len() {
-            starts[k] += starts[k - 1];
-        }
-        order.clear();
-        order.resize(splats.len(), 0);
-        for (i, s) in splats.iter().enumerate() {
-            let slot = &mut starts[s.pixel as usize];
-            order[*slot as usize] = i as u32;
-            *slot += 1;
-        }
+        group_by_pixel(
+            splats.len(),
+            self.pixels.len(),
+            |i| splats[i].pixel,
+            &mut order,
+            starts,
+        );
         // starts[k] is now the end of pixel k's run, which begins where pixel k − 1's ends.
         let key = |i: u32| (splats[i as usize].dist.to_bits(), i);
         let mut begin = 0;
@@ -851,5 +843,32 @@ impl Microbuffer {
                     * (px.solid_angle / px.dir.z.abs())
             })
             .fold(Rgb::ZERO, |a, b| a + b)
+    }
+}
+
+/// The indices `0..n` of items on the pixels of a buffer of `pixels`, grouped by their
+/// `pixel` (a counting sort, keeping index order within a pixel), into `order`; `ends[k]` is
+/// then the end of pixel k's run, which begins where pixel k − 1's ends.
+pub fn group_by_pixel(
+    n: usize,
+    pixels: usize,
+    pixel: impl Fn(usize) -> u32,
+    order: &mut Vec<u32>,
+    ends: &mut Vec<u32>,
+) {
+    ends.clear();
+    ends.resize(pixels + 1, 0);
+    for i in 0..n {
+        ends[pixel(i) as usize + 1] += 1;
+    }
+    for k in 1..ends.len() {
+        ends[k] += ends[k - 1];
+    }
+    order.clear();
+    order.resize(n, 0);
+    for i in 0..n {
+        let at = &mut ends[pixel(i) as usize];
+        order[*at as usize] = i as u32;
+        *at += 1;
     }
 }

@@ -124,23 +124,18 @@ impl<T: Coefficient> SparseHaar<T> {
 
     /// The full decomposition back (dropped coefficients as zeros).
     pub fn to_dense(&self) -> Haar2d<T> {
-        let count = ((1usize << (2 * self.levels)) - 1) / 3;
-        let mut h = Haar2d {
-            levels: self.levels,
-            scale: self.scale,
-            details: vec![[T::default(); 3]; count],
-        };
-        if !self.nodes.is_empty() {
-            self.fill(&mut h, 0, 0, 0, 0);
-        }
-        h
+        self.dense_at(self.levels)
     }
 
     /// The decomposition back at the coarsest resolution that holds every stored detail (the
     /// finer ones are all zero): the same function as [`SparseHaar::to_dense`], smaller where
     /// the map is smooth (a diffuse subtree's intensity in a tree of 64² maps is 8²).
     pub fn to_dense_trimmed(&self) -> Haar2d<T> {
-        let levels = self.stored_depth(0, 0);
+        self.dense_at(self.stored_depth(0, 0))
+    }
+
+    /// The decomposition with the details of `levels` levels (at least the stored ones).
+    fn dense_at(&self, levels: u32) -> Haar2d<T> {
         let mut h = Haar2d {
             levels,
             scale: self.scale,

@@ -199,27 +199,10 @@ impl<T: Coefficient> Haar2d<T> {
 
     /// The image back (exact up to rounding).
     pub fn inverse(&self) -> Vec<T> {
-        let mut out = Vec::new();
-        self.inverse_into(&mut out, &mut Vec::new());
-        out
-    }
-
-    /// [`Haar2d::inverse`] into `out`, with `scratch` for the coarser levels: a caller that
-    /// decodes many maps keeps both and allocates nothing (fresh buffers per map fault in
-    /// fresh pages, most of a bounce's slot fill before).
-    pub fn inverse_into(&self, out: &mut Vec<T>, scratch: &mut Vec<T>) {
-        // Level by level, ping-ponging so that the finest lands in `out`.
-        let (mut s, mut next) = if self.levels.is_multiple_of(2) {
-            (out, scratch)
-        } else {
-            (scratch, out)
-        };
-        s.clear();
-        s.push(self.scale);
+        let mut s = vec![self.scale];
         for l in 0..self.levels {
             let side = 1usize << l;
-            next.clear();
-            next.resize(4 * side * side, T::default());
+            let mut next = vec![T::default(); 4 * side * side];
             for j in 0..side {
                 for i in 0..side {
                     let m = s[j * side + i];
@@ -231,12 +214,10 @@ impl<T: Coefficient> Haar2d<T> {
                     next[(2 * j + 1) * w + 2 * i + 1] = (m - dx - dy + dxy) * 0.5;
                 }
             }
-            std::mem::swap(&mut s, &mut next);
+            s = next;
         }
-        let n = (1usize << self.levels) as f32;
-        for v in s.iter_mut() {
-            *v = *v * n;
-        }
+        let n = 1usize << self.levels;
+        s.iter().map(|&v| v * n as f32).collect()
     }
 
     /// f at the point `(x, y)` of the unit square, from the root down to the finest cell
