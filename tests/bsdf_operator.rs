@@ -2,8 +2,8 @@
 //! stated thresholding bound, and energy conservation.
 
 use glam::Vec3;
+use wpbgi::bounce::bsdf_operator::operator_side;
 use wpbgi::bounce::bsdf_operator::{forward, inverse, kernel, mean_cosines, BsdfOperator};
-use wpbgi::bounce::iterate::operator_side;
 use wpbgi::bsdf::{Bsdf, Diffuse, Distribution, Microfacet, RoughConductor, RoughDielectric};
 use wpbgi::sampler::Sampler;
 use wpbgi::spectrum::Rgb;

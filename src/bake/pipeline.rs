@@ -110,6 +110,7 @@ impl BakeSettings {
                 "tolerance": self.bounces.tolerance,
                 "operator_tau": self.bounces.operator_tau,
                 "view_tree": self.bounces.view_tree,
+                "receiver_stride": self.bounces.receiver_stride,
             },
         })
     }

@@ -42,14 +42,60 @@ use crate::bsdf::{Bsdf, TransportMode};
 use crate::gather::microbuffer::Microbuffer;
 use crate::geometry::frame::Frame;
 use crate::geometry::warp::square_to_hemisphere_equal_area;
-use crate::haar::Haar2d;
+use crate::haar::{texel_directions, Haar2d};
 use crate::sampler::{sobol02, Sampler};
 use crate::spectrum::Rgb;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
+use std::sync::Arc;
 
 /// BSDF samples per incoming texel for the flux each column of K is scaled to.
 pub const ALBEDO_SAMPLES: u32 = 256;
+
+/// Incoming coefficients below this fraction of their norm are dropped before D = V·C.
+pub const INCOMING_TAU: f32 = 1e-3;
+
+/// A texel of a surfel's sphere map that no texel of its operator's grid feeds (below a
+/// reflecting BSDF's horizon), see [`BsdfOperator::map_texels`].
+pub const NO_TEXEL: u16 = u16::MAX;
+
+/// The operator grid for a BSDF: fine enough for its lobe, as the surfel maps' resolution.
+pub fn operator_side(bsdf: &Bsdf) -> u32 {
+    match bsdf.alpha() {
+        Some(a) if a < 0.08 => 32,
+        Some(a) if a < 0.3 => 16,
+        _ => 8,
+    }
+}
+
+/// The operator of each BSDF of `bsdfs` (one per surfel), thresholded at `tau`: `None` for
+/// diffuse ones, which store RGB. Each distinct BSDF is built once.
+pub fn operators_of(bsdfs: &[Bsdf], tau: f32) -> Vec<Option<Arc<BsdfOperator>>> {
+    let mut built: Vec<(Bsdf, Arc<BsdfOperator>)> = Vec::new();
+    bsdfs
+        .iter()
+        .map(|b| {
+            if matches!(b, Bsdf::Diffuse(_)) {
+                return None;
+            }
+            if let Some((_, op)) = built.iter().find(|(known, _)| known == b) {
+                return Some(op.clone());
+            }
+            let op = Arc::new(BsdfOperator::new(b, operator_side(b), tau));
+            built.push((*b, op.clone()));
+            Some(op)
+        })
+        .collect()
+}
+
+/// The texels of a `2^levels`-a-side sphere map from `local`, the outgoing radiance on an
+/// operator's grid, through the map's [`BsdfOperator::map_texels`] (zero where [`NO_TEXEL`]).
+pub fn on_sphere_map(local: &[Rgb], map_texels: &[u16]) -> Vec<Rgb> {
+    map_texels
+        .iter()
+        .map(|&t| local.get(t as usize).copied().unwrap_or(Rgb::ZERO))
+        .collect()
+}
 
 /// A BSDF's sparse 4D Haar operator.
 #[derive(Clone, Debug)]
@@ -338,6 +384,21 @@ impl BsdfOperator {
     /// The texel of local direction `w`, or `None` below a one-hemisphere grid's horizon.
     pub fn texel_of(&self, w: Vec3) -> Option<u32> {
         texel_of(w, self.n, self.hemispheres)
+    }
+
+    /// Per texel of a surfel's global sphere map (`2^levels` texels per side), the texel of
+    /// this operator's grid in the surfel's `frame` that feeds it, by nearest texel (spec
+    /// §8.2: "the filter is unspecified"), or [`NO_TEXEL`]. A grid has at most 2 × 32² texels
+    /// ([`operator_side`]), well within `u16`.
+    pub fn map_texels(&self, frame: Frame, levels: u32) -> Vec<u16> {
+        texel_directions(levels)
+            .iter()
+            .map(|&w| {
+                self.texel_of(frame.to_local(w))
+                    .and_then(|t| u16::try_from(t).ok())
+                    .unwrap_or(NO_TEXEL)
+            })
+            .collect()
     }
 
     /// Stored coefficients of V.

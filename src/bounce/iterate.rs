@@ -30,8 +30,9 @@
 //! memory budget ([`BounceSettings::transport_budget`]) are gathered again in every bounce by
 //! the same code, so the cache does not depend on the budget.
 
-use super::bsdf_operator::BsdfOperator;
-use super::transport::{slot_values, ReceiverLinks, SlotIndex, Slots, NO_TEXEL};
+use super::bsdf_operator::{on_sphere_map, operators_of, BsdfOperator, INCOMING_TAU};
+use super::receivers::Receivers;
+use super::transport::{slot_values, ReceiverLinks, SlotIndex, Slots};
 use super::view_tree::{receiver_groups, VIEW_EPS};
 use crate::accel::Accel;
 use crate::bake::coding::{encode, CodedTree};
@@ -59,8 +60,8 @@ use std::sync::Arc;
 /// Microbuffer pixels per side for diffuse surfels (as the final render's default).
 pub const DIFFUSE_BUFFER: u32 = 16;
 
-/// Incoming coefficients below this fraction of their norm are dropped before D = V·C.
-pub const INCOMING_TAU: f32 = 1e-3;
+/// The default [`BounceSettings::receiver_stride`] (see docs/bounces.md for its measure).
+pub const RECEIVER_STRIDE: u32 = 16;
 
 /// How many bounces to run.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -75,6 +76,10 @@ pub struct BounceSettings {
     /// Share the far part of the gather among nearby surfels (the view tree, see
     /// [`super::view_tree`]); otherwise every surfel traverses the whole tree.
     pub view_tree: bool,
+    /// About one surfel in this many gathers in each bounce; the others blend the light of
+    /// their nearest gathering neighbours on the same surface (see [`super::receivers`]).
+    /// 1: every surfel gathers.
+    pub receiver_stride: u32,
     /// The most bytes the recorded transport may hold; receivers past it gather again in
     /// every bounce. It changes the time, never the cache (so it is not part of the cache's
     /// hash). `None`: [`default_transport_budget`].
@@ -126,6 +131,7 @@ impl BounceSettings {
             tolerance: 1e-3,
             operator_tau: 1e-2,
             view_tree: true,
+            receiver_stride: RECEIVER_STRIDE,
             transport_budget: None,
         }
     }
@@ -214,32 +220,6 @@ fn add_scaled(a: &SurfelRadiance, b: &SurfelRadiance, k: f32, tau: f32) -> Surfe
     }
 }
 
-/// The BSDF operators of a bake, one per distinct BSDF (built on first use).
-struct Operators {
-    built: Vec<(Bsdf, Arc<BsdfOperator>)>,
-}
-
-impl Operators {
-    fn get(&mut self, bsdf: &Bsdf, tau: f32) -> Arc<BsdfOperator> {
-        if let Some((_, op)) = self.built.iter().find(|(b, _)| b == bsdf) {
-            return op.clone();
-        }
-        let n = operator_side(bsdf);
-        let op = Arc::new(BsdfOperator::new(bsdf, n, tau));
-        self.built.push((*bsdf, op.clone()));
-        op
-    }
-}
-
-/// The operator grid for a BSDF: fine enough for its lobe, as the surfel maps' resolution.
-pub fn operator_side(bsdf: &Bsdf) -> u32 {
-    match bsdf.alpha() {
-        Some(a) if a < 0.08 => 32,
-        Some(a) if a < 0.3 => 16,
-        _ => 8,
-    }
-}
-
 /// Receiver groups recorded at once: enough to keep both cores busy, few enough that the
 /// links of groups past the budget never pile up.
 const RECORD_CHUNK: usize = 512;
@@ -266,11 +246,7 @@ pub fn add_bounces(
         .iter()
         .map(|s| surfel_bsdf(scene, s))
         .collect();
-    let mut operators = Operators { built: Vec::new() };
-    let ops: Vec<Option<Arc<BsdfOperator>>> = bsdfs
-        .iter()
-        .map(|b| (!matches!(b, Bsdf::Diffuse(_))).then(|| operators.get(b, settings.operator_tau)))
-        .collect();
+    let ops = operators_of(&bsdfs, settings.operator_tau);
     let reflected_direct: Vec<SurfelRadiance> = baked
         .radiance
         .iter()
@@ -281,6 +257,17 @@ pub fn add_bounces(
     // The gather's geometry: the tree as senders, read once from the bake in memory (the
     // radiance each bounce sends comes from the transport's slots).
     let senders = geometry_senders(baked)?;
+    let kinds: Vec<Option<u32>> = ops
+        .iter()
+        .zip(&bsdfs)
+        .map(|(op, b)| op.as_ref().and_then(|_| map_levels(b)))
+        .collect();
+    let receivers = Receivers::choose(
+        &baked.tree,
+        &baked.surfels,
+        &kinds,
+        settings.receiver_stride,
+    );
     let groups = if settings.view_tree {
         receiver_groups(&baked.tree, &baked.surfels)
     } else {
@@ -293,6 +280,7 @@ pub fn add_bounces(
             })
             .collect()
     };
+    let groups = receivers.groups(groups, &baked.surfels);
     let slots =
         Slots::new(&baked.tree, &baked.radiance, baked.plan.map_levels).map_err(|too_many| {
             Error::InvalidSetting(format!(
@@ -375,15 +363,19 @@ pub fn add_bounces(
         let sent = &emit;
         let coded = coded_light(baked, sent);
         let values = slot_values(&slots, &index, &baked.tree, &baked.surfels, sent, &coded);
-        let light = gather.evaluate(&kept, regathered, &index, &values, cancel)?;
+        let mut light = gather.evaluate(&kept, regathered, &index, &values, cancel)?;
+        receivers.blend(&mut light, tau);
+        gather.reflect(&mut light);
         let e = energy(baked, &light);
         report.energies.push(e);
         if let Some(&prev) = report.energies.iter().rev().nth(1) {
             ratios.push(if prev > 0.0 { e / prev } else { 0.0 });
         }
-        for (t, l) in baked.radiance.iter_mut().zip(&light) {
-            *t = add_scaled(t, l, 1.0, tau);
-        }
+        baked
+            .radiance
+            .par_iter_mut()
+            .zip(&light)
+            .for_each(|(t, l)| *t = add_scaled(t, l, 1.0, tau));
         total_energy += e;
         report.bounces = bounce;
         report.seconds.push(start.elapsed().as_secs_f64());
@@ -600,7 +592,7 @@ impl Gather<'_> {
                 match op {
                     Some(op) => {
                         let levels = map_levels(&self.bsdfs[i as usize]).unwrap_or(3);
-                        links.with_map_texels(map_texels(op, mb.frame, levels))
+                        links.with_map_texels(op.map_texels(mb.frame, levels))
                     }
                     None => links,
                 }
@@ -708,50 +700,40 @@ impl Gather<'_> {
         Ok(light)
     }
 
-    /// A receiver's outgoing radiance from its links: the cosine convolution for diffuse
-    /// surfels (one RGB value), D = V·C resampled onto its sphere map for the others.
+    /// A receiver's gathered light from its links: for diffuse surfels the cosine convolution
+    /// before their reflectance (one RGB value, see [`Gather::reflect`]), for the others
+    /// D = V·C resampled onto their sphere map.
     fn outgoing(&self, links: &ReceiverLinks, values: &[Rgb], tau: f32) -> SurfelRadiance {
         let i = links.surfel as usize;
-        let bsdf = &self.bsdfs[i];
-        match (&self.ops[i], bsdf) {
-            (Some(op), _) => {
+        match &self.ops[i] {
+            Some(op) => {
                 let radiance = links.pixel_radiance(values);
                 let local = op.outgoing(&radiance, INCOMING_TAU);
-                SurfelRadiance::Map(resample(&local, links.map_texels(), tau))
+                let texels = on_sphere_map(&local, links.map_texels());
+                // The map has 4^levels texels.
+                let side = 1 << (texels.len().trailing_zeros() / 2);
+                SurfelRadiance::Map(SparseHaar::compress(&Haar2d::forward(&texels, side), tau))
             }
-            (None, Bsdf::Diffuse(d)) => {
-                SurfelRadiance::Rgb((d.reflectance * links.diffuse_sum(values)).max(Rgb::ZERO))
-            }
-            (None, _) => SurfelRadiance::Rgb(Rgb::ZERO),
+            None => SurfelRadiance::Rgb(links.diffuse_sum(values)),
         }
     }
-}
 
-/// Per texel of a surfel's global sphere map (2^levels texels per side), the texel of its
-/// operator's local grid (in the surfel's `frame`) it takes its radiance from, by nearest
-/// texel (spec §8.2: "the filter is unspecified"), or [`NO_TEXEL`]. An operator grid has at
-/// most 2 × 32² texels ([`operator_side`]), well within `u16`.
-fn map_texels(op: &BsdfOperator, frame: Frame, levels: u32) -> Vec<u16> {
-    texel_directions(levels)
-        .iter()
-        .map(|&w| {
-            op.texel_of(frame.to_local(w))
-                .and_then(|t| u16::try_from(t).ok())
-                .unwrap_or(NO_TEXEL)
-        })
-        .collect()
-}
-
-/// The surfel's global sphere map of its outgoing radiance `local` on the operator's grid,
-/// through its [`map_texels`].
-fn resample(local: &[Rgb], map_texels: &[u16], tau: f32) -> SparseHaar<Rgb> {
-    let texels: Vec<Rgb> = map_texels
-        .iter()
-        .map(|&t| local.get(t as usize).copied().unwrap_or(Rgb::ZERO))
-        .collect();
-    // The map has 4^levels texels.
-    let side = 1 << (map_texels.len().trailing_zeros() / 2);
-    SparseHaar::compress(&Haar2d::forward(&texels, side), tau)
+    /// Every surfel's outgoing radiance from its gathered (or blended) light: diffuse surfels
+    /// multiply it by their reflectance, which stays their own where neighbours' light is
+    /// blended.
+    fn reflect(&self, light: &mut [SurfelRadiance]) {
+        light
+            .par_iter_mut()
+            .zip(self.bsdfs)
+            .zip(self.ops)
+            .for_each(|((l, bsdf), op)| match (op, bsdf, &*l) {
+                (Some(_), _, _) => {}
+                (None, Bsdf::Diffuse(d), SurfelRadiance::Rgb(sum)) => {
+                    *l = SurfelRadiance::Rgb((d.reflectance * *sum).max(Rgb::ZERO))
+                }
+                (None, _, _) => *l = SurfelRadiance::Rgb(Rgb::ZERO),
+            });
+    }
 }
 
 #[cfg(test)]
@@ -820,11 +802,7 @@ mod tests {
             .iter()
             .map(|s| surfel_bsdf(&scene, s))
             .collect();
-        let mut operators = Operators { built: Vec::new() };
-        let ops: Vec<Option<Arc<BsdfOperator>>> = bsdfs
-            .iter()
-            .map(|b| (!matches!(b, Bsdf::Diffuse(_))).then(|| operators.get(b, 1e-2)))
-            .collect();
+        let ops = operators_of(&bsdfs, 1e-2);
         let cache = BakedCache::in_memory(Path::new("test"), &baked).expect("cache");
         let senders = Senders::from_cache(&cache).expect("senders");
         let slots = Slots::new(&baked.tree, &baked.radiance, baked.plan.map_levels).expect("slots");

@@ -2,6 +2,7 @@
 
 pub mod bsdf_operator;
 pub mod iterate;
+pub mod receivers;
 pub mod transport;
 pub mod view_tree;
 

@@ -255,12 +255,10 @@ pub struct ReceiverLinks {
     pixel_ends: Box<[u32]>,
     terms: Box<[Term]>,
     /// For a directional receiver: per texel of its outgoing map, the texel of its operator's
-    /// grid it takes its radiance from, or [`NO_TEXEL`] (geometry alone, so recorded once).
+    /// grid it takes its radiance from, or [`NO_TEXEL`](super::bsdf_operator::NO_TEXEL)
+    /// (geometry alone, so recorded once).
     map_texels: Box<[u16]>,
 }
-
-/// A map texel no operator texel reaches.
-pub const NO_TEXEL: u16 = u16::MAX;
 
 impl ReceiverLinks {
     /// The links of surfel `surfel`'s closed buffer `mb` (which recorded links): merged by
@@ -349,7 +347,7 @@ impl ReceiverLinks {
     }
 
     /// Per texel of a directional receiver's outgoing map, its operator texel or
-    /// [`NO_TEXEL`].
+    /// [`NO_TEXEL`](super::bsdf_operator::NO_TEXEL).
     pub fn map_texels(&self) -> &[u16] {
         &self.map_texels
     }

@@ -75,6 +75,12 @@ pub struct BakeArgs {
     /// Default: 40 % of the machine's memory.
     #[arg(long, value_name = "MB")]
     transport_memory: Option<u64>,
+    /// About one surfel in N gathers indirect light in each bounce; the others blend the
+    /// light of their nearest gathering neighbours on the same surface (indirect light varies
+    /// slowly, and the final render gathers it again). 1: every surfel gathers.
+    #[arg(long, value_name = "N", default_value_t = wpbgi::bounce::iterate::RECEIVER_STRIDE,
+          value_parser = clap::value_parser!(u32).range(1..))]
+    receiver_stride: u32,
     /// Report the plan, progress and summary as JSON lines on standard error.
     #[arg(long)]
     json: bool,
@@ -114,6 +120,7 @@ fn settings_of(a: &BakeArgs) -> BakeSettings {
     s.max_cut = a.max_cut;
     s.bounces = BounceSettings {
         transport_budget: a.transport_memory.map(|mb| mb.saturating_mul(1_000_000)),
+        receiver_stride: a.receiver_stride,
         ..a.bounces
     };
     s
