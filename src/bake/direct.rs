@@ -9,13 +9,22 @@
 //!
 //! L(ω) = (1/K) Σₖ f(ω, ωₖ) |cos θₖ| Lₑ,ₖ / pₖ   for each texel centre ω of the octahedral map,
 //!
-//! and for diffuse surfels, which store RGB only, the irradiance E = (1/K) Σₖ max(0, n·ωₖ) Lₑ,ₖ/pₖ
+//! except for near-specular BSDFs (α below [`NEAR_SPECULAR_ALPHA`]): a texel centre then sees
+//! almost none of the K sample lobes, and the map is a few spikes (cbox-mirror's α = 0.001 box:
+//! relMSE 7.1e-3 with 128 samples, 1.1e-2 with 64, 1.8e-2 with 32). Their samples are binned
+//! into the BSDF operator's grid as mean radiance per texel, and the operator, which integrates
+//! f over texel pairs, gives the map (D = V·C, as in a bounce). For wider lobes point values are
+//! better: through the operator the glass of cbox-glossy (α = 0.02) blurred the caustic under
+//! it (relMSE +16 %).
+//!
+//! For diffuse surfels, which store RGB only, the irradiance E = (1/K) Σₖ max(0, n·ωₖ) Lₑ,ₖ/pₖ
 //! (the outgoing radiance is then ρE/π). With many point and spot lights, a light tree gives
 //! each surfel its lightcut instead (see [`super::lightcuts`]); its clusters join the samples.
 
 use super::lightcuts::LightTree;
 use super::surfels::Surfel;
 use crate::accel::Accel;
+use crate::bounce::bsdf_operator::{on_sphere_map, BsdfOperator, INCOMING_TAU};
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::emitters::{EmitterSample, EmitterSampler};
 use crate::geometry::frame::Frame;
@@ -40,6 +49,10 @@ pub struct DirectLight<'a> {
     /// Largest lightcut, in clusters.
     pub max_cut: usize,
 }
+
+/// BSDFs narrower than this (α) take their maps' direct light through their operator (see the
+/// module docs).
+pub const NEAR_SPECULAR_ALPHA: f32 = 0.01;
 
 /// Lightcuts' relative error target (DESIGN.md §5.2).
 pub const LIGHTCUT_ERROR: f32 = 0.02;
@@ -103,6 +116,26 @@ impl DirectLight<'_> {
             .iter()
             .map(|a| a.value * s.n.dot(a.wi).max(0.0))
             .fold(Rgb::ZERO, |acc, x| acc + x)
+    }
+
+    /// [`DirectLight::radiance_map`] of a near-specular BSDF, through its operator `op`: the
+    /// emitter samples binned into the operator's grid, D = V·C, and the result read onto the
+    /// map by nearest texel, as a bounce turns gathered light into a map.
+    pub fn radiance_map_through(
+        &self,
+        s: &Surfel,
+        id: u64,
+        op: &BsdfOperator,
+        levels: u32,
+    ) -> Vec<Rgb> {
+        let frame = Frame::from_normal(s.n);
+        let incident = op.incident(
+            self.arrivals(s, id)
+                .into_iter()
+                .map(|a| (frame.to_local(a.wi), a.value)),
+        );
+        let local = op.outgoing(&incident, INCOMING_TAU);
+        on_sphere_map(&local, &op.map_texels(frame, levels))
     }
 
     /// Outgoing radiance of surfel `id` with BSDF `bsdf` at the centre of every texel of the

@@ -6,12 +6,13 @@
 //! from that compact form, so the uncompressed set never exists.
 
 use super::coding::{encode, CodedTree};
-use super::direct::DirectLight;
+use super::direct::{DirectLight, NEAR_SPECULAR_ALPHA};
 use super::lightcuts::LightTree;
 use super::plan::{map_levels, Plan};
 use super::surfels::{sample_surfels, Surfel};
 use super::tree::SurfelTree;
 use crate::accel::Accel;
+use crate::bounce::bsdf_operator::{BsdfOperator, Operators};
 use crate::bounce::{add_bounces, BounceReport, BounceSettings};
 use crate::bsdf::Bsdf;
 use crate::cache::store::{BACK_SIDED, CLOSED, SOLID};
@@ -56,10 +57,14 @@ impl Quality {
         }
     }
 
+    /// Emitter samples per surfel. Fewer per surfel as surfels grow denser: the render's
+    /// gather averages many neighbours, and the error follows the spacing (measured at
+    /// 100 000 surfels: 32 samples give the relMSE of 128 on the five Cornell-class scenes,
+    /// within 1 %; at 20 000, 32 instead of 64 cost the caustic 8 %).
     pub fn light_samples(self) -> u32 {
         match self {
             Quality::Draft => 64,
-            Quality::Preview => 128,
+            Quality::Preview => 32,
             Quality::Final => 256,
             Quality::Ultra => 512,
         }
@@ -173,6 +178,8 @@ pub struct Baked {
     pub emitted: Vec<Rgb>,
     /// Per mesh: its surfels' flags ([`mesh_flags`]).
     pub mesh_flags: Vec<u32>,
+    /// The BSDF operators built so far (the direct light's, for the bounces to reuse).
+    pub operators: Operators,
     pub tree: SurfelTree,
     /// Radiant intensity I(ω) of every node (RGB).
     pub coded: CodedTree<Rgb>,
@@ -258,13 +265,19 @@ pub fn bake_cancellable(
         light_tree: light_tree.as_ref(),
         max_cut: settings.max_cut.max(1),
     };
+    let bsdfs: Vec<Bsdf> = surfels.iter().map(|s| surfel_bsdf(scene, s)).collect();
+    let mut operators = Operators::new(settings.bounces.operator_tau);
+    let near_specular = operators.of_each(&bsdfs, |b| {
+        b.alpha().is_some_and(|a| a < NEAR_SPECULAR_ALPHA)
+    });
     let done = std::sync::atomic::AtomicUsize::new(0);
     let (radiance, emitted): (Vec<SurfelRadiance>, Vec<Rgb>) = surfels
         .par_iter()
         .enumerate()
         .map(|(i, s)| {
             stop()?;
-            let r = surfel_radiance(scene, &direct, s, i as u64, settings.tau);
+            let (bsdf, op) = (&bsdfs[i], near_specular[i].as_deref());
+            let r = surfel_radiance(scene, &direct, s, i as u64, (bsdf, op), settings.tau);
             let n = done.fetch_add(1, Ordering::Relaxed) + 1;
             if n.is_multiple_of(4096) {
                 progress("direct light", n as f32 / surfels.len() as f32);
@@ -315,6 +328,7 @@ pub fn bake_cancellable(
         radiance,
         emitted,
         mesh_flags,
+        operators,
         tree,
         coded,
         projected,
@@ -348,27 +362,31 @@ pub fn surfel_bsdf(scene: &Scene, s: &Surfel) -> Bsdf {
     material.bsdf_at(&scene.textures, uv)
 }
 
-/// Direct light plus emission leaving surfel `s`, and the emission alone.
+/// Direct light plus emission leaving surfel `s` with its BSDF (and that BSDF's operator where
+/// its direct light goes through it, see [`NEAR_SPECULAR_ALPHA`]), and the emission alone.
 fn surfel_radiance(
     scene: &Scene,
     direct: &DirectLight,
     s: &Surfel,
     id: u64,
+    (bsdf, op): (&Bsdf, Option<&BsdfOperator>),
     tau: f32,
 ) -> (SurfelRadiance, Rgb) {
     let (material, uv) = surfel_material(scene, s);
-    let bsdf = material.bsdf_at(&scene.textures, uv);
     // Emission leaves the front face (both faces for two-sided emitters are not separate
     // surfels: the front is what a surfel stands for).
     let emitted = material.emission_at(&scene.textures, uv, true);
-    let radiance = match (map_levels(&bsdf), &bsdf) {
+    let radiance = match (map_levels(bsdf), bsdf) {
         (None, Bsdf::Diffuse(d)) => {
             let e = direct.irradiance(s, id);
             SurfelRadiance::Rgb(d.reflectance * e * std::f32::consts::FRAC_1_PI + emitted)
         }
         (levels, _) => {
             let levels = levels.unwrap_or(3);
-            let mut texels = direct.radiance_map(s, id, &bsdf, levels);
+            let mut texels = match op {
+                Some(op) => direct.radiance_map_through(s, id, op, levels),
+                None => direct.radiance_map(s, id, bsdf, levels),
+            };
             if emitted != Rgb::ZERO {
                 for (v, w) in texels.iter_mut().zip(texel_directions(levels)) {
                     if w.dot(s.n) > 0.0 {

@@ -68,24 +68,45 @@ pub fn operator_side(bsdf: &Bsdf) -> u32 {
     }
 }
 
-/// The operator of each BSDF of `bsdfs` (one per surfel), thresholded at `tau`: `None` for
-/// diffuse ones, which store RGB. Each distinct BSDF is built once.
-pub fn operators_of(bsdfs: &[Bsdf], tau: f32) -> Vec<Option<Arc<BsdfOperator>>> {
-    let mut built: Vec<(Bsdf, Arc<BsdfOperator>)> = Vec::new();
-    bsdfs
-        .iter()
-        .map(|b| {
-            if matches!(b, Bsdf::Diffuse(_)) {
-                return None;
-            }
-            if let Some((_, op)) = built.iter().find(|(known, _)| known == b) {
-                return Some(op.clone());
-            }
-            let op = Arc::new(BsdfOperator::new(b, operator_side(b), tau));
-            built.push((*b, op.clone()));
-            Some(op)
-        })
-        .collect()
+/// The operators a bake has built, one per distinct BSDF, thresholded at one `tau`: the
+/// direct light builds those of near-specular BSDFs, the bounces the rest.
+#[derive(Debug)]
+pub struct Operators {
+    tau: f32,
+    built: Vec<(Bsdf, Arc<BsdfOperator>)>,
+}
+
+impl Operators {
+    /// None built yet; each will be thresholded at `tau` (see [`BsdfOperator::new`]).
+    pub fn new(tau: f32) -> Self {
+        Operators {
+            tau,
+            built: Vec::new(),
+        }
+    }
+
+    /// The operator of `bsdf`, built on first use.
+    pub fn get(&mut self, bsdf: &Bsdf) -> Arc<BsdfOperator> {
+        if let Some((_, op)) = self.built.iter().find(|(known, _)| known == bsdf) {
+            return op.clone();
+        }
+        let op = Arc::new(BsdfOperator::new(bsdf, operator_side(bsdf), self.tau));
+        self.built.push((*bsdf, op.clone()));
+        op
+    }
+
+    /// The operator of each BSDF of `bsdfs` (one per surfel) that is `wanted`, `None` for the
+    /// others.
+    pub fn of_each(
+        &mut self,
+        bsdfs: &[Bsdf],
+        wanted: impl Fn(&Bsdf) -> bool,
+    ) -> Vec<Option<Arc<BsdfOperator>>> {
+        bsdfs
+            .iter()
+            .map(|b| wanted(b).then(|| self.get(b)))
+            .collect()
+    }
 }
 
 /// The texels of a `2^levels`-a-side sphere map from `local`, the outgoing radiance on an
@@ -399,6 +420,21 @@ impl BsdfOperator {
                     .unwrap_or(NO_TEXEL)
             })
             .collect()
+    }
+
+    /// The mean incoming radiance per texel of the grid from samples of an estimator: each a
+    /// local direction and what it carries, radiance times solid angle (Lₑ/(p K) for one of
+    /// K emitter samples). A texel's mean is its samples' sum over its solid angle (the grid
+    /// is equal-area: 2π/n² a texel); samples below a reflecting BSDF's horizon are dropped.
+    pub fn incident(&self, samples: impl Iterator<Item = (Vec3, Rgb)>) -> Vec<Rgb> {
+        let texel_solid_angle = 2.0 * std::f32::consts::PI / (self.n * self.n) as f32;
+        let mut x = vec![Rgb::ZERO; self.size()];
+        for (w, value) in samples {
+            if let Some(t) = self.texel_of(w) {
+                x[t as usize] += value / texel_solid_angle;
+            }
+        }
+        x
     }
 
     /// Stored coefficients of V.

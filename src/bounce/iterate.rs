@@ -30,7 +30,7 @@
 //! memory budget ([`BounceSettings::transport_budget`]) are gathered again in every bounce by
 //! the same code, so the cache does not depend on the budget.
 
-use super::bsdf_operator::{on_sphere_map, operators_of, BsdfOperator, INCOMING_TAU};
+use super::bsdf_operator::{on_sphere_map, BsdfOperator, INCOMING_TAU};
 use super::receivers::Receivers;
 use super::transport::{slot_values, ReceiverLinks, SlotIndex, Slots};
 use super::view_tree::{receiver_groups, VIEW_EPS};
@@ -246,7 +246,10 @@ pub fn add_bounces(
         .iter()
         .map(|s| surfel_bsdf(scene, s))
         .collect();
-    let ops = operators_of(&bsdfs, settings.operator_tau);
+    // Diffuse surfels store RGB; every other one a map, through its BSDF's operator.
+    let ops = baked
+        .operators
+        .of_each(&bsdfs, |b| !matches!(b, Bsdf::Diffuse(_)));
     let reflected_direct: Vec<SurfelRadiance> = baked
         .radiance
         .iter()
@@ -738,6 +741,7 @@ impl Gather<'_> {
 
 #[cfg(test)]
 mod tests {
+    use super::super::bsdf_operator::Operators;
     use super::*;
     use crate::bake::{bake, BakeSettings};
     use crate::cache::store::BakedCache;
@@ -802,7 +806,7 @@ mod tests {
             .iter()
             .map(|s| surfel_bsdf(&scene, s))
             .collect();
-        let ops = operators_of(&bsdfs, 1e-2);
+        let ops = Operators::new(1e-2).of_each(&bsdfs, |b| !matches!(b, Bsdf::Diffuse(_)));
         let cache = BakedCache::in_memory(Path::new("test"), &baked).expect("cache");
         let senders = Senders::from_cache(&cache).expect("senders");
         let slots = Slots::new(&baked.tree, &baked.radiance, baked.plan.map_levels).expect("slots");

@@ -14,7 +14,7 @@ use wpbgi::cache::store::{bake_hash, BakedCache};
 pub enum QualityArg {
     /// 20 000 surfels, 64 light samples each.
     Draft,
-    /// 100 000 surfels, 128 light samples.
+    /// 100 000 surfels, 32 light samples (denser surfels need fewer each).
     Preview,
     /// 500 000 surfels, 256 light samples.
     Final,
