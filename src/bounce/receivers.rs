@@ -20,9 +20,10 @@
 //! Everything here is geometry, fixed before the first bounce, in a fixed order: the cache
 //! does not depend on the thread count.
 
+use super::view_tree::cells;
 use crate::bake::pipeline::SurfelRadiance;
 use crate::bake::surfels::Surfel;
-use crate::bake::tree::{SurfelTree, NONE};
+use crate::bake::tree::SurfelTree;
 use crate::gather::fpbgi::Cluster;
 use crate::haar::{Haar2d, SparseHaar};
 use crate::spectrum::Rgb;
@@ -79,7 +80,7 @@ impl Receivers {
             };
         }
         let mut gathers = vec![false; n];
-        for active in cell_receivers(tree, surfels, stride) {
+        for (_, active) in cells(tree, surfels, stride, CELL_CONE) {
             gathers[active as usize] = true;
         }
         let mean_area = surfels.iter().map(|s| f64::from(s.area)).sum::<f64>() / n as f64;
@@ -212,41 +213,6 @@ fn blend_of(from: &[(u32, f32)], light: &[SurfelRadiance], tau: f32) -> SurfelRa
         }
         None => SurfelRadiance::Rgb(rgb),
     }
-}
-
-/// The receiver of every cell: the largest tree nodes of at most `stride` surfels on one mesh
-/// within [`CELL_CONE`] (a leaf otherwise), each the member nearest its node's centre.
-fn cell_receivers(tree: &SurfelTree, surfels: &[Surfel], stride: u32) -> Vec<u32> {
-    let mut out = Vec::new();
-    let mut stack = if tree.nodes.is_empty() {
-        vec![]
-    } else {
-        vec![0u32]
-    };
-    while let Some(j) = stack.pop() {
-        let node = &tree.nodes[j as usize];
-        let members = &tree.order[node.first as usize..(node.first + node.count) as usize];
-        let Some(&first) = members.first() else {
-            continue;
-        };
-        let mesh = surfels[first as usize].mesh;
-        let cell = node.is_leaf()
-            || (node.count <= stride
-                && node.cone_angle <= CELL_CONE
-                && members.iter().all(|&i| surfels[i as usize].mesh == mesh));
-        if !cell {
-            stack.extend(node.children.iter().rev().filter(|&&c| c != NONE));
-            continue;
-        }
-        let distance = |i: u32| (surfels[i as usize].p - node.center).length_squared();
-        out.extend(
-            members
-                .iter()
-                .copied()
-                .min_by(|&a, &b| distance(a).total_cmp(&distance(b)).then(a.cmp(&b))),
-        );
-    }
-    out
 }
 
 /// Gathering surfels bucketed by position in cubes of the search reach: a surfel's candidates

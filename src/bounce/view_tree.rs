@@ -47,7 +47,31 @@ pub const VIEW_EPS: f32 = 0.1;
 /// of surfel indices whose active member is the one nearest the node's centre and whose cone
 /// is the node's normal cone.
 pub fn receiver_groups(tree: &SurfelTree, surfels: &[Surfel]) -> Vec<Cluster> {
-    let mut groups = Vec::new();
+    cells(tree, surfels, GROUP_SURFELS, GROUP_CONE)
+        .into_iter()
+        .map(|(j, active)| {
+            let node = &tree.nodes[j as usize];
+            let members = &tree.order[node.first as usize..(node.first + node.count) as usize];
+            let pa = surfels[active as usize].p;
+            let radius = members
+                .iter()
+                .map(|&i| (surfels[i as usize].p - pa).length())
+                .fold(0.0, f32::max);
+            Cluster {
+                members: members.to_vec(),
+                active,
+                radius,
+                cone: Some(node.cone_angle),
+            }
+        })
+        .collect()
+}
+
+/// The largest nodes of `tree` with at most `most` surfels, all on one mesh, normals within
+/// `cone` of the node's axis (a leaf otherwise), covering every surfel once in tree order: each
+/// node's index and its member nearest the node's centre (the lowest index on a tie).
+pub fn cells(tree: &SurfelTree, surfels: &[Surfel], most: u32, cone: f32) -> Vec<(u32, u32)> {
+    let mut out = Vec::new();
     let mut stack = if tree.nodes.is_empty() {
         vec![]
     } else {
@@ -60,11 +84,11 @@ pub fn receiver_groups(tree: &SurfelTree, surfels: &[Surfel]) -> Vec<Cluster> {
             continue;
         };
         let mesh = surfels[first as usize].mesh;
-        let group = node.is_leaf()
-            || (node.count <= GROUP_SURFELS
-                && node.cone_angle <= GROUP_CONE
+        let cell = node.is_leaf()
+            || (node.count <= most
+                && node.cone_angle <= cone
                 && members.iter().all(|&i| surfels[i as usize].mesh == mesh));
-        if !group {
+        if !cell {
             stack.extend(node.children.iter().rev().filter(|&&c| c != NONE));
             continue;
         }
@@ -74,17 +98,7 @@ pub fn receiver_groups(tree: &SurfelTree, surfels: &[Surfel]) -> Vec<Cluster> {
             .copied()
             .min_by(|&a, &b| distance(a).total_cmp(&distance(b)).then(a.cmp(&b)))
             .unwrap_or(first);
-        let pa = surfels[active as usize].p;
-        let radius = members
-            .iter()
-            .map(|&i| (surfels[i as usize].p - pa).length())
-            .fold(0.0, f32::max);
-        groups.push(Cluster {
-            members: members.to_vec(),
-            active,
-            radius,
-            cone: Some(node.cone_angle),
-        });
+        out.push((j, active));
     }
-    groups
+    out
 }
