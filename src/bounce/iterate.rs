@@ -173,6 +173,8 @@ pub struct TransportReport {
     /// Receiver groups kept, and gathered again in every bounce.
     pub kept_groups: usize,
     pub regathered_groups: usize,
+    /// Surfels that gather (the others blend their light, see [`super::receivers`]).
+    pub receivers: usize,
     /// Slots the receivers read, of all the tree's.
     pub read_slots: usize,
     pub slots: u64,
@@ -311,6 +313,7 @@ pub fn add_bounces(
     let mut index = SlotIndex::new(&slots);
     let mut kept: Vec<Vec<ReceiverLinks>> = Vec::new();
     let mut transport = TransportReport {
+        receivers: receivers.count(),
         slots: slots.total(),
         ..TransportReport::default()
     };

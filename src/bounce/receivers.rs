@@ -12,8 +12,9 @@
 //! Clear 1988) in its simplest form, as production light caches use it.
 //!
 //! Diffuse surfels blend the gathered sum before their own reflectance multiplies it, so a
-//! textured albedo stays sharp; directional surfels blend their outgoing sphere maps (the
-//! neighbours' normals are close, and the maps are in world directions). A surfel with no such
+//! textured albedo stays sharp. Directional surfels blend their outgoing sphere maps (in world
+//! directions) only with neighbours of the same normal ([`DIRECTIONAL_CONE`]): on flat faces,
+//! not on a curved glass. A surfel with no such
 //! neighbour within [`SEARCH_SPACINGS`] receiver spacings gathers itself: corners, thin strips
 //! and small objects keep their own gathers.
 //!
@@ -117,8 +118,10 @@ impl Receivers {
                 near.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
                 near.truncate(NEIGHBOURS);
                 let r2 = s.area / std::f32::consts::PI;
-                let weights: Vec<(u32, f32)> =
-                    near.iter().map(|&(d2, j)| (j, 1.0 / (d2 + r2))).collect();
+                let weights: Vec<(u32, f32)> = near
+                    .iter()
+                    .map(|&(d2, j)| (j, 1.0 / (d2 + r2).max(1e-20)))
+                    .collect();
                 let total: f32 = weights.iter().map(|w| w.1).sum();
                 Some(Blend {
                     surfel: i,

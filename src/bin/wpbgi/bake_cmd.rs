@@ -238,9 +238,12 @@ pub fn bake_command(a: BakeArgs) -> Result<()> {
                 String::new()
             };
             eprintln!(
-                "  transport: {} MB ({:.0} bytes per surfel), {} of {} slots read{regathered}",
+                "  transport: {} MB ({:.0} bytes per surfel), {} of {} surfels gather, {} of {} \
+                 slots read{regathered}",
                 t.bytes / 1_000_000,
                 t.bytes as f64 / baked.surfels.len().max(1) as f64,
+                t.receivers,
+                baked.surfels.len(),
                 t.read_slots,
                 t.slots,
             );
