@@ -178,6 +178,8 @@ pub struct Baked {
     pub emitted: Vec<Rgb>,
     /// Per mesh: its surfels' flags ([`mesh_flags`]).
     pub mesh_flags: Vec<u32>,
+    /// Per surfel: its BSDF (textures looked up).
+    pub bsdfs: Vec<Bsdf>,
     /// The BSDF operators built so far (the direct light's, for the bounces to reuse).
     pub operators: Operators,
     pub tree: SurfelTree,
@@ -328,6 +330,7 @@ pub fn bake_cancellable(
         radiance,
         emitted,
         mesh_flags,
+        bsdfs,
         operators,
         tree,
         coded,

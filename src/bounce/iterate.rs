@@ -36,7 +36,7 @@ use super::transport::{slot_values, ReceiverLinks, SlotIndex, Slots};
 use super::view_tree::{receiver_groups, VIEW_EPS};
 use crate::accel::Accel;
 use crate::bake::coding::{encode, CodedTree};
-use crate::bake::pipeline::{intensity_map, surfel_bsdf, Baked, Progress, SurfelRadiance};
+use crate::bake::pipeline::{intensity_map, Baked, Progress, SurfelRadiance};
 use crate::bake::plan::map_levels;
 use crate::bake::surfels::Surfel;
 use crate::bsdf::Bsdf;
@@ -243,15 +243,11 @@ pub fn add_bounces(
     let mut start = std::time::Instant::now();
     let tau = baked.settings.tau;
     let accel = Accel::build(scene);
-    let bsdfs: Vec<Bsdf> = baked
-        .surfels
-        .iter()
-        .map(|s| surfel_bsdf(scene, s))
-        .collect();
+    let bsdfs = &baked.bsdfs;
     // Diffuse surfels store RGB; every other one a map, through its BSDF's operator.
     let ops = baked
         .operators
-        .of_each(&bsdfs, |b| !matches!(b, Bsdf::Diffuse(_)));
+        .of_each(bsdfs, |b| !matches!(b, Bsdf::Diffuse(_)));
     let reflected_direct: Vec<SurfelRadiance> = baked
         .radiance
         .iter()
@@ -264,7 +260,7 @@ pub fn add_bounces(
     let senders = geometry_senders(baked)?;
     let kinds: Vec<Option<u32>> = ops
         .iter()
-        .zip(&bsdfs)
+        .zip(bsdfs)
         .map(|(op, b)| op.as_ref().and_then(|_| map_levels(b)))
         .collect();
     let receivers = Receivers::choose(
@@ -300,7 +296,7 @@ pub fn add_bounces(
         senders: &senders,
         surfels: &baked.surfels,
         tau,
-        bsdfs: &bsdfs,
+        bsdfs,
         ops: &ops,
         slots: &slots,
     };
@@ -804,12 +800,8 @@ mod tests {
     fn links_replay_the_gather() {
         let (scene, baked) = rough_box(3000, 16, 0.0);
         let accel = Accel::build(&scene);
-        let bsdfs: Vec<Bsdf> = baked
-            .surfels
-            .iter()
-            .map(|s| surfel_bsdf(&scene, s))
-            .collect();
-        let ops = Operators::new(1e-2).of_each(&bsdfs, |b| !matches!(b, Bsdf::Diffuse(_)));
+        let bsdfs = &baked.bsdfs;
+        let ops = Operators::new(1e-2).of_each(bsdfs, |b| !matches!(b, Bsdf::Diffuse(_)));
         let cache = BakedCache::in_memory(Path::new("test"), &baked).expect("cache");
         let senders = Senders::from_cache(&cache).expect("senders");
         let slots = Slots::new(&baked.tree, &baked.radiance, baked.plan.map_levels).expect("slots");
@@ -819,7 +811,7 @@ mod tests {
             senders: &senders,
             surfels: &baked.surfels,
             tau: 0.0,
-            bsdfs: &bsdfs,
+            bsdfs,
             ops: &ops,
             slots: &slots,
         };
