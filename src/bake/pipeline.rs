@@ -268,8 +268,8 @@ pub fn bake_cancellable(
         max_cut: settings.max_cut.max(1),
     };
     let bsdfs: Vec<Bsdf> = surfels.iter().map(|s| surfel_bsdf(scene, s)).collect();
-    let mut operators = Operators::new(settings.bounces.operator_tau);
-    let near_specular = operators.of_each(&bsdfs, |b| {
+    let mut operators = Operators::default();
+    let near_specular = operators.of_each(&bsdfs, settings.bounces.operator_tau, |b| {
         b.alpha().is_some_and(|a| a < NEAR_SPECULAR_ALPHA)
     });
     let done = std::sync::atomic::AtomicUsize::new(0);

@@ -68,43 +68,36 @@ pub fn operator_side(bsdf: &Bsdf) -> u32 {
     }
 }
 
-/// The operators a bake has built, one per distinct BSDF, thresholded at one `tau`: the
-/// direct light builds those of near-specular BSDFs, the bounces the rest.
-#[derive(Debug)]
+/// The operators a bake has built, one per distinct BSDF and threshold: the direct light
+/// builds those of near-specular BSDFs, the bounces the rest (and reuse the direct light's).
+#[derive(Debug, Default)]
 pub struct Operators {
-    tau: f32,
-    built: Vec<(Bsdf, Arc<BsdfOperator>)>,
+    built: Vec<(Bsdf, f32, Arc<BsdfOperator>)>,
 }
 
 impl Operators {
-    /// None built yet; each will be thresholded at `tau` (see [`BsdfOperator::new`]).
-    pub fn new(tau: f32) -> Self {
-        Operators {
-            tau,
-            built: Vec::new(),
-        }
-    }
-
-    /// The operator of `bsdf`, built on first use.
-    pub fn get(&mut self, bsdf: &Bsdf) -> Arc<BsdfOperator> {
-        if let Some((_, op)) = self.built.iter().find(|(known, _)| known == bsdf) {
+    /// The operator of `bsdf` thresholded at `tau` (see [`BsdfOperator::new`]), built on first
+    /// use.
+    pub fn get(&mut self, bsdf: &Bsdf, tau: f32) -> Arc<BsdfOperator> {
+        if let Some((_, _, op)) = self.built.iter().find(|(b, t, _)| b == bsdf && *t == tau) {
             return op.clone();
         }
-        let op = Arc::new(BsdfOperator::new(bsdf, operator_side(bsdf), self.tau));
-        self.built.push((*bsdf, op.clone()));
+        let op = Arc::new(BsdfOperator::new(bsdf, operator_side(bsdf), tau));
+        self.built.push((*bsdf, tau, op.clone()));
         op
     }
 
-    /// The operator of each BSDF of `bsdfs` (one per surfel) that is `wanted`, `None` for the
-    /// others.
+    /// The operator (at `tau`) of each BSDF of `bsdfs` (one per surfel) that is `wanted`,
+    /// `None` for the others.
     pub fn of_each(
         &mut self,
         bsdfs: &[Bsdf],
+        tau: f32,
         wanted: impl Fn(&Bsdf) -> bool,
     ) -> Vec<Option<Arc<BsdfOperator>>> {
         bsdfs
             .iter()
-            .map(|b| wanted(b).then(|| self.get(b)))
+            .map(|b| wanted(b).then(|| self.get(b, tau)))
             .collect()
     }
 }

@@ -245,9 +245,9 @@ pub fn add_bounces(
     let accel = Accel::build(scene);
     let bsdfs = &baked.bsdfs;
     // Diffuse surfels store RGB; every other one a map, through its BSDF's operator.
-    let ops = baked
-        .operators
-        .of_each(bsdfs, |b| !matches!(b, Bsdf::Diffuse(_)));
+    let ops = baked.operators.of_each(bsdfs, settings.operator_tau, |b| {
+        !matches!(b, Bsdf::Diffuse(_))
+    });
     let reflected_direct: Vec<SurfelRadiance> = baked
         .radiance
         .iter()
@@ -801,7 +801,7 @@ mod tests {
         let (scene, baked) = rough_box(3000, 16, 0.0);
         let accel = Accel::build(&scene);
         let bsdfs = &baked.bsdfs;
-        let ops = Operators::new(1e-2).of_each(bsdfs, |b| !matches!(b, Bsdf::Diffuse(_)));
+        let ops = Operators::default().of_each(bsdfs, 1e-2, |b| !matches!(b, Bsdf::Diffuse(_)));
         let cache = BakedCache::in_memory(Path::new("test"), &baked).expect("cache");
         let senders = Senders::from_cache(&cache).expect("senders");
         let slots = Slots::new(&baked.tree, &baked.radiance, baked.plan.map_levels).expect("slots");
