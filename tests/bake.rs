@@ -22,6 +22,7 @@ fn settings() -> BakeSettings {
         seed: 1,
         max_cut: 1000,
         bounces: wpbgi::bounce::BounceSettings::exactly(0),
+        surfel_density: Vec::new(),
     }
 }
 
@@ -308,6 +309,63 @@ fn a_bake_that_cannot_fit_is_refused_before_any_work() {
             Ok(_) => panic!("{points} points, {bounces} bounces: baked"),
         };
         assert!(message.contains(says), "{message}");
+        assert_eq!(seen.into_inner().expect("lock"), Vec::<String>::new());
+    }
+}
+
+/// `--surfel-density`: the named material's surfaces get that many times the surfels per unit
+/// area (the total unchanged), and a name no material has is refused before any work.
+#[test]
+fn surfel_density_refines_the_named_material() {
+    let scene = cbox();
+    let glass = |b: &Baked| {
+        let on: Vec<_> = b
+            .surfels
+            .iter()
+            .filter(|s| {
+                scene.materials[scene.meshes[s.mesh as usize].material].name == "glass-a0.1"
+            })
+            .collect();
+        (on.len(), on.iter().map(|s| f64::from(s.area)).sum::<f64>())
+    };
+    let uniform = run(&scene);
+    let fine = bake(
+        &scene,
+        &BakeSettings {
+            surfel_density: vec![("glass-a0.1".into(), 4.0)],
+            ..settings()
+        },
+        &|_, _| {},
+    )
+    .expect("bakes");
+    assert_eq!(fine.surfels.len(), uniform.surfels.len());
+    let ((n1, a1), (n4, a4)) = (glass(&uniform), glass(&fine));
+    // The sphere is a few per cent of the area: 4× its share of a fixed total is a little
+    // less than 4× its count (the walls give up what it gains).
+    let ratio = n4 as f64 / n1 as f64;
+    assert!((3.4..4.2).contains(&ratio), "{n1} → {n4} glass surfels");
+    // The same surface either way: the areas differ by the Voronoi counting's noise only.
+    assert!((a4 / a1 - 1.0).abs() < 0.03, "glass area {a1} → {a4}");
+    for (density, says) in [
+        (
+            ("no-such".to_string(), 2.0),
+            "no material is named \"no-such\"",
+        ),
+        (("white".to_string(), 0.0), "must be a positive number"),
+    ] {
+        let s = BakeSettings {
+            surfel_density: vec![density],
+            ..settings()
+        };
+        let seen = std::sync::Mutex::new(Vec::new());
+        let progress = |stage: &str, _: f32| seen.lock().expect("lock").push(stage.to_string());
+        match bake(&scene, &s, &progress) {
+            Err(e @ wpbgi::Error::InvalidSetting(_)) => {
+                assert!(e.to_string().contains(says), "{e}")
+            }
+            Err(e) => panic!("{e}"),
+            Ok(_) => panic!("baked with {:?}", s.surfel_density),
+        }
         assert_eq!(seen.into_inner().expect("lock"), Vec::<String>::new());
     }
 }

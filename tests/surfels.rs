@@ -3,7 +3,7 @@
 mod common;
 
 use glam::Vec3;
-use wpbgi::bake::{sample_surfels, Surfel};
+use wpbgi::bake::{sample_surfels, sample_surfels_with_density, Surfel};
 use wpbgi::scene::{Mesh, Scene};
 
 /// A square of side `s` in the plane z = `z`, facing +z (or −z when `up` is false).
@@ -70,6 +70,49 @@ fn count_and_areas_are_exact() {
     assert!(
         (big_area - 4.0).abs() < 0.05 * 4.0,
         "big square credited {big_area}"
+    );
+}
+
+/// A mesh of density 4 gets 4× the surfels per unit area, each standing for a quarter of the
+/// area, with the spacing of its own density; the areas still sum to each mesh's surface.
+#[test]
+fn density_weights_follow_the_mesh() {
+    let sc = scene(vec![
+        square(1.0, Vec3::ZERO, true),
+        square(1.0, Vec3::new(3.0, 0.0, 0.0), true),
+    ]);
+    let n = 2000;
+    let s = sample_surfels_with_density(&sc, n, 5, &[1.0, 4.0]);
+    assert_eq!(s.len(), n);
+    let on = |m: u32| s.iter().filter(move |x| x.mesh == m);
+    let frac = on(1).count() as f64 / n as f64;
+    // Candidates split 1 : 4 by weighted area (binomial, σ = √(0.16 / 10 000) = 0.004 of the
+    // 10 000 candidates); elimination keeps the ratio to within its edge effects.
+    assert!(
+        (frac - 0.8).abs() < 0.02,
+        "{frac} of the surfels on the dense square"
+    );
+    for m in 0..2 {
+        let area: f64 = on(m).map(|x| x.area as f64).sum();
+        assert!((area - 1.0).abs() < 0.02, "square {m} credited {area}");
+    }
+    // Each square is Poisson at its own radius: r_max of N_eff = n surfels over the weighted
+    // area 1 + 4 = 5, and half that on the dense square.
+    let r_max = (5.0 / (2.0 * 3f32.sqrt() * n as f32)).sqrt();
+    for (m, r) in [(0u32, r_max), (1, r_max / 2.0)] {
+        let own: Vec<Surfel> = on(m).copied().collect();
+        let d = nearest_neighbour_distances(&own);
+        let mean = d.iter().sum::<f32>() / d.len() as f32 / (2.0 * r);
+        // As spacing_is_poisson_disk: about 0.76 of 2r at uniform density.
+        assert!(
+            (0.65..0.85).contains(&mean),
+            "square {m}: mean spacing {mean}"
+        );
+    }
+    // Density 1 everywhere is the uniform sampler, bit for bit.
+    assert_eq!(
+        sample_surfels_with_density(&sc, 500, 6, &[1.0, 1.0]),
+        sample_surfels(&sc, 500, 6)
     );
 }
 

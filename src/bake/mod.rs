@@ -12,5 +12,5 @@ pub use coding::{encode, CodedTree, NodeCoding};
 pub use direct::DirectLight;
 pub use pipeline::{bake, bake_cancellable, BakeSettings, Baked, Quality, SurfelRadiance};
 pub use plan::Plan;
-pub use surfels::{sample_surfels, Surfel};
+pub use surfels::{sample_surfels, sample_surfels_with_density, Surfel};
 pub use tree::{Node, SurfelTree};

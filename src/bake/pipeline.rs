@@ -9,7 +9,7 @@ use super::coding::{encode, CodedTree};
 use super::direct::{DirectLight, NEAR_SPECULAR_ALPHA};
 use super::lightcuts::LightTree;
 use super::plan::{map_levels, Plan};
-use super::surfels::{sample_surfels, Surfel};
+use super::surfels::{sample_surfels_with_density, Surfel};
 use super::tree::SurfelTree;
 use crate::accel::Accel;
 use crate::bounce::bsdf_operator::{BsdfOperator, Operators};
@@ -86,6 +86,10 @@ pub struct BakeSettings {
     pub max_cut: usize,
     /// Indirect bounces after the direct light (none: a direct-only cache).
     pub bounces: BounceSettings,
+    /// Surfels per unit area of the named materials' meshes relative to the others (1), in
+    /// the order given; a material named twice takes its last factor. Finer glass sharpens
+    /// the caustics it casts (docs/bounces.md measures it), at the cost of its surfels.
+    pub surfel_density: Vec<(String, f32)>,
 }
 
 impl BakeSettings {
@@ -98,12 +102,13 @@ impl BakeSettings {
             seed: 0,
             max_cut: 1000,
             bounces: BounceSettings::exactly(0),
+            surfel_density: Vec::new(),
         }
     }
 
     /// A canonical text of the settings, for the content hash and the cache's plan.
     pub fn to_json(&self) -> serde_json::Value {
-        serde_json::json!({
+        let mut json = serde_json::json!({
             "points": self.points,
             "light_samples": self.light_samples,
             "tau": self.tau,
@@ -117,8 +122,49 @@ impl BakeSettings {
                 "view_tree": self.bounces.view_tree,
                 "receiver_stride": self.bounces.receiver_stride,
             },
-        })
+        });
+        // Left out when uniform, so that the caches of earlier versions keep their hash.
+        if !self.surfel_density.is_empty() {
+            json["surfel_density"] = self
+                .surfel_density
+                .iter()
+                .map(|(name, w)| serde_json::json!([name, w]))
+                .collect();
+        }
+        json
     }
+}
+
+/// Each mesh's relative surfel density from the per-material factors of `densities`
+/// (material name, factor): an unknown name or a factor that is not a positive finite number
+/// is refused, naming it.
+fn mesh_densities(scene: &Scene, densities: &[(String, f32)]) -> Result<Vec<f32>> {
+    let mut of_material = vec![1.0f32; scene.materials.len()];
+    for (name, w) in densities {
+        if !(w.is_finite() && *w > 0.0) {
+            return Err(Error::InvalidSetting(format!(
+                "the surfel density of material \"{name}\" must be a positive number, got {w}"
+            )));
+        }
+        let matching: Vec<usize> = (0..scene.materials.len())
+            .filter(|&m| scene.materials[m].name == *name)
+            .collect();
+        if matching.is_empty() {
+            let names: Vec<&str> = scene.materials.iter().map(|m| m.name.as_str()).collect();
+            return Err(Error::InvalidSetting(format!(
+                "no material is named \"{name}\" (the scene's: {})",
+                names.join(", ")
+            )));
+        }
+        for m in matching {
+            of_material[m] = *w;
+        }
+    }
+    Ok(scene
+        .meshes
+        .iter()
+        .map(|m| of_material[m.material])
+        .collect())
 }
 
 /// Refuse, before any work, a bake that cannot fit: bounces whose transport slots overflow
@@ -230,6 +276,7 @@ pub fn bake_cancellable(
         )));
     }
     scene.check_renderable()?;
+    let density = mesh_densities(scene, &settings.surfel_density)?;
     let mut timings = Vec::new();
     let mut stage =
         |name: &'static str, start: Instant| timings.push((name, start.elapsed().as_secs_f64()));
@@ -252,7 +299,7 @@ pub fn bake_cancellable(
 
     let t = Instant::now();
     progress("surfels", 0.0);
-    let surfels = sample_surfels(scene, settings.points, settings.seed);
+    let surfels = sample_surfels_with_density(scene, settings.points, settings.seed, &density);
     progress("surfels", 1.0);
     stage("surfels", t);
     stop()?;

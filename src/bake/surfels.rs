@@ -12,6 +12,10 @@
 //!    total of the candidates nearest to it: the local density decides the area (Voronoi by
 //!    counting), and the areas sum to the total surface area.
 //!
+//! With per-mesh densities ([`sample_surfels_with_density`]), candidates are drawn by area
+//! times density, a mesh of density w has discs of radius r_max/√w, and a candidate on it
+//! stands for A_w / (count · w) of surface, A_w the density-weighted area.
+//!
 //! Neighbours count only when they face the same way (n·n' > 0). The two sides of a thin wall
 //! then do not thin each other out, and the area of one side is never credited to the other.
 
@@ -60,7 +64,20 @@ impl Surfel {
 /// `n` Poisson-disk surfels over every triangle of `scene` (fewer if the scene has fewer
 /// candidates' worth of area: never more than requested).
 pub fn sample_surfels(scene: &Scene, n: usize, seed: u64) -> Vec<Surfel> {
-    let (cdf, tris) = area_table(scene);
+    sample_surfels_with_density(scene, n, seed, &[])
+}
+
+/// As [`sample_surfels`], with mesh `m` sampled at `density[m]` times the surfels per unit
+/// area of a mesh of density 1 (meshes past the slice's end have density 1; a density must be
+/// positive and finite). The discs of a mesh of density w have 1/√w times the radius.
+pub fn sample_surfels_with_density(
+    scene: &Scene,
+    n: usize,
+    seed: u64,
+    density: &[f32],
+) -> Vec<Surfel> {
+    let density_of = |mesh: u32| f64::from(density.get(mesh as usize).copied().unwrap_or(1.0));
+    let (cdf, tris) = area_table(scene, &density_of);
     let total = cdf.last().copied().unwrap_or(0.0);
     if n == 0 || !(total > 0.0) {
         return Vec::new();
@@ -70,21 +87,31 @@ pub fn sample_surfels(scene: &Scene, n: usize, seed: u64) -> Vec<Surfel> {
         .into_par_iter()
         .map(|i| candidate(scene, &cdf, &tris, total, seed, i))
         .collect();
-    let r_max = ((total / (2.0 * 3f64.sqrt() * n as f64)).sqrt()) as f32;
-    let grid = Grid::new(&mut candidates, 2.0 * r_max);
-    let alive = eliminate(&candidates, &grid, r_max, n);
-    assign_areas(&candidates, &grid, &alive, (total / count as f64) as f32)
+    // Density 1's disc radius; a mesh of density w has r_max / √w.
+    let r_max = (total / (2.0 * 3f64.sqrt() * n as f64)).sqrt();
+    let radius = |mesh: u32| (r_max / density_of(mesh).sqrt()) as f32;
+    let largest = candidates
+        .iter()
+        .map(|c| radius(c.mesh))
+        .fold(0.0f32, f32::max);
+    let grid = Grid::new(&mut candidates, 2.0 * largest);
+    let alive = eliminate(&candidates, &grid, &radius, n);
+    // Every candidate stands for the area over which one was drawn: W / (count · w).
+    let area_each = |mesh: u32| (total / (count as f64 * density_of(mesh))) as f32;
+    assign_areas(&candidates, &grid, &alive, &area_each)
 }
 
-/// Cumulative triangle areas (f64) and the `(mesh, triangle)` of each entry.
-fn area_table(scene: &Scene) -> (Vec<f64>, Vec<(u32, u32)>) {
+/// Cumulative triangle areas weighted by their mesh's density (f64) and the
+/// `(mesh, triangle)` of each entry.
+fn area_table(scene: &Scene, density: &dyn Fn(u32) -> f64) -> (Vec<f64>, Vec<(u32, u32)>) {
     let mut cdf = Vec::with_capacity(scene.triangle_count());
     let mut tris = Vec::with_capacity(scene.triangle_count());
     let mut acc = 0.0f64;
     for (mi, m) in scene.meshes.iter().enumerate() {
+        let w = density(mi as u32);
         for (ti, t) in m.triangles.iter().enumerate() {
             let p = |k: u32| m.positions[k as usize].as_dvec3();
-            let area = 0.5 * (p(t[1]) - p(t[0])).cross(p(t[2]) - p(t[0])).length();
+            let area = 0.5 * (p(t[1]) - p(t[0])).cross(p(t[2]) - p(t[0])).length() * w;
             if area > 0.0 {
                 acc += area;
                 cdf.push(acc);
@@ -203,9 +230,12 @@ impl Grid {
     }
 }
 
-/// Yuksel's weight of a neighbour at distance `d`, for candidates facing the same way.
+/// Yuksel's weight of a neighbour at distance `d`, for candidates facing the same way, with
+/// the larger of their two disc radii (symmetric, so that removing a candidate takes from
+/// its neighbours exactly what it gave them).
 #[inline]
-fn weight(a: &Surfel, b: &Surfel, r_max: f32) -> f32 {
+fn weight(a: &Surfel, b: &Surfel, radius: &(impl Fn(u32) -> f32 + Sync)) -> f32 {
+    let r_max = radius(a.mesh).max(radius(b.mesh));
     let d = a.p.distance(b.p);
     if d < 2.0 * r_max && a.n.dot(b.n) > 0.0 {
         (1.0 - d / (2.0 * r_max)).powi(8)
@@ -282,14 +312,19 @@ impl WeightHeap {
 }
 
 /// Which candidates survive elimination down to `keep`.
-fn eliminate(c: &[Surfel], grid: &Grid, r_max: f32, keep: usize) -> Vec<bool> {
+fn eliminate(
+    c: &[Surfel],
+    grid: &Grid,
+    radius: &(impl Fn(u32) -> f32 + Sync),
+    keep: usize,
+) -> Vec<bool> {
     let w: Vec<f32> = (0..c.len())
         .into_par_iter()
         .map(|i| {
             let mut sum = 0.0;
             grid.for_each_around(c[i].p, |j| {
                 if j as usize != i {
-                    sum += weight(&c[i], &c[j as usize], r_max);
+                    sum += weight(&c[i], &c[j as usize], radius);
                 }
             });
             sum
@@ -306,7 +341,7 @@ fn eliminate(c: &[Surfel], grid: &Grid, r_max: f32, keep: usize) -> Vec<bool> {
         remaining -= 1;
         grid.for_each_around(c[i as usize].p, |j| {
             if alive[j as usize] {
-                let dw = weight(&c[i as usize], &c[j as usize], r_max);
+                let dw = weight(&c[i as usize], &c[j as usize], radius);
                 if dw > 0.0 {
                     heap.decrease(j, dw);
                 }
@@ -316,8 +351,14 @@ fn eliminate(c: &[Surfel], grid: &Grid, r_max: f32, keep: usize) -> Vec<bool> {
     alive
 }
 
-/// The surviving candidates, each with the area of the candidates nearest to it.
-fn assign_areas(c: &[Surfel], grid: &Grid, alive: &[bool], area_each: f32) -> Vec<Surfel> {
+/// The surviving candidates, each with the area of the candidates nearest to it
+/// (`area_each` of a candidate on a mesh).
+fn assign_areas(
+    c: &[Surfel],
+    grid: &Grid,
+    alive: &[bool],
+    area_each: &impl Fn(u32) -> f32,
+) -> Vec<Surfel> {
     let nearest: Vec<u32> = (0..c.len())
         .into_par_iter()
         .map(|i| {
@@ -345,16 +386,17 @@ fn assign_areas(c: &[Surfel], grid: &Grid, alive: &[bool], area_each: f32) -> Ve
             best.1
         })
         .collect();
-    let mut counts = vec![0u32; c.len()];
-    for &k in &nearest {
-        counts[k as usize] += 1;
+    // Summed in candidate order (f64): the same areas for any thread count.
+    let mut areas = vec![0.0f64; c.len()];
+    for (i, &k) in nearest.iter().enumerate() {
+        areas[k as usize] += f64::from(area_each(c[i].mesh));
     }
     c.iter()
         .zip(alive)
-        .zip(&counts)
+        .zip(&areas)
         .filter(|((_, a), _)| **a)
-        .map(|((s, _), &k)| Surfel {
-            area: k as f32 * area_each,
+        .map(|((s, _), &area)| Surfel {
+            area: area as f32,
             ..*s
         })
         .collect()
