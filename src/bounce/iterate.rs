@@ -10,10 +10,10 @@
 //!
 //! Bounce control: the energy of a bounce is Σ area × luminance of the surfels' mean outgoing
 //! radiance. The loop stops when a bounce carries less than `tolerance` of the reflected
-//! total, or at `max`; once the ratio r of successive bounce energies has settled (three
-//! bounces within 1 % of each other) and the remaining tail is still above the tolerance, the
-//! geometric tail Σ_{j≥1} rʲ of the last bounce is added at once (a stiff scene, albedo near
-//! 1, would need hundreds of bounces).
+//! total, when the ratio r of successive bounce energies has settled (three bounces within
+//! 1 % of each other), or at `max`; whichever stops it, the geometric tail Σ_{j≥1} rʲ of the
+//! last bounce is added at once (a stiff scene, albedo near 1, would need hundreds of
+//! bounces, and a tail left out darkens the cache by r/(1 − r) times the last bounce).
 //!
 //! Receivers gather per group of the view tree (spec §8.3, [`super::view_tree`]): nearby
 //! surfels share one cut of the far senders. Every pixel of a bounce's microbuffer whose
@@ -124,11 +124,12 @@ pub fn check_slots(points: u64, levels: u32) -> Result<()> {
 }
 
 impl BounceSettings {
-    /// `auto`: up to 30 bounces, stopping at 0.1 % of the total.
+    /// `auto`: up to 30 bounces, stopping once one adds less than 1 % of the total, with the
+    /// geometric tail of the rest (docs/bounces.md, "Bounce control", measures the choice).
     pub fn auto() -> Self {
         BounceSettings {
             max: 30,
-            tolerance: 1e-3,
+            tolerance: 1e-2,
             operator_tau: 1e-2,
             view_tree: true,
             receiver_stride: RECEIVER_STRIDE,
@@ -373,25 +374,14 @@ pub fn add_bounces(
         if let Some(&prev) = report.energies.iter().rev().nth(1) {
             ratios.push(if prev > 0.0 { e / prev } else { 0.0 });
         }
-        baked
-            .radiance
-            .par_iter_mut()
-            .zip(&light)
-            .for_each(|(t, l)| *t = add_scaled(t, l, 1.0, tau));
         total_energy += e;
         report.bounces = bounce;
-        report.seconds.push(start.elapsed().as_secs_f64());
-        start = std::time::Instant::now();
-        progress("bounces", done_before + 1.0 / settings.max as f32);
         report.residual = if total_energy > 0.0 {
             e / total_energy
         } else {
             0.0
         };
         let fixed_count = settings.tolerance <= 0.0;
-        if !fixed_count && report.residual < f64::from(settings.tolerance) {
-            break;
-        }
         let settled = ratios.len() >= 3 && {
             let last = &ratios[ratios.len() - 3..];
             let (lo, hi) = last.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), &r| {
@@ -399,16 +389,27 @@ pub fn add_bounces(
             });
             hi < 1.0 && hi - lo <= 0.01 * hi
         };
-        if !fixed_count && (settled || bounce == settings.max) {
-            let r = *ratios.last().unwrap_or(&0.0);
-            if r > 0.0 && r < 1.0 {
-                let tail = r / (1.0 - r);
-                for (t, l) in baked.radiance.iter_mut().zip(&light) {
-                    *t = add_scaled(t, l, tail as f32, tau);
-                }
-                report.extrapolated = Some(tail);
-                report.residual = e * tail / (total_energy + e * tail);
-            }
+        let small = report.residual < f64::from(settings.tolerance);
+        let stop = !fixed_count && (small || settled || bounce == settings.max);
+        // On stopping, the bounces left sum to about this one times r/(1 − r), r the last
+        // ratio of successive energies: added with it, whatever stopped the loop (left out,
+        // they would darken the cache by that much).
+        let r = *ratios.last().unwrap_or(&0.0);
+        let tail = (stop && r > 0.0 && r < 1.0).then(|| r / (1.0 - r));
+        let weight = 1.0 + tail.unwrap_or(0.0) as f32;
+        baked
+            .radiance
+            .par_iter_mut()
+            .zip(&light)
+            .for_each(|(t, l)| *t = add_scaled(t, l, weight, tau));
+        if let Some(tail) = tail {
+            report.extrapolated = Some(tail);
+            report.residual = e * tail / (total_energy + e * tail);
+        }
+        report.seconds.push(start.elapsed().as_secs_f64());
+        start = std::time::Instant::now();
+        progress("bounces", done_before + 1.0 / settings.max as f32);
+        if stop {
             break;
         }
         emit = light;

@@ -65,8 +65,9 @@ pub struct BakeArgs {
     #[arg(long, default_value_t = 1000)]
     max_cut: usize,
     /// Indirect bounces after the direct light: a number (0: a direct-only cache), or `auto`:
-    /// until a bounce adds less than 0.1 % of the light (at most 30), the geometric tail
-    /// extrapolated once successive bounces lose light at a steady ratio.
+    /// until a bounce adds less than 1 % of the light (at most 30), then the bounces left at
+    /// once, as the geometric tail of the last (r/(1 − r) times it, r the ratio of the last
+    /// two bounces' light).
     #[arg(long, default_value = "auto", value_parser = parse_bounces)]
     bounces: BounceSettings,
     /// Memory (MB) the bounces may keep their recorded light transport in: the first bounce
