@@ -150,9 +150,16 @@ fn mesh_densities(scene: &Scene, densities: &[(String, f32)]) -> Result<Vec<f32>
             .filter(|&m| scene.materials[m].name == *name)
             .collect();
         if matching.is_empty() {
-            let names: Vec<&str> = scene.materials.iter().map(|m| m.name.as_str()).collect();
+            // The names of the materials some mesh uses (not the loader's unused fallback).
+            let mut used: Vec<usize> = scene.meshes.iter().map(|m| m.material).collect();
+            used.sort_unstable();
+            used.dedup();
+            let names: Vec<&str> = used
+                .iter()
+                .map(|&m| scene.materials[m].name.as_str())
+                .collect();
             return Err(Error::InvalidSetting(format!(
-                "no material is named \"{name}\" (the scene's: {})",
+                "no material is named \"{name}\" (the scene's meshes use: {})",
                 names.join(", ")
             )));
         }
