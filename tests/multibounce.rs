@@ -167,19 +167,18 @@ fn view_tree_and_thinned_receivers_match_every_surfel_gathering() {
         view_tree: false,
         ..every
     });
-    let (mean_err, rms) = bounce_difference(&direct, &alone, &shared);
-    eprintln!(
-        "view tree against per surfel: mean {:+.2} %, RMS {:.2} % per surfel",
-        100.0 * mean_err,
-        100.0 * rms
-    );
+    let compared = |what: &str, a, b| {
+        let (mean_err, rms) = bounce_difference(&direct, a, b);
+        eprintln!(
+            "{what}: mean {:+.2} %, RMS {:.2} % per surfel",
+            100.0 * mean_err,
+            100.0 * rms
+        );
+        (mean_err, rms)
+    };
+    let (mean_err, rms) = compared("view tree against per surfel", &alone, &shared);
     assert!(mean_err.abs() < 0.01 && rms < 0.05);
     let thinned = rough_draft(BounceSettings::exactly(1));
-    let (mean_err, rms) = bounce_difference(&direct, &shared, &thinned);
-    eprintln!(
-        "thinned receivers against every surfel: mean {:+.2} %, RMS {:.2} % per surfel",
-        100.0 * mean_err,
-        100.0 * rms
-    );
+    let (mean_err, rms) = compared("thinned receivers against every surfel", &shared, &thinned);
     assert!(mean_err.abs() < 0.0075 && rms < 0.13);
 }

@@ -24,7 +24,7 @@
 use super::lightcuts::LightTree;
 use super::surfels::Surfel;
 use crate::accel::Accel;
-use crate::bounce::bsdf_operator::{on_sphere_map, BsdfOperator, INCOMING_TAU};
+use crate::bounce::bsdf_operator::BsdfOperator;
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::emitters::{EmitterSample, EmitterSampler};
 use crate::geometry::frame::Frame;
@@ -134,8 +134,7 @@ impl DirectLight<'_> {
                 .into_iter()
                 .map(|a| (frame.to_local(a.wi), a.value)),
         );
-        let local = op.outgoing(&incident, INCOMING_TAU);
-        on_sphere_map(&local, &op.map_texels(frame, levels))
+        op.sphere_map(&incident, &op.map_texels(frame, levels))
     }
 
     /// Outgoing radiance of surfel `id` with BSDF `bsdf` at the centre of every texel of the

@@ -89,13 +89,16 @@ pub fn sample_surfels_with_density(
         .collect();
     // Density 1's disc radius; a mesh of density w has r_max / √w.
     let r_max = (total / (2.0 * 3f64.sqrt() * n as f64)).sqrt();
-    let radius = |mesh: u32| (r_max / density_of(mesh).sqrt()) as f32;
+    // Per mesh, looked up for every pair the elimination weighs.
+    let radii: Vec<f32> = (0..scene.meshes.len() as u32)
+        .map(|m| (r_max / density_of(m).sqrt()) as f32)
+        .collect();
     let largest = candidates
         .iter()
-        .map(|c| radius(c.mesh))
+        .map(|c| radii[c.mesh as usize])
         .fold(0.0f32, f32::max);
     let grid = Grid::new(&mut candidates, 2.0 * largest);
-    let alive = eliminate(&candidates, &grid, &radius, n);
+    let alive = eliminate(&candidates, &grid, &radii, n);
     // Every candidate stands for the area over which one was drawn: W / (count · w).
     let area_each = |mesh: u32| (total / (count as f64 * density_of(mesh))) as f32;
     assign_areas(&candidates, &grid, &alive, &area_each)
@@ -234,8 +237,8 @@ impl Grid {
 /// the larger of their two disc radii (symmetric, so that removing a candidate takes from
 /// its neighbours exactly what it gave them).
 #[inline]
-fn weight(a: &Surfel, b: &Surfel, radius: &(impl Fn(u32) -> f32 + Sync)) -> f32 {
-    let r_max = radius(a.mesh).max(radius(b.mesh));
+fn weight(a: &Surfel, b: &Surfel, radii: &[f32]) -> f32 {
+    let r_max = radii[a.mesh as usize].max(radii[b.mesh as usize]);
     let d = a.p.distance(b.p);
     if d < 2.0 * r_max && a.n.dot(b.n) > 0.0 {
         (1.0 - d / (2.0 * r_max)).powi(8)
@@ -312,19 +315,14 @@ impl WeightHeap {
 }
 
 /// Which candidates survive elimination down to `keep`.
-fn eliminate(
-    c: &[Surfel],
-    grid: &Grid,
-    radius: &(impl Fn(u32) -> f32 + Sync),
-    keep: usize,
-) -> Vec<bool> {
+fn eliminate(c: &[Surfel], grid: &Grid, radii: &[f32], keep: usize) -> Vec<bool> {
     let w: Vec<f32> = (0..c.len())
         .into_par_iter()
         .map(|i| {
             let mut sum = 0.0;
             grid.for_each_around(c[i].p, |j| {
                 if j as usize != i {
-                    sum += weight(&c[i], &c[j as usize], radius);
+                    sum += weight(&c[i], &c[j as usize], radii);
                 }
             });
             sum
@@ -341,7 +339,7 @@ fn eliminate(
         remaining -= 1;
         grid.for_each_around(c[i as usize].p, |j| {
             if alive[j as usize] {
-                let dw = weight(&c[i as usize], &c[j as usize], radius);
+                let dw = weight(&c[i as usize], &c[j as usize], radii);
                 if dw > 0.0 {
                     heap.decrease(j, dw);
                 }

@@ -102,15 +102,6 @@ impl Operators {
     }
 }
 
-/// The texels of a `2^levels`-a-side sphere map from `local`, the outgoing radiance on an
-/// operator's grid, through the map's [`BsdfOperator::map_texels`] (zero where [`NO_TEXEL`]).
-pub fn on_sphere_map(local: &[Rgb], map_texels: &[u16]) -> Vec<Rgb> {
-    map_texels
-        .iter()
-        .map(|&t| local.get(t as usize).copied().unwrap_or(Rgb::ZERO))
-        .collect()
-}
-
 /// A BSDF's sparse 4D Haar operator.
 #[derive(Clone, Debug)]
 pub struct BsdfOperator {
@@ -412,6 +403,19 @@ impl BsdfOperator {
                     .and_then(|t| u16::try_from(t).ok())
                     .unwrap_or(NO_TEXEL)
             })
+            .collect()
+    }
+
+    /// The texels of a surfel's sphere map (as many as `map_texels`, its
+    /// [`BsdfOperator::map_texels`]) of the light leaving it for `incident` radiance per texel
+    /// of the grid: D = V·C ([`BsdfOperator::outgoing`], incoming coefficients thresholded at
+    /// [`INCOMING_TAU`]) read by nearest texel, zero where [`NO_TEXEL`]. The one step from
+    /// incident light to a map, for the bounces and the near-specular direct light alike.
+    pub fn sphere_map(&self, incident: &[Rgb], map_texels: &[u16]) -> Vec<Rgb> {
+        let local = self.outgoing(incident, INCOMING_TAU);
+        map_texels
+            .iter()
+            .map(|&t| local.get(t as usize).copied().unwrap_or(Rgb::ZERO))
             .collect()
     }
 

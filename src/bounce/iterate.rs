@@ -30,7 +30,7 @@
 //! memory budget ([`BounceSettings::transport_budget`]) are gathered again in every bounce by
 //! the same code, so the cache does not depend on the budget.
 
-use super::bsdf_operator::{on_sphere_map, BsdfOperator, INCOMING_TAU};
+use super::bsdf_operator::BsdfOperator;
 use super::receivers::Receivers;
 use super::transport::{slot_values, ReceiverLinks, SlotIndex, Slots};
 use super::view_tree::{receiver_groups, VIEW_EPS};
@@ -710,9 +710,7 @@ impl Gather<'_> {
         let i = links.surfel as usize;
         match &self.ops[i] {
             Some(op) => {
-                let radiance = links.pixel_radiance(values);
-                let local = op.outgoing(&radiance, INCOMING_TAU);
-                let texels = on_sphere_map(&local, links.map_texels());
+                let texels = op.sphere_map(&links.pixel_radiance(values), links.map_texels());
                 // The map has 4^levels texels.
                 let side = 1 << (texels.len().trailing_zeros() / 2);
                 SurfelRadiance::Map(SparseHaar::compress(&Haar2d::forward(&texels, side), tau))

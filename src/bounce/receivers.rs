@@ -21,7 +21,7 @@
 //! Everything here is geometry, fixed before the first bounce, in a fixed order: the cache
 //! does not depend on the thread count.
 
-use super::view_tree::cells;
+use super::view_tree::{cells, group_of};
 use crate::bake::pipeline::SurfelRadiance;
 use crate::bake::surfels::Surfel;
 use crate::bake::tree::SurfelTree;
@@ -166,17 +166,7 @@ impl Receivers {
                     .iter()
                     .copied()
                     .min_by(|&a, &b| distance(a).total_cmp(&distance(b)).then(a.cmp(&b)))?;
-                let pa = surfels[active as usize].p;
-                let radius = members
-                    .iter()
-                    .map(|&i| (surfels[i as usize].p - pa).length())
-                    .fold(0.0, f32::max);
-                Some(Cluster {
-                    members,
-                    active,
-                    radius,
-                    cone: g.cone,
-                })
+                Some(group_of(members, active, surfels, g.cone))
             })
             .collect()
     }

@@ -52,19 +52,25 @@ pub fn receiver_groups(tree: &SurfelTree, surfels: &[Surfel]) -> Vec<Cluster> {
         .map(|(j, active)| {
             let node = &tree.nodes[j as usize];
             let members = &tree.order[node.first as usize..(node.first + node.count) as usize];
-            let pa = surfels[active as usize].p;
-            let radius = members
-                .iter()
-                .map(|&i| (surfels[i as usize].p - pa).length())
-                .fold(0.0, f32::max);
-            Cluster {
-                members: members.to_vec(),
-                active,
-                radius,
-                cone: Some(node.cone_angle),
-            }
+            group_of(members.to_vec(), active, surfels, Some(node.cone_angle))
         })
         .collect()
+}
+
+/// The receiver group of `members` around its `active` member: its radius is the farthest
+/// member's distance from the active one; `cone` is the group's normal cone.
+pub fn group_of(members: Vec<u32>, active: u32, surfels: &[Surfel], cone: Option<f32>) -> Cluster {
+    let pa = surfels[active as usize].p;
+    let radius = members
+        .iter()
+        .map(|&i| (surfels[i as usize].p - pa).length())
+        .fold(0.0, f32::max);
+    Cluster {
+        members,
+        active,
+        radius,
+        cone,
+    }
 }
 
 /// The largest nodes of `tree` with at most `most` surfels, all on one mesh, normals within
