@@ -5,6 +5,7 @@ use wpbgi::geometry::warp::square_to_uniform_sphere;
 use wpbgi::haar::sphere_map::square_to_direction_f64;
 use wpbgi::haar::{
     direction_to_square, square_to_direction, texel_directions, texel_of, Haar2d, SparseHaar,
+    SparseSum,
 };
 use wpbgi::sampler::Sampler;
 
@@ -233,6 +234,113 @@ fn sparse_decodes_agree_bit_for_bit() {
             assert_eq!(
                 SparseHaar::compress_below(&trimmed, 1e-3).refined_to(full.levels),
                 SparseHaar::compress_below(&full, 1e-3)
+            );
+        }
+    }
+}
+
+/// Sums of sparse maps (the bounces' blends and totals, the tree's coding) are the dense
+/// sums, thresholded the same way, bit for bit: terms of different resolutions and
+/// thresholds, weights of either sign, and a map added to itself.
+#[test]
+fn sparse_sums_are_the_dense_sums_bit_for_bit() {
+    let maps: Vec<SparseHaar<Vec3>> = [
+        (64usize, 0.01, 40),
+        (64, 0.1, 41),
+        (16, 0.02, 42),
+        (64, 0.0, 43),
+    ]
+    .iter()
+    .map(|&(n, tau, seed)| {
+        let image = if seed == 41 {
+            lobe_image(n)
+        } else {
+            random_image(n, seed)
+        };
+        SparseHaar::compress(&Haar2d::forward(&image, n), tau)
+    })
+    .collect();
+    let cases: Vec<Vec<(usize, f32)>> = vec![
+        vec![(0, 1.0)],
+        vec![(0, 1.0), (1, 0.37)],
+        vec![(1, 0.25), (2, 0.5), (0, 0.125), (1, 0.125)],
+        vec![(1, 0.5), (2, -0.5)],
+        vec![(3, 1.0), (0, 1.0)],
+    ];
+    for terms in &cases {
+        let sparse_terms: Vec<(&SparseHaar<Vec3>, f32)> =
+            terms.iter().map(|&(m, w)| (&maps[m], w)).collect();
+        let dense = terms
+            .iter()
+            .fold(Haar2d::forward(&[Vec3::ZERO], 1), |acc, &(m, w)| {
+                Haar2d::combine(&acc, 1.0, &maps[m].to_dense_trimmed(), w)
+            });
+        let levels = terms
+            .iter()
+            .map(|&(m, _)| maps[m].levels())
+            .max()
+            .unwrap_or(0);
+        for tau in [0.0, 1e-3, 0.05] {
+            assert_eq!(
+                SparseHaar::weighted_sum(&sparse_terms, tau),
+                SparseHaar::compress(&dense, tau).refined_to(levels),
+                "terms {terms:?}, tau {tau}"
+            );
+        }
+        assert_eq!(SparseSum::of(&sparse_terms).norm(), dense.norm());
+    }
+    assert_eq!(maps[0].norm(), maps[0].to_dense().norm());
+}
+
+/// A map times a function constant on the cells of a coarser level (a surfel's radiance
+/// times its projected area per 8² cell) equals the product taken texel by texel, to
+/// rounding; the cells' means are the texels averaged.
+#[test]
+fn scaling_by_cells_is_the_texel_product() {
+    for (n, k, tau) in [
+        (64usize, 3u32, 0.01),
+        (64, 3, 0.0),
+        (16, 3, 0.05),
+        (8, 3, 0.0),
+        (32, 1, 0.02),
+    ] {
+        let map = SparseHaar::compress(&Haar2d::forward(&random_image(n, 50), n), tau);
+        let side = 1usize << k;
+        // Factors of both signs and zeros, as clamped cosines give.
+        let factors: Vec<f32> = (0..side * side)
+            .map(|c| ((c as f32 * 0.7).sin() * 1.5).max(-0.2))
+            .collect();
+        let mut texels = Vec::new();
+        map.texels_into(&mut texels);
+        let block = n / side;
+        let mut means = Vec::new();
+        map.means_into(k, &mut means);
+        let mut product = texels.clone();
+        for (t, v) in product.iter_mut().enumerate() {
+            let cell = (t / n / block) * side + (t % n) / block;
+            *v *= factors[cell];
+        }
+        for (c, mean) in means.iter().enumerate() {
+            let (cx, cy) = (c % side, c / side);
+            let mut sum = Vec3::ZERO;
+            for y in cy * block..(cy + 1) * block {
+                for x in cx * block..(cx + 1) * block {
+                    sum += texels[y * n + x];
+                }
+            }
+            let expected = sum / (block * block) as f32;
+            assert!(
+                (*mean - expected).abs().max_element() <= 1e-5 * max_abs(&texels),
+                "mean {c}"
+            );
+        }
+        let mut ours = Vec::new();
+        map.scaled_by_cells(k, &factors).texels_into(&mut ours);
+        let scale = max_abs(&product);
+        for (a, b) in ours.iter().zip(&product) {
+            assert!(
+                (*a - *b).abs().max_element() <= 1e-5 * scale,
+                "n {n}, k {k}: {a} against {b}"
             );
         }
     }

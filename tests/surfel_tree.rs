@@ -52,6 +52,73 @@ fn leaf_maps(s: &[Surfel]) -> Vec<Haar2d<Rgb>> {
         .collect()
 }
 
+/// A map with every non-zero coefficient: what `encode` takes per leaf.
+fn exact(m: &Haar2d<Rgb>) -> SparseHaar<Rgb> {
+    SparseHaar::compress_below(m, 0.0)
+}
+
+/// The coding as spec §6 writes it, on dense maps: per node the exact G = G(left) + G(right)
+/// and H = (G(left) − G(right))/2, each kept above τ‖G‖ ([`Haar2d::combine`], [`Haar2d::norm`]).
+fn dense_coding(
+    tree: &SurfelTree,
+    maps: &[Haar2d<Rgb>],
+    eps: u32,
+    tau: f32,
+) -> Vec<[Option<SparseHaar<Rgb>>; 2]> {
+    let mut g: Vec<Option<Haar2d<Rgb>>> = vec![None; tree.nodes.len()];
+    let mut stored = vec![[None, None]; tree.nodes.len()];
+    // Children follow their parents (breadth-first), so a reverse sweep is post-order enough.
+    for j in (0..tree.nodes.len()).rev() {
+        let n = &tree.nodes[j];
+        let (gj, h) = if n.is_leaf() {
+            (maps[tree.order[n.first as usize] as usize].clone(), None)
+        } else {
+            let [l, r] = n
+                .children
+                .map(|c| g[c as usize].as_ref().expect("child first"));
+            (
+                Haar2d::combine(l, 1.0, r, 1.0),
+                Some(Haar2d::combine(l, 0.5, r, -0.5)),
+            )
+        };
+        let cut = tau * gj.norm();
+        let keep = |m: &Haar2d<Rgb>| SparseHaar::compress_below(m, cut).refined_to(LEVELS);
+        stored[j] = [
+            (n.level <= eps).then(|| keep(&gj)),
+            h.filter(|_| n.level >= eps).map(|h| keep(&h)),
+        ];
+        g[j] = Some(gj);
+    }
+    stored
+}
+
+/// The sparse coder stores what the dense one does, coefficient for coefficient.
+#[test]
+fn sparse_coding_is_the_dense_coding_bit_for_bit() {
+    let s = surfels(400);
+    let tree = SurfelTree::build(&s);
+    // Leaves with every coefficient, and sparse ones (thresholded as light maps are).
+    let full = leaf_maps(&s);
+    let sparse: Vec<Haar2d<Rgb>> = full
+        .iter()
+        .map(|m| SparseHaar::compress(m, 0.05).to_dense())
+        .collect();
+    for (maps, eps, tau) in [
+        (&full, 0, 0.0),
+        (&full, 3, 2e-3),
+        (&sparse, 3, 2e-3),
+        (&sparse, 3, 5e-2),
+        (&sparse, tree.depth(), 1e-2),
+    ] {
+        let coded = encode(&tree, &|i| exact(&maps[i as usize]), LEVELS, eps, tau);
+        let dense = dense_coding(&tree, maps, eps, tau);
+        for (j, (ours, theirs)) in coded.nodes.iter().zip(&dense).enumerate() {
+            assert_eq!(ours.g, theirs[0], "eps {eps}, tau {tau}, node {j}: G");
+            assert_eq!(ours.h, theirs[1], "eps {eps}, tau {tau}, node {j}: H");
+        }
+    }
+}
+
 /// The exact aggregate of node `j`: the sum of its surfels' maps.
 fn aggregate(tree: &SurfelTree, maps: &[Haar2d<Rgb>], j: usize) -> Haar2d<Rgb> {
     let n = &tree.nodes[j];
@@ -111,7 +178,7 @@ fn lossless_coding_reconstructs_every_node_exactly() {
     let tree = SurfelTree::build(&s);
     let maps = leaf_maps(&s);
     for eps in [0, 3, tree.depth()] {
-        let coded = encode(&tree, &|i| maps[i as usize].clone(), LEVELS, eps, 0.0);
+        let coded = encode(&tree, &|i| exact(&maps[i as usize]), LEVELS, eps, 0.0);
         for j in 0..tree.nodes.len() {
             let exact = aggregate(&tree, &maps, j);
             let ours = coded.reconstruct(&tree, j as u32).expect("reconstructs");
@@ -132,7 +199,7 @@ fn thresholded_coding_error_is_bounded() {
     let tree = SurfelTree::build(&s);
     let maps = leaf_maps(&s);
     let (eps, tau) = (3u32, 2e-3f32);
-    let coded = encode(&tree, &|i| maps[i as usize].clone(), LEVELS, eps, tau);
+    let coded = encode(&tree, &|i| exact(&maps[i as usize]), LEVELS, eps, tau);
     let total = 1 + 3 * maps[0].details.len();
     let dropped = |m: &Option<SparseHaar<Rgb>>| {
         (total - m.as_ref().expect("stored").coefficient_count()) as f32
@@ -213,10 +280,10 @@ fn coarse_leaves_code_as_refined_ones() {
         })
         .collect();
     for (eps, tau) in [(3, 0.0), (3, 2e-3), (tree.depth(), 1e-2)] {
-        let ours = encode(&tree, &|i| coarse[i as usize].clone(), LEVELS, eps, tau);
+        let ours = encode(&tree, &|i| exact(&coarse[i as usize]), LEVELS, eps, tau);
         let refined = encode(
             &tree,
-            &|i| coarse[i as usize].refined_to(LEVELS),
+            &|i| exact(&coarse[i as usize].refined_to(LEVELS)),
             LEVELS,
             eps,
             tau,
@@ -241,7 +308,7 @@ fn coding_is_independent_of_thread_count() {
             .num_threads(threads)
             .build()
             .expect("pool")
-            .install(|| encode(&tree, &|i| maps[i as usize].clone(), LEVELS, 2, 1e-3))
+            .install(|| encode(&tree, &|i| exact(&maps[i as usize]), LEVELS, 2, 1e-3))
     };
     assert_eq!(run(1), run(2));
 }

@@ -20,7 +20,7 @@
 //! exist at once: O(depth) maps, never the whole set.
 
 use super::tree::{SurfelTree, NONE};
-use crate::haar::{Coefficient, Haar2d, SparseHaar};
+use crate::haar::{Coefficient, Haar2d, SparseHaar, SparseSum};
 
 /// What one node stores.
 #[derive(Clone, Debug, PartialEq)]
@@ -43,15 +43,17 @@ pub struct CodedTree<T> {
 }
 
 /// Code `tree` with leaf functions `leaf(surfel index)` (the radiant-intensity map of one
-/// surfel, already transformed, at its own resolution), split level `split_level` and
-/// relative threshold `tau`; every stored map has `levels`.
+/// surfel at its own resolution, every non-zero coefficient kept), split level `split_level`
+/// and relative threshold `tau`; every stored map has `levels`.
 ///
-/// A node's maps are combined at the finest resolution below it ([`Haar2d::combine`]), not at
-/// `levels`: a subtree of diffuse surfels (8 × 8 cosine lobes) in a scene with a 64 × 64
-/// glass costs 64 texels a node instead of 4096, with the same coefficients.
+/// A node's maps are summed sparsely ([`SparseSum`]): only the cells some child stores are
+/// visited, at the finest resolution below the node, not at `levels` (a subtree of diffuse
+/// surfels, 8 × 8 cosine lobes, in a scene with a 64 × 64 glass costs at most 64 texels a
+/// node instead of 4096; a mirror's sparse maps, the cells they keep). The coefficients are
+/// those of the dense sums ([`Haar2d::combine`]) bit for bit.
 pub fn encode<T: Coefficient + Send + Sync>(
     tree: &SurfelTree,
-    leaf: &(dyn Fn(u32) -> Haar2d<T> + Sync),
+    leaf: &(dyn Fn(u32) -> SparseHaar<T> + Sync),
     levels: u32,
     split_level: u32,
     tau: f32,
@@ -73,38 +75,46 @@ pub fn encode<T: Coefficient + Send + Sync>(
 /// Returns the uncompressed G of node `j`, appending what the subtree stores to `out`.
 fn encode_node<T: Coefficient + Send + Sync>(
     tree: &SurfelTree,
-    leaf: &(dyn Fn(u32) -> Haar2d<T> + Sync),
+    leaf: &(dyn Fn(u32) -> SparseHaar<T> + Sync),
     eps: u32,
     tau: f32,
     j: u32,
     out: &mut Vec<(u32, NodeCoding<T>)>,
-) -> Haar2d<T> {
+) -> SparseHaar<T> {
     let node = &tree.nodes[j as usize];
-    let (g, h) = if node.is_leaf() {
-        (leaf(tree.order[node.first as usize]), None)
-    } else {
-        let [l, r] = node.children;
-        let (mut out_l, mut out_r) = (Vec::new(), Vec::new());
-        let (gl, gr) = rayon::join(
-            || encode_node(tree, leaf, eps, tau, l, &mut out_l),
-            || encode_node(tree, leaf, eps, tau, r, &mut out_r),
-        );
-        out.append(&mut out_l);
-        out.append(&mut out_r);
-        let g = Haar2d::combine(&gl, 1.0, &gr, 1.0);
-        let h = Haar2d::combine(&gl, 0.5, &gr, -0.5);
-        (g, Some(h))
-    };
+    if node.is_leaf() {
+        let g = leaf(tree.order[node.first as usize]);
+        if node.level <= eps {
+            let sum = SparseSum::of(&[(&g, 1.0)]);
+            let stored = sum.keep(tau * sum.norm());
+            out.push((
+                j,
+                NodeCoding {
+                    g: Some(stored),
+                    h: None,
+                },
+            ));
+        }
+        return g;
+    }
+    let [l, r] = node.children;
+    let (mut out_l, mut out_r) = (Vec::new(), Vec::new());
+    let (gl, gr) = rayon::join(
+        || encode_node(tree, leaf, eps, tau, l, &mut out_l),
+        || encode_node(tree, leaf, eps, tau, r, &mut out_r),
+    );
+    out.append(&mut out_l);
+    out.append(&mut out_r);
+    let g = SparseSum::of(&[(&gl, 1.0), (&gr, 1.0)]);
     let cut = tau * g.norm();
     let stored = NodeCoding {
-        g: (node.level <= eps).then(|| SparseHaar::compress_below(&g, cut)),
-        h: h.filter(|_| node.level >= eps)
-            .map(|h| SparseHaar::compress_below(&h, cut)),
+        g: (node.level <= eps).then(|| g.keep(cut)),
+        h: (node.level >= eps).then(|| SparseSum::of(&[(&gl, 0.5), (&gr, -0.5)]).keep(cut)),
     };
     if stored.g.is_some() || stored.h.is_some() {
         out.push((j, stored));
     }
-    g
+    g.keep(0.0)
 }
 
 impl<T: Coefficient> CodedTree<T> {

@@ -371,7 +371,8 @@ pub fn bake_cancellable(
     };
     progress("coding", 0.0);
     let coded = encode(&tree, &leaf, levels, eps, settings.tau);
-    let area_leaf = |i: u32| projected_area_map(&surfels[i as usize]);
+    let area_leaf =
+        |i: u32| SparseHaar::compress_below(&projected_area_map(&surfels[i as usize]), 0.0);
     let projected = encode(&tree, &area_leaf, PROJECTED_AREA_LEVELS, eps, settings.tau);
     progress("coding", 1.0);
     stage("coding", t);
@@ -501,33 +502,37 @@ pub fn mesh_flags(scene: &Scene) -> Vec<u32> {
 /// surfels' radiance, exactly: a 16² glossy I over the 8² P strayed by 3 % in a closed room,
 /// and sampling P as finely as I tripled a glossy cache (P and the cosine lobes of diffuse
 /// nodes at 64²).
-pub fn intensity_map(s: &Surfel, r: &SurfelRadiance, back: bool) -> Haar2d<Rgb> {
-    let (own, radiance): (u32, Vec<Rgb>) = match r {
-        // Diffuse radiance is constant, so its intensity is a cosine lobe on P's grid.
-        SurfelRadiance::Rgb(c) => (
-            PROJECTED_AREA_LEVELS,
-            vec![*c; 1 << (2 * PROJECTED_AREA_LEVELS)],
-        ),
-        SurfelRadiance::Map(m) => (m.levels(), m.to_dense().inverse()),
+///
+/// The result is exact and sparse (every non-zero coefficient, no dense transform of a map):
+/// the cosine being constant on the 8² cells, L's finer details are scaled by it, and only
+/// the 8² means go through a transform ([`SparseHaar::scaled_by_cells`]).
+pub fn intensity_map(s: &Surfel, r: &SurfelRadiance, back: bool) -> SparseHaar<Rgb> {
+    let coarse = match r {
+        SurfelRadiance::Rgb(_) => PROJECTED_AREA_LEVELS,
+        SurfelRadiance::Map(m) => m.levels().min(PROJECTED_AREA_LEVELS),
     };
-    let coarse = own.min(PROJECTED_AREA_LEVELS);
-    let (side, shift) = (1usize << own, own - coarse);
-    let centres = texel_directions(coarse);
-    let texels: Vec<Rgb> = radiance
+    let factors: Vec<f32> = texel_directions(coarse)
         .iter()
-        .enumerate()
-        .map(|(t, l)| {
-            let (x, y) = ((t % side) >> shift, (t / side) >> shift);
-            let cos = centres[(y << coarse) + x].dot(s.n);
+        .map(|w| {
+            let cos = w.dot(s.n);
             // Diffuse surfels radiate from the front only; maps carry their own lower half.
             let projected = match r {
                 SurfelRadiance::Map(_) if back => cos.abs(),
                 _ => cos.max(0.0),
             };
-            *l * (s.area * projected)
+            s.area * projected
         })
         .collect();
-    Haar2d::forward(&texels, 1 << own)
+    match r {
+        // Diffuse radiance is constant, so its intensity is a cosine lobe on P's grid.
+        SurfelRadiance::Rgb(c) => {
+            let texels: Vec<Rgb> = factors.iter().map(|f| *c * *f).collect();
+            SparseHaar::compress_below(&Haar2d::forward(&texels, 1 << coarse), 0.0)
+        }
+        // The cosine is constant on the cells of level `coarse`: L's finer details scale by
+        // it, its coarser ones are the transform of the cells' means times it.
+        SurfelRadiance::Map(m) => m.scaled_by_cells(coarse, &factors),
+    }
 }
 
 /// The resolution of projected-area maps, and of the cosine in intensity maps: P(ω) is a sum

@@ -215,8 +215,7 @@ fn add_scaled(a: &SurfelRadiance, b: &SurfelRadiance, k: f32, tau: f32) -> Surfe
     match (a, b) {
         (SurfelRadiance::Rgb(x), SurfelRadiance::Rgb(y)) => SurfelRadiance::Rgb(*x + *y * k),
         (SurfelRadiance::Map(x), SurfelRadiance::Map(y)) => {
-            let sum = Haar2d::combine(&x.to_dense_trimmed(), 1.0, &y.to_dense_trimmed(), k);
-            SurfelRadiance::Map(SparseHaar::compress(&sum, tau).refined_to(x.levels()))
+            SurfelRadiance::Map(SparseHaar::weighted_sum(&[(x, 1.0), (y, k)], tau))
         }
         // Surfels keep their kind from the direct light on; nothing else is produced.
         _ => a.clone(),

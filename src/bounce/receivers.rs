@@ -26,7 +26,7 @@ use crate::bake::pipeline::SurfelRadiance;
 use crate::bake::surfels::Surfel;
 use crate::bake::tree::SurfelTree;
 use crate::gather::fpbgi::Cluster;
-use crate::haar::{Haar2d, SparseHaar};
+use crate::haar::SparseHaar;
 use crate::spectrum::Rgb;
 use glam::Vec3;
 use rayon::prelude::*;
@@ -188,23 +188,17 @@ impl Receivers {
 /// Σ w·light[j] over `from` (gathering surfels, all of one kind).
 fn blend_of(from: &[(u32, f32)], light: &[SurfelRadiance], tau: f32) -> SurfelRadiance {
     let mut rgb = Rgb::ZERO;
-    let mut map: Option<(Haar2d<Rgb>, u32)> = None;
+    let mut maps: Vec<(&SparseHaar<Rgb>, f32)> = Vec::new();
     for &(j, w) in from {
         match &light[j as usize] {
             SurfelRadiance::Rgb(c) => rgb += *c * w,
-            SurfelRadiance::Map(m) => {
-                let (acc, levels) =
-                    map.unwrap_or_else(|| (Haar2d::forward(&[Rgb::ZERO], 1), m.levels()));
-                let sum = Haar2d::combine(&acc, 1.0, &m.to_dense_trimmed(), w);
-                map = Some((sum, levels.max(m.levels())));
-            }
+            SurfelRadiance::Map(m) => maps.push((m, w)),
         }
     }
-    match map {
-        Some((acc, levels)) => {
-            SurfelRadiance::Map(SparseHaar::compress(&acc, tau).refined_to(levels))
-        }
-        None => SurfelRadiance::Rgb(rgb),
+    if maps.is_empty() {
+        SurfelRadiance::Rgb(rgb)
+    } else {
+        SurfelRadiance::Map(SparseHaar::weighted_sum(&maps, tau))
     }
 }
 

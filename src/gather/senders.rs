@@ -868,7 +868,7 @@ fn emitted_intensities(
                     ))
                 }
             };
-            dense[j] = Some(intensity_map(&surfel, &emission, true));
+            dense[j] = Some(intensity_map(&surfel, &emission, true).to_dense());
         } else {
             let [l, r] = records[j].children.map(|c| dense[c as usize].as_ref());
             dense[j] = match (l, r) {

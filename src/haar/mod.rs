@@ -6,7 +6,7 @@ pub mod sparse;
 pub mod sphere_map;
 pub mod transform;
 
-pub use sparse::SparseHaar;
+pub use sparse::{SparseHaar, SparseSum};
 pub use sphere_map::{
     direction_to_square, square_to_direction, texel_at, texel_centre, texel_directions, texel_of,
 };

@@ -107,6 +107,113 @@ impl<T: Coefficient> SparseHaar<T> {
         at as u32
     }
 
+    /// Σ w·f over `terms`, thresholded at `tau` of the sum's norm as [`SparseHaar::compress`]
+    /// does it (see [`SparseSum`]).
+    pub fn weighted_sum(terms: &[(&SparseHaar<T>, f32)], tau: f32) -> Self {
+        let sum = SparseSum::of(terms);
+        sum.keep(tau * sum.norm())
+    }
+
+    /// The L2 norm of the function, as [`Haar2d::norm`] gives it for the dense decomposition
+    /// (the same squares added in the same order).
+    pub fn norm(&self) -> f32 {
+        SparseSum::of(&[(self, 1.0)]).norm()
+    }
+
+    /// The product of f with a function that is constant on each cell of level `k`
+    /// (`factors`, row-major, `2^k` a side; `k` at most the map's levels), exactly: the
+    /// details finer than level k scale by their cell's factor, and the coarser ones are the
+    /// transform of the products of the cells' means. Every non-zero coefficient is kept.
+    pub fn scaled_by_cells(&self, k: u32, factors: &[f32]) -> Self {
+        assert!(k <= self.levels, "cells finer than the map");
+        let side = 1usize << k;
+        assert_eq!(factors.len(), side * side, "one factor per cell");
+        let mut means = Vec::new();
+        self.means_into(k, &mut means);
+        let products: Vec<T> = means.iter().zip(factors).map(|(m, f)| *m * *f).collect();
+        let coarse = Haar2d::forward(&products, side);
+        let mut out = SparseHaar {
+            levels: self.levels,
+            scale: coarse.scale,
+            nodes: Vec::new(),
+        };
+        if self.levels > 0 {
+            let root = if self.nodes.is_empty() { NONE } else { 0 };
+            out.push_scaled(self, &coarse, factors, root, (0, 0, 0));
+        }
+        out
+    }
+
+    /// [`SparseHaar::scaled_by_cells`] for the cell `(l, i, j)` (the map's node there:
+    /// `node`) and below; returns the new node's index, or `NONE` where all is zero.
+    fn push_scaled(
+        &mut self,
+        map: &SparseHaar<T>,
+        coarse: &Haar2d<T>,
+        factors: &[f32],
+        node: u32,
+        (l, i, j): (u32, u32, u32),
+    ) -> u32 {
+        let k = coarse.levels;
+        let mut details = if l < k {
+            coarse.details[detail_index(l, i, j)]
+        } else {
+            let shift = l - k;
+            let f = factors[((j as usize >> shift) << k) + (i as usize >> shift)];
+            if node == NONE || f == 0.0 {
+                return NONE;
+            }
+            map.nodes[node as usize].details.map(|c| c * f)
+        };
+        for c in &mut details {
+            if !keeps(*c, 0.0) {
+                *c = T::default();
+            }
+        }
+        let at = self.nodes.len();
+        self.nodes.push(Node {
+            details,
+            children: [NONE; 4],
+        });
+        if l + 1 < self.levels {
+            for (q, (a, b)) in [(0, 0), (1, 0), (0, 1), (1, 1)].into_iter().enumerate() {
+                let child = if node == NONE {
+                    NONE
+                } else {
+                    map.nodes[node as usize].children[q]
+                };
+                if l + 1 < k || child != NONE {
+                    let c = self.push_scaled(
+                        map,
+                        coarse,
+                        factors,
+                        child,
+                        (l + 1, 2 * i + a, 2 * j + b),
+                    );
+                    self.nodes[at].children[q] = c;
+                }
+            }
+        }
+        if self.nodes[at].children.iter().any(|&c| c != NONE)
+            || details.iter().any(|c| *c != T::default())
+        {
+            at as u32
+        } else {
+            self.nodes.pop();
+            NONE
+        }
+    }
+
+    /// The means of f over the cells of level `k` (row-major, `2^k` a side): the texels of
+    /// the map averaged down to that resolution, as [`SparseHaar::texels_into`] gives them.
+    pub fn means_into(&self, k: u32, out: &mut Vec<T>) {
+        let n = 1usize << k;
+        out.clear();
+        out.resize(n * n, T::default());
+        let root = if self.nodes.is_empty() { NONE } else { 0 };
+        self.decode_to(k, out, root, 0, (0, 0), self.scale);
+    }
+
     /// f at the point `(x, y)` of the unit square.
     pub fn eval(&self, x: f32, y: f32) -> T {
         let mut value = self.scale;
@@ -155,16 +262,17 @@ impl<T: Coefficient> SparseHaar<T> {
         out.clear();
         out.resize(n * n, T::default());
         let root = if self.nodes.is_empty() { NONE } else { 0 };
-        self.decode(out, root, 0, (0, 0), self.scale);
+        self.decode_to(self.levels, out, root, 0, (0, 0), self.scale);
     }
 
-    /// Cell `(i, j)` of level `l`, whose (scaled) mean is `m`, and below.
-    fn decode(&self, out: &mut [T], node: u32, l: u32, (i, j): (usize, usize), m: T) {
-        if node == NONE || l == self.levels {
-            // m is the mean over 4^(levels − l) texels, scaled by 2^−l: each texel is m 2^l.
+    /// Cell `(i, j)` of level `l`, whose (scaled) mean is `m`, and below, down to level
+    /// `stop` (the resolution of `out`).
+    fn decode_to(&self, stop: u32, out: &mut [T], node: u32, l: u32, (i, j): (usize, usize), m: T) {
+        if node == NONE || l == stop {
+            // m is the mean over 4^(stop − l) texels, scaled by 2^−l: each texel is m 2^l.
             let v = m * (1u32 << l) as f32;
-            let size = 1usize << (self.levels - l);
-            let side = 1usize << self.levels;
+            let size = 1usize << (stop - l);
+            let side = 1usize << stop;
             for y in j * size..(j + 1) * size {
                 out[y * side + i * size..y * side + (i + 1) * size].fill(v);
             }
@@ -179,7 +287,14 @@ impl<T: Coefficient> SparseHaar<T> {
             (m - dx - dy + dxy) * 0.5,
         ];
         for (q, (a, b)) in [(0, 0), (1, 0), (0, 1), (1, 1)].into_iter().enumerate() {
-            self.decode(out, n.children[q], l + 1, (2 * i + a, 2 * j + b), means[q]);
+            self.decode_to(
+                stop,
+                out,
+                n.children[q],
+                l + 1,
+                (2 * i + a, 2 * j + b),
+                means[q],
+            );
         }
     }
 
@@ -326,4 +441,155 @@ fn read_value<T: Coefficient>(bytes: &[u8], at: &mut usize) -> Option<T> {
         *at += 4;
     }
     Some(T::from_floats(&f[..T::FLOATS]))
+}
+
+/// Σ w·f over sparse maps, exactly, without a dense decomposition: every cell some term
+/// stores (and only those) with its summed details. Bit for bit the dense sum built term by
+/// term with [`Haar2d::combine`] (the same products and sums in the same order); its
+/// [`SparseSum::norm`] adds the squares in the dense order, so that [`SparseSum::keep`] at a
+/// cut relative to it keeps what [`SparseHaar::compress_below`] of the dense sum keeps.
+pub struct SparseSum<T> {
+    levels: u32,
+    scale: T,
+    /// In pre-order.
+    cells: Vec<SummedCell<T>>,
+}
+
+/// A cell of a [`SparseSum`]: where it lies and its summed details.
+struct SummedCell<T> {
+    index: usize,
+    level: u32,
+    quadrant: usize,
+    details: Details<T>,
+}
+
+impl<T: Coefficient> SparseSum<T> {
+    /// Σ w·f over `terms`, at the finest resolution among them.
+    pub fn of(terms: &[(&SparseHaar<T>, f32)]) -> Self {
+        let levels = terms.iter().map(|(m, _)| m.levels).max().unwrap_or(0);
+        let scale = terms
+            .iter()
+            .fold(T::default(), |acc, (m, w)| acc * 1.0 + m.scale * *w);
+        let mut sum = SparseSum {
+            levels,
+            scale,
+            cells: Vec::new(),
+        };
+        // Per level, the terms' nodes at the cell being visited.
+        let mut nodes = vec![NONE; terms.len() * (levels as usize + 1)];
+        for ((m, _), n) in terms.iter().zip(&mut nodes) {
+            *n = if m.nodes.is_empty() { NONE } else { 0 };
+        }
+        if nodes[..terms.len()].iter().any(|&n| n != NONE) {
+            sum.add_cell(terms, &mut nodes, (0, 0, 0), 0);
+        }
+        sum
+    }
+
+    /// The cell `(l, i, j)` (quadrant `quadrant` of its parent; the terms' nodes there in
+    /// `nodes[..terms.len()]`) and the cells below it that any term stores.
+    fn add_cell(
+        &mut self,
+        terms: &[(&SparseHaar<T>, f32)],
+        nodes: &mut [u32],
+        (l, i, j): (u32, u32, u32),
+        quadrant: usize,
+    ) {
+        let (here, below) = nodes.split_at_mut(terms.len());
+        let mut details = [T::default(); 3];
+        for ((m, w), &n) in terms.iter().zip(here.iter()) {
+            if n != NONE {
+                let d = m.nodes[n as usize].details;
+                for (acc, c) in details.iter_mut().zip(d) {
+                    *acc = *acc * 1.0 + c * *w;
+                }
+            }
+        }
+        self.cells.push(SummedCell {
+            index: detail_index(l, i, j),
+            level: l,
+            quadrant,
+            details,
+        });
+        for (q, (a, b)) in [(0, 0), (1, 0), (0, 1), (1, 1)].into_iter().enumerate() {
+            let mut any = false;
+            for (((m, _), &n), child) in terms.iter().zip(here.iter()).zip(below.iter_mut()) {
+                *child = if n == NONE {
+                    NONE
+                } else {
+                    m.nodes[n as usize].children[q]
+                };
+                any |= *child != NONE;
+            }
+            if any {
+                self.add_cell(terms, below, (l + 1, 2 * i + a, 2 * j + b), q);
+            }
+        }
+    }
+
+    /// The L2 norm of the sum ([`Haar2d::norm`] of the dense sum, bit for bit).
+    pub fn norm(&self) -> f32 {
+        let mut order: Vec<(usize, u32)> = self
+            .cells
+            .iter()
+            .enumerate()
+            .map(|(c, cell)| (cell.index, c as u32))
+            .collect();
+        order.sort_unstable();
+        std::iter::once(self.scale)
+            .chain(
+                order
+                    .iter()
+                    .flat_map(|&(_, c)| self.cells[c as usize].details.iter().copied()),
+            )
+            .map(|c| (c.magnitude() as f64).powi(2))
+            .sum::<f64>()
+            .sqrt() as f32
+    }
+
+    /// The sum with the coefficients of magnitude at least `cut` (non-zero ones for 0), as
+    /// [`SparseHaar::compress_below`] keeps them.
+    pub fn keep(&self, cut: f32) -> SparseHaar<T> {
+        let mut out = SparseHaar {
+            levels: self.levels,
+            scale: self.scale,
+            nodes: Vec::new(),
+        };
+        if !self.cells.is_empty() {
+            self.keep_cell(&mut out, &mut 0, cut);
+        }
+        out
+    }
+
+    /// Append `cells[*next]` and its subtree (the deeper cells that follow it in pre-order)
+    /// to `out` with the details that reach `cut`, unless nothing in it does; returns its
+    /// index, or `NONE`.
+    fn keep_cell(&self, out: &mut SparseHaar<T>, next: &mut usize, cut: f32) -> u32 {
+        let cell = &self.cells[*next];
+        *next += 1;
+        let mut details = cell.details;
+        for c in &mut details {
+            if !keeps(*c, cut) {
+                *c = T::default();
+            }
+        }
+        let at = out.nodes.len();
+        out.nodes.push(Node {
+            details,
+            children: [NONE; 4],
+        });
+        while *next < self.cells.len() && self.cells[*next].level > cell.level {
+            let quadrant = self.cells[*next].quadrant;
+            let child = self.keep_cell(out, next, cut);
+            out.nodes[at].children[quadrant] = child;
+        }
+        if out.nodes[at].children.iter().any(|&c| c != NONE)
+            || details.iter().any(|c| *c != T::default())
+        {
+            at as u32
+        } else {
+            out.nodes.pop();
+            NONE
+        }
+    }
 }
