@@ -423,3 +423,27 @@ fn multi_bounce_cache_is_identical_for_any_thread_count_and_transport_budget() {
         );
     }
 }
+
+/// The staleness check hashes the settings the cache stores as text: every float must read
+/// back as the one hashed (f32 settings such as a 3 % bounce tolerance print as long
+/// decimals that a float parser which is not correctly rounded reads one ulp off).
+#[test]
+fn settings_hash_survives_the_caches_text() {
+    let scene = cbox();
+    let mut s = settings();
+    for (tau, tolerance, operator_tau) in
+        [(0.002, 0.03, 0.01), (0.1, 0.07, 0.003), (1e-4, 0.3, 0.2)]
+    {
+        s.tau = tau;
+        s.bounces.tolerance = tolerance;
+        s.bounces.operator_tau = operator_tau;
+        let json = s.to_json();
+        let text = serde_json::to_string(&json).expect("prints");
+        let back: serde_json::Value = serde_json::from_str(&text).expect("parses");
+        assert_eq!(
+            bake_hash(&scene, &json),
+            bake_hash(&scene, &back),
+            "tau {tau}, tolerance {tolerance}, operator_tau {operator_tau}: {text}"
+        );
+    }
+}
