@@ -46,7 +46,7 @@ typedef struct {
   // Emitter samples per surfel; 0: the preset's.
   uint32_t light_samples;
   // Indirect bounces after the direct light; -1: automatic (until they carry less than
-  // 1 % of the light, then their geometric tail, as `wpbgi bake --bounces auto`); 0: direct light only.
+  // 3 % of the light, then their geometric tail, as `wpbgi bake --bounces auto`); 0: direct light only.
   int32_t bounces;
   // Seed of the random streams.
   uint64_t seed;

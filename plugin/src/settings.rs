@@ -20,7 +20,7 @@ pub struct WpbgiBakeSettings {
     /// Emitter samples per surfel; 0: the preset's.
     pub light_samples: u32,
     /// Indirect bounces after the direct light; -1: automatic (until they carry less than
-    /// 1 % of the light, then their geometric tail, as `wpbgi bake --bounces auto`); 0: direct light only.
+    /// 3 % of the light, then their geometric tail, as `wpbgi bake --bounces auto`); 0: direct light only.
     pub bounces: i32,
     /// Seed of the random streams.
     pub seed: u64,

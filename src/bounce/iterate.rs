@@ -124,12 +124,12 @@ pub fn check_slots(points: u64, levels: u32) -> Result<()> {
 }
 
 impl BounceSettings {
-    /// `auto`: up to 30 bounces, stopping once one adds less than 1 % of the total, with the
+    /// `auto`: up to 30 bounces, stopping once one adds less than 3 % of the total, with the
     /// geometric tail of the rest (docs/bounces.md, "Bounce control", measures the choice).
     pub fn auto() -> Self {
         BounceSettings {
             max: 30,
-            tolerance: 1e-2,
+            tolerance: 3e-2,
             operator_tau: 1e-2,
             view_tree: true,
             receiver_stride: RECEIVER_STRIDE,

@@ -65,7 +65,7 @@ pub struct BakeArgs {
     #[arg(long, default_value_t = 1000)]
     max_cut: usize,
     /// Indirect bounces after the direct light: a number (0: a direct-only cache), or `auto`:
-    /// until a bounce adds less than 1 % of the light (at most 30), then the bounces left at
+    /// until a bounce adds less than 3 % of the light (at most 30), then the bounces left at
     /// once, as the geometric tail of the last (r/(1 − r) times it, r the ratio of the last
     /// two bounces' light).
     #[arg(long, default_value = "auto", value_parser = parse_bounces)]
