@@ -155,7 +155,7 @@ impl<T: Coefficient> SparseHaar<T> {
         (l, i, j): (u32, u32, u32),
     ) -> u32 {
         let k = coarse.levels;
-        let mut details = if l < k {
+        let details = if l < k {
             coarse.details[detail_index(l, i, j)]
         } else {
             let shift = l - k;
@@ -165,16 +165,7 @@ impl<T: Coefficient> SparseHaar<T> {
             }
             map.nodes[node as usize].details.map(|c| c * f)
         };
-        for c in &mut details {
-            if !keeps(*c, 0.0) {
-                *c = T::default();
-            }
-        }
-        let at = self.nodes.len();
-        self.nodes.push(Node {
-            details,
-            children: [NONE; 4],
-        });
+        let at = self.open_node(details, 0.0);
         if l + 1 < self.levels {
             for (q, (a, b)) in [(0, 0), (1, 0), (0, 1), (1, 1)].into_iter().enumerate() {
                 let child = if node == NONE {
@@ -194,9 +185,29 @@ impl<T: Coefficient> SparseHaar<T> {
                 }
             }
         }
-        if self.nodes[at].children.iter().any(|&c| c != NONE)
-            || details.iter().any(|c| *c != T::default())
-        {
+        self.close_node(at)
+    }
+
+    /// Append a node with the `details` that reach `cut` (the others zero) and no children
+    /// yet; returns its index, for [`SparseHaar::close_node`] once its children are in.
+    fn open_node(&mut self, mut details: Details<T>, cut: f32) -> usize {
+        for c in &mut details {
+            if !keeps(*c, cut) {
+                *c = T::default();
+            }
+        }
+        self.nodes.push(Node {
+            details,
+            children: [NONE; 4],
+        });
+        self.nodes.len() - 1
+    }
+
+    /// Node `at` (the last one, its children appended and closed before it) kept if it or a
+    /// child holds something, else removed: its index, or `NONE`.
+    fn close_node(&mut self, at: usize) -> u32 {
+        let n = &self.nodes[at];
+        if n.children.iter().any(|&c| c != NONE) || n.details.iter().any(|c| *c != T::default()) {
             at as u32
         } else {
             self.nodes.pop();
@@ -567,29 +578,12 @@ impl<T: Coefficient> SparseSum<T> {
     fn keep_cell(&self, out: &mut SparseHaar<T>, next: &mut usize, cut: f32) -> u32 {
         let cell = &self.cells[*next];
         *next += 1;
-        let mut details = cell.details;
-        for c in &mut details {
-            if !keeps(*c, cut) {
-                *c = T::default();
-            }
-        }
-        let at = out.nodes.len();
-        out.nodes.push(Node {
-            details,
-            children: [NONE; 4],
-        });
+        let at = out.open_node(cell.details, cut);
         while *next < self.cells.len() && self.cells[*next].level > cell.level {
             let quadrant = self.cells[*next].quadrant;
             let child = self.keep_cell(out, next, cut);
             out.nodes[at].children[quadrant] = child;
         }
-        if out.nodes[at].children.iter().any(|&c| c != NONE)
-            || details.iter().any(|c| *c != T::default())
-        {
-            at as u32
-        } else {
-            out.nodes.pop();
-            NONE
-        }
+        out.close_node(at)
     }
 }
