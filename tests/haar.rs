@@ -289,7 +289,10 @@ fn sparse_sums_are_the_dense_sums_bit_for_bit() {
         }
         assert_eq!(SparseSum::of(&sparse_terms).norm(), dense.norm());
     }
-    assert_eq!(maps[0].norm(), maps[0].to_dense().norm());
+    assert_eq!(
+        SparseSum::of(&[(&maps[0], 1.0)]).norm(),
+        maps[0].to_dense().norm()
+    );
 }
 
 /// A map times a function constant on the cells of a coarser level (a surfel's radiance

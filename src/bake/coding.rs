@@ -85,8 +85,7 @@ fn encode_node<T: Coefficient + Send + Sync>(
     if node.is_leaf() {
         let g = leaf(tree.order[node.first as usize]);
         if node.level <= eps {
-            let sum = SparseSum::of(&[(&g, 1.0)]);
-            let stored = sum.keep(tau * sum.norm());
+            let stored = SparseHaar::weighted_sum(&[(&g, 1.0)], tau);
             out.push((
                 j,
                 NodeCoding {

@@ -114,12 +114,6 @@ impl<T: Coefficient> SparseHaar<T> {
         sum.keep(tau * sum.norm())
     }
 
-    /// The L2 norm of the function, as [`Haar2d::norm`] gives it for the dense decomposition
-    /// (the same squares added in the same order).
-    pub fn norm(&self) -> f32 {
-        SparseSum::of(&[(self, 1.0)]).norm()
-    }
-
     /// The product of f with a function that is constant on each cell of level `k`
     /// (`factors`, row-major, `2^k` a side; `k` at most the map's levels), exactly: the
     /// details finer than level k scale by their cell's factor, and the coarser ones are the
