@@ -32,8 +32,8 @@
 
 use super::bsdf_operator::BsdfOperator;
 use super::receivers::Receivers;
-use super::transport::{slot_values, ReceiverLinks, SlotIndex, Slots};
-use super::view_tree::{receiver_groups, VIEW_EPS};
+use super::transport::{slot_values, LinkScratch, ReceiverLinks, SlotIndex, Slots};
+use super::view_tree::{receiver_groups, GROUP_SURFELS, VIEW_EPS};
 use crate::accel::Accel;
 use crate::bake::coding::{encode, CodedTree};
 use crate::bake::pipeline::{intensity_map, Baked, Progress, SurfelRadiance};
@@ -318,11 +318,11 @@ pub fn add_bounces(
         // The flag is looked at per group: a chunk takes up to a second or so.
         let recorded: Vec<Vec<ReceiverLinks>> = chunk
             .par_iter()
-            .map_init(Vec::new, |stack, group| {
+            .map_init(Scratch::default, |scratch, group| {
                 if cancel.load(Ordering::Relaxed) {
                     return Vec::new();
                 }
-                let links = gather.record(group, stack);
+                let links = gather.record(group, scratch);
                 for l in &links {
                     l.mark(&index);
                 }
@@ -571,6 +571,28 @@ pub fn close_buffer(
     }
 }
 
+/// What one thread's gathers reuse from group to group: the traversal stack and finished
+/// microbuffers, whose splat and link lists keep their capacity (a glass receiver splats
+/// thousands of senders; growing fresh lists for each receiver was a tenth of the first
+/// bounce, most of it the kernel clearing the new pages).
+#[derive(Default)]
+struct Scratch {
+    stack: Vec<u32>,
+    buffers: Vec<Microbuffer>,
+    links: LinkScratch,
+}
+
+impl Scratch {
+    /// The most buffers kept: a group's members at once, and one more of another size.
+    const KEPT: usize = GROUP_SURFELS as usize + 1;
+
+    /// Keep `buffers` for the next groups (as many as [`Scratch::KEPT`]).
+    fn keep(&mut self, buffers: impl Iterator<Item = Microbuffer>) {
+        let room = Self::KEPT.saturating_sub(self.buffers.len());
+        self.buffers.extend(buffers.take(room));
+    }
+}
+
 /// What a bounce's gather needs: the scene, the senders' geometry and the receivers' BSDFs.
 struct Gather<'a> {
     scene: &'a Scene,
@@ -585,38 +607,54 @@ struct Gather<'a> {
 
 impl Gather<'_> {
     /// The links of every member of `group` (see [`Gather::buffers`]).
-    fn record(&self, group: &Cluster, stack: &mut Vec<u32>) -> Vec<ReceiverLinks> {
-        self.buffers(group, stack)
-            .into_iter()
+    fn record(&self, group: &Cluster, scratch: &mut Scratch) -> Vec<ReceiverLinks> {
+        let buffers = self.buffers(group, scratch);
+        let links: Vec<ReceiverLinks> = buffers
+            .iter()
             .map(|(i, mb)| {
-                let op = &self.ops[i as usize];
-                let links = ReceiverLinks::of_buffer(i, &mb, op.is_none(), self.slots);
+                let op = &self.ops[*i as usize];
+                let links =
+                    ReceiverLinks::of_buffer(*i, mb, op.is_none(), self.slots, &mut scratch.links);
                 match op {
                     Some(op) => {
-                        let levels = map_levels(&self.bsdfs[i as usize]).unwrap_or(3);
+                        let levels = map_levels(&self.bsdfs[*i as usize]).unwrap_or(3);
                         links.with_map_texels(op.map_texels(mb.frame, levels))
                     }
                     None => links,
                 }
             })
-            .collect()
+            .collect();
+        scratch.keep(buffers.into_iter().map(|(_, mb)| mb));
+        links
     }
 
     /// The closed microbuffer of every member of `group`, recording links: gathered with the
     /// group's far senders shared (spec §8.3), and closed.
-    fn buffers(&self, group: &Cluster, stack: &mut Vec<u32>) -> Vec<(u32, Microbuffer)> {
+    fn buffers(&self, group: &Cluster, scratch: &mut Scratch) -> Vec<(u32, Microbuffer)> {
+        let Scratch { stack, buffers, .. } = scratch;
         let surfels = self.surfels;
         let side = |i: u32| {
             self.ops[i as usize]
                 .as_ref()
                 .map_or(DIFFUSE_BUFFER, |op| op.n)
         };
-        let buffer = |i: u32| {
+        let mut buffer = |i: u32| {
             let s = &surfels[i as usize];
             let spherical = self.bsdfs[i as usize].is_two_sided();
-            let mut mb = Microbuffer::new(side(i), spherical, Frame::from_normal(s.n));
-            mb.record_links();
-            mb
+            let frame = Frame::from_normal(s.n);
+            let n = side(i);
+            match buffers.iter().rposition(|mb| mb.n == n) {
+                Some(k) => {
+                    let mut mb = buffers.swap_remove(k);
+                    mb.reset(spherical, frame);
+                    mb
+                }
+                None => {
+                    let mut mb = Microbuffer::new(n, spherical, frame);
+                    mb.record_links();
+                    mb
+                }
+            }
         };
         let closed = |i: u32, mut mb: Microbuffer| {
             let s = &surfels[i as usize];
@@ -676,11 +714,11 @@ impl Gather<'_> {
             kept.par_iter().flatten().map(outgoing).collect();
         let from_regathered: Vec<Vec<(u32, SurfelRadiance)>> = regathered
             .par_iter()
-            .map_init(Vec::new, |stack, group| {
+            .map_init(Scratch::default, |scratch, group| {
                 if cancel.load(Ordering::Relaxed) {
                     return Vec::new();
                 }
-                let mut links = self.record(group, stack);
+                let mut links = self.record(group, scratch);
                 links
                     .iter_mut()
                     .map(|l| {
@@ -817,11 +855,12 @@ mod tests {
         let picked: Vec<&Cluster> = groups.iter().step_by(7).collect();
         assert!(picked.iter().any(|g| g.members.len() > 1));
         let mut index = SlotIndex::new(&slots);
-        let mut stack = Vec::new();
+        let mut scratch = Scratch::default();
         let mut recorded: Vec<(Microbuffer, ReceiverLinks)> = Vec::new();
         for group in &picked {
-            for (i, mb) in gather.buffers(group, &mut stack) {
-                let links = ReceiverLinks::of_buffer(i, &mb, ops[i as usize].is_none(), &slots);
+            for (i, mb) in gather.buffers(group, &mut scratch) {
+                let diffuse = ops[i as usize].is_none();
+                let links = ReceiverLinks::of_buffer(i, &mb, diffuse, &slots, &mut scratch.links);
                 links.mark(&index);
                 recorded.push((mb, links));
             }

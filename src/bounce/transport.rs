@@ -234,6 +234,16 @@ struct Term {
     w: f32,
 }
 
+/// The lists a thread's [`ReceiverLinks::of_buffer`] works in, kept from receiver to receiver
+/// with their capacity: only the terms kept are allocated anew, at their exact size.
+#[derive(Debug, Default)]
+pub struct LinkScratch {
+    order: Vec<u32>,
+    ends: Vec<u32>,
+    run: Vec<Term>,
+    terms: Vec<Term>,
+}
+
 /// Append `terms` to `out` sorted by slot, the weights of equal slots summed. Ties are
 /// broken by the weight's bits, so the sums' order, and with it every rounding, depends on the
 /// set of terms alone, never on the order they were produced in.
@@ -263,7 +273,20 @@ pub struct ReceiverLinks {
 impl ReceiverLinks {
     /// The links of surfel `surfel`'s closed buffer `mb` (which recorded links): merged by
     /// slot with the cosine convolution folded in (`diffuse`), or per pixel.
-    pub fn of_buffer(surfel: u32, mb: &Microbuffer, diffuse: bool, slots: &Slots) -> ReceiverLinks {
+    pub fn of_buffer(
+        surfel: u32,
+        mb: &Microbuffer,
+        diffuse: bool,
+        slots: &Slots,
+        scratch: &mut LinkScratch,
+    ) -> ReceiverLinks {
+        let LinkScratch {
+            order,
+            ends,
+            run,
+            terms,
+        } = scratch;
+        terms.clear();
         let Some(links) = mb.links() else {
             return ReceiverLinks {
                 surfel,
@@ -288,35 +311,25 @@ impl ReceiverLinks {
             for e in &links.entries {
                 per_source[e.source as usize] += e.w_cos * pixel_weight[e.pixel as usize];
             }
-            let mut raw: Vec<Term> = Vec::with_capacity(links.sources.len());
+            run.clear();
             for (&lookup, &w) in links.sources.iter().zip(&per_source) {
                 if w != 0.0 {
-                    slots.terms(lookup, |slot, f| raw.push(Term { slot, w: w * f }));
+                    slots.terms(lookup, |slot, f| run.push(Term { slot, w: w * f }));
                 }
             }
-            let mut terms = Vec::with_capacity(raw.len());
-            merge_by_slot(&mut raw, &mut terms);
+            merge_by_slot(run, terms);
             return ReceiverLinks {
                 surfel,
                 pixel_ends: Box::default(),
-                terms: terms.into_boxed_slice(),
+                terms: terms.as_slice().into(),
                 map_texels: Box::default(),
             };
         }
         // Directional: the entries grouped into pixel runs, each run merged by slot.
         let pixels = mb.pixels.len();
-        let (mut order, mut ends) = (Vec::new(), Vec::new());
         let entries = &links.entries;
-        group_by_pixel(
-            entries.len(),
-            pixels,
-            |i| entries[i].pixel,
-            &mut order,
-            &mut ends,
-        );
-        let mut terms: Vec<Term> = Vec::with_capacity(entries.len());
+        group_by_pixel(entries.len(), pixels, |i| entries[i].pixel, order, ends);
         let mut pixel_ends = vec![0u32; pixels];
-        let mut run: Vec<Term> = Vec::new();
         let mut begin = 0;
         for (k, &end) in ends[..pixels].iter().enumerate() {
             run.clear();
@@ -327,14 +340,14 @@ impl ReceiverLinks {
                     slots.terms(lookup, |slot, f| run.push(Term { slot, w: e.w * f }));
                 }
             }
-            merge_by_slot(&mut run, &mut terms);
+            merge_by_slot(run, terms);
             pixel_ends[k] = terms.len() as u32;
             begin = end as usize;
         }
         ReceiverLinks {
             surfel,
             pixel_ends: pixel_ends.into_boxed_slice(),
-            terms: terms.into_boxed_slice(),
+            terms: terms.as_slice().into(),
             map_texels: Box::default(),
         }
     }

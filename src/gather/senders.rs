@@ -22,8 +22,10 @@ use crate::cache::store::{
     BakedCache, NodeRecord, SurfelRecord, BACK_SIDED, CLOSED, NO_MAP, SOLID,
 };
 use crate::cache::CacheError;
+use crate::haar::sphere_map::MAX_TABLE_LEVELS;
 use crate::haar::{
-    direction_to_square, square_to_direction, texel_at, Coefficient, Haar2d, SparseHaar,
+    direction_to_square, square_to_direction, texel_at, texel_directions, Coefficient, Haar2d,
+    SparseHaar,
 };
 use crate::spectrum::Rgb;
 use glam::{Vec2, Vec3};
@@ -678,10 +680,13 @@ impl Senders {
 }
 
 /// The centre of the texel of the `2^levels`-texel sphere map that holds point `p` of its
-/// unit square.
+/// unit square (from the shared table where the resolution has one: the same directions).
 fn texel_centre(p: Vec2, levels: u32) -> Vec3 {
     let n = 1u32 << levels;
     let (x, y) = texel_at(p, n);
+    if levels <= MAX_TABLE_LEVELS {
+        return texel_directions(levels)[(y * n + x) as usize];
+    }
     square_to_direction((Vec2::new(x as f32, y as f32) + 0.5) / n as f32)
 }
 
