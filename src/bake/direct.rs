@@ -146,13 +146,23 @@ impl DirectLight<'_> {
             .into_iter()
             .map(|a| (frame.to_local(a.wi), a.value))
             .collect();
+        // The arrivals in lanes, evaluated several at a time (the same values).
+        let lanes = [0, 1, 2].map(|c| arrivals.iter().map(|(wi, _)| wi[c]).collect::<Vec<f32>>());
+        let lanes: [&[f32]; 3] = [&lanes[0], &lanes[1], &lanes[2]];
+        let mut values = Vec::with_capacity(arrivals.len());
         texel_directions(levels)
             .iter()
             .map(|w| {
-                let wo = frame.to_local(*w);
-                arrivals
+                bsdf.eval_lanes(
+                    frame.to_local(*w),
+                    lanes,
+                    TransportMode::Radiance,
+                    &mut values,
+                );
+                values
                     .iter()
-                    .map(|(wi, value)| bsdf.eval(wo, *wi, TransportMode::Radiance) * *value)
+                    .zip(&arrivals)
+                    .map(|(f, (_, value))| *f * *value)
                     .fold(Rgb::ZERO, |acc, x| acc + x)
             })
             .collect()

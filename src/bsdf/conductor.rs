@@ -1,7 +1,7 @@
 //! Mitsuba's `roughconductor`: one-sided microfacet reflection with the complex-index Fresnel term.
 
 use super::fresnel::fresnel_conductor;
-use super::microfacet::Microfacet;
+use super::microfacet::{Distribution, Microfacet};
 use super::{BsdfSample, Lobe};
 use crate::geometry::frame::reflect;
 use crate::spectrum::Rgb;
@@ -34,6 +34,34 @@ impl RoughConductor {
         let g = self.distr.g(wi, wo, h);
         // f·cos θo = D G F / (4 cos θi): the cos θo of the BRDF cancels the foreshortening.
         self.fresnel(wi.dot(h)) * (d * g / (4.0 * wi.z))
+    }
+
+    /// [`RoughConductor::eval`] from `wi` towards every direction of `wo` (lanes of x, y and
+    /// z), into `out`: see [`crate::bsdf::Bsdf::eval_lanes`]. GGX only.
+    pub(super) fn eval_lanes(&self, wi: Vec3, [xs, ys, zs]: [&[f32]; 3], out: &mut [Rgb]) {
+        debug_assert_eq!(self.distr.kind, Distribution::Ggx);
+        if !(wi.z > 0.0) {
+            out.fill(Rgb::ZERO);
+            return;
+        }
+        let cos_scale = 4.0 * wi.z;
+        let lanes = xs.iter().zip(ys).zip(zs).zip(out.iter_mut());
+        for (((&ox, &oy), &oz), out) in lanes {
+            let (hx, hy, hz) = (ox + wi.x, oy + wi.y, oz + wi.z);
+            let recip = 1.0 / (hx * hx + hy * hy + hz * hz).sqrt();
+            let (mx, my, mz) = (hx * recip, hy * recip, hz * recip);
+            let d = self.distr.ggx_lane(mx, my, mz);
+            let wi_m = wi.x * mx + wi.y * my + wi.z * mz;
+            let wo_m = ox * mx + oy * my + oz * mz;
+            let g = self.distr.ggx_smith_g1_lane(wi.to_array(), wi_m)
+                * self.distr.ggx_smith_g1_lane([ox, oy, oz], wo_m);
+            let value = self.fresnel(wi_m) * (d * g / cos_scale);
+            *out = if oz > 0.0 && d != 0.0 {
+                value
+            } else {
+                Rgb::ZERO
+            };
+        }
     }
 
     pub fn pdf(&self, wi: Vec3, wo: Vec3) -> f32 {

@@ -2,7 +2,7 @@
 //! (Walter et al. 2007), two-sided, with lobe selection by the Fresnel reflectance.
 
 use super::fresnel::fresnel_dielectric;
-use super::microfacet::Microfacet;
+use super::microfacet::{Distribution, Microfacet};
 use super::{BsdfSample, Lobe, TransportMode};
 use crate::geometry::frame::{reflect, refract};
 use crate::spectrum::Rgb;
@@ -50,6 +50,72 @@ impl RoughDielectric {
             value
         } else {
             Rgb::ZERO
+        }
+    }
+
+    /// [`RoughDielectric::eval`] from `wi` towards every direction of `wo` (lanes of x, y
+    /// and z), into `out`: see [`crate::bsdf::Bsdf::eval_lanes`]. GGX only.
+    pub(super) fn eval_lanes(
+        &self,
+        wi: Vec3,
+        [xs, ys, zs]: [&[f32]; 3],
+        mode: TransportMode,
+        out: &mut [Rgb],
+    ) {
+        debug_assert_eq!(self.distr.kind, Distribution::Ggx);
+        let eta_side = if wi.z > 0.0 { self.eta } else { 1.0 / self.eta };
+        let cos_scale = 4.0 * wi.z.abs();
+        let radiance_scale = match mode {
+            TransportMode::Radiance => 1.0 / (eta_side * eta_side),
+            TransportMode::Importance => 1.0,
+        };
+        // Fresnel's indices on either side of a microfacet (see `fresnel_dielectric`).
+        let rcp_eta = 1.0 / self.eta;
+        let index_matched = self.eta == 1.0;
+        let lanes = xs.iter().zip(ys).zip(zs).zip(out.iter_mut());
+        for (((&ox, &oy), &oz), out) in lanes {
+            // The half vector on the side of the macro normal.
+            let reflect = wi.z * oz > 0.0;
+            let along = if reflect { 1.0 } else { eta_side };
+            let (hx, hy, hz) = (wi.x + ox * along, wi.y + oy * along, wi.z + oz * along);
+            let recip = 1.0 / (hx * hx + hy * hy + hz * hz).sqrt();
+            let flip = if (hz * recip).is_sign_negative() {
+                -1.0
+            } else {
+                1.0
+            };
+            let (mx, my, mz) = (hx * recip * flip, hy * recip * flip, hz * recip * flip);
+            let d = self.distr.ggx_lane(mx, my, mz);
+            // Fresnel reflectance at wi·m.
+            let wi_m = wi.x * mx + wi.y * my + wi.z * mz;
+            let (eta_it, eta_ti) = if wi_m >= 0.0 {
+                (self.eta, rcp_eta)
+            } else {
+                (rcp_eta, self.eta)
+            };
+            let cos_t = (1.0 - (1.0 - wi_m * wi_m) * (eta_ti * eta_ti))
+                .max(0.0)
+                .sqrt();
+            let cos_i = wi_m.abs();
+            let a_s = (cos_i - eta_it * cos_t) / (cos_i + eta_it * cos_t);
+            let a_p = (cos_t - eta_it * cos_i) / (cos_t + eta_it * cos_i);
+            let f = 0.5 * (a_s * a_s + a_p * a_p);
+            let f = if cos_i == 0.0 { 1.0 } else { f };
+            let f = if index_matched { 0.0 } else { f };
+            let wo_m = ox * mx + oy * my + oz * mz;
+            let g = self.distr.ggx_smith_g1_lane(wi.to_array(), wi_m)
+                * self.distr.ggx_smith_g1_lane([ox, oy, oz], wo_m);
+            let reflected = f * d * g / cos_scale;
+            let denom = wi_m + eta_side * wo_m;
+            let transmitted =
+                (radiance_scale * (1.0 - f) * d * g * eta_side * eta_side * wi_m * wo_m)
+                    / (wi.z * denom * denom);
+            let value = if reflect {
+                self.specular_reflectance * reflected
+            } else {
+                self.specular_transmittance * transmitted.abs()
+            };
+            *out = if value.is_finite() { value } else { Rgb::ZERO };
         }
     }
 

@@ -61,6 +61,38 @@ impl Microfacet {
         }
     }
 
+    /// [`Microfacet::eval`] of a GGX distribution at the normal (`mx`, `my`, `mz`): the same
+    /// operations in the same order, without branches, for a loop the compiler vectorises
+    /// (see [`crate::bsdf::Bsdf::eval_lanes`]).
+    #[inline(always)]
+    pub fn ggx_lane(&self, mx: f32, my: f32, mz: f32) -> f32 {
+        let alpha_uv = self.alpha_u * self.alpha_v;
+        let (sx, sy) = (mx / self.alpha_u, my / self.alpha_v);
+        let q = sx * sx + sy * sy + mz * mz;
+        let d = 1.0 / (PI * alpha_uv * q * q);
+        if d * mz > 1e-20 {
+            d
+        } else {
+            0.0
+        }
+    }
+
+    /// [`Microfacet::smith_g1`] of a GGX distribution for the direction `v` with `v_m` = v·m,
+    /// as [`Microfacet::ggx_lane`] is its D.
+    #[inline(always)]
+    pub fn ggx_smith_g1_lane(&self, [vx, vy, vz]: [f32; 3], v_m: f32) -> f32 {
+        let (ax, ay) = (self.alpha_u * vx, self.alpha_v * vy);
+        let xy_alpha_2 = ax * ax + ay * ay;
+        let tan_theta_alpha_2 = xy_alpha_2 / (vz * vz);
+        let result = 2.0 / (1.0 + (1.0 + tan_theta_alpha_2).sqrt());
+        let result = if xy_alpha_2 == 0.0 { 1.0 } else { result };
+        if v_m * vz <= 0.0 {
+            0.0
+        } else {
+            result
+        }
+    }
+
     /// The distribution of normals D(m).
     pub fn eval(&self, m: Vec3) -> f32 {
         let alpha_uv = self.alpha_u * self.alpha_v;

@@ -83,6 +83,28 @@ impl Bsdf {
         }
     }
 
+    /// [`Bsdf::eval`] from `wi` towards every direction of `wo`, given as lanes of x, y and z,
+    /// into `out` (one value per lane): the same values bit for bit, evaluated several at a
+    /// time where the BSDF has a form without branches (GGX conductors and dielectrics: the
+    /// same operations in the same order, `tests/bsdf_conformance.rs`), one by one otherwise.
+    /// What a map of point values over many emitter samples needs (`bake::direct`).
+    pub fn eval_lanes(&self, wi: Vec3, wo: [&[f32]; 3], mode: TransportMode, out: &mut Vec<Rgb>) {
+        let n = wo.iter().map(|l| l.len()).min().unwrap_or(0);
+        out.clear();
+        out.resize(n, Rgb::ZERO);
+        match self {
+            Bsdf::Conductor(c) if c.distr.kind == Distribution::Ggx => c.eval_lanes(wi, wo, out),
+            Bsdf::Dielectric(d) if d.distr.kind == Distribution::Ggx => {
+                d.eval_lanes(wi, wo, mode, out)
+            }
+            _ => {
+                for (k, out) in out.iter_mut().enumerate() {
+                    *out = self.eval(wi, Vec3::new(wo[0][k], wo[1][k], wo[2][k]), mode);
+                }
+            }
+        }
+    }
+
     /// Solid-angle density of [`Bsdf::sample`] producing `wo`.
     #[inline]
     pub fn pdf(&self, wi: Vec3, wo: Vec3) -> f32 {
