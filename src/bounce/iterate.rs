@@ -355,16 +355,18 @@ pub fn add_bounces(
     let regathered = &groups[kept.len()..];
 
     let mut total_energy = energy(baked, &reflected_direct);
-    // What the next bounce sends: the reflected direct light, then each bounce's light (the
-    // previous one dropped as soon as it is replaced, so the heap does not grow past the
-    // second bounce).
+    // What the next bounce sends: the reflected direct light, then each bounce's light.
     let mut emit: Vec<SurfelRadiance> = reflected_direct;
     let mut ratios: Vec<f64> = Vec::new();
     for bounce in 1..=settings.max {
         let done_before = (bounce - 1) as f32 / settings.max as f32;
-        let sent = &emit;
-        let coded = coded_light(baked, sent);
-        let values = slot_values(&slots, &index, &baked.tree, &baked.surfels, sent, &coded);
+        // The light sent is read once, into the slots, and dropped before the new light is
+        // made: the heap reuses its memory (fresh pages are cleared by the kernel).
+        let values = {
+            let sent = std::mem::take(&mut emit);
+            let coded = coded_light(baked, &sent);
+            slot_values(&slots, &index, &baked.tree, &baked.surfels, &sent, &coded)
+        };
         let mut light = gather.evaluate(&kept, regathered, &index, &values, cancel)?;
         receivers.blend(&mut light, tau);
         gather.reflect(&mut light);
