@@ -139,3 +139,110 @@ fn gather_matches_the_integrated_irradiance() {
         assert!(lo.is_finite());
     }
 }
+
+/// A receiver on a solid reaches the surfels of its own solid one by one (their inward light
+/// is in no node's maps), but not those of another solid: a node wholly on another closed
+/// mesh is taken whole, as any receiver takes it. Two glass spheres (the bundled caustic
+/// scene's, instanced twice): every node holding surfels of one sphere alone needs leaves for
+/// that sphere's receivers and not for the other's, and a node mixing meshes still does.
+#[test]
+fn a_solid_reaches_only_its_own_solid_as_leaves() {
+    let data = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/mitsuba/");
+    let mut g: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(format!("{data}caustic.gltf")).unwrap())
+            .unwrap();
+    let sphere = g["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .position(|n| n["name"] == "sphere")
+        .expect("the caustic scene's sphere");
+    let mesh = g["nodes"][sphere]["mesh"].clone();
+    let instance = |name: &str, x: f32| {
+        serde_json::json!({"name": name, "mesh": mesh, "scale": [0.5, 0.5, 0.5],
+            "translation": [x, -0.5, 0.0]})
+    };
+    g["nodes"][sphere] = instance("sphere-a", -0.45);
+    let nodes = g["nodes"].as_array_mut().unwrap();
+    nodes.push(instance("sphere-b", 0.45));
+    let b = nodes.len() - 1;
+    g["scenes"][0]["nodes"]
+        .as_array_mut()
+        .unwrap()
+        .push(b.into());
+    for buffer in g["buffers"].as_array_mut().unwrap() {
+        if let Some(uri) = buffer["uri"].as_str().filter(|u| !u.starts_with("data:")) {
+            buffer["uri"] = format!("{data}{uri}").into();
+        }
+    }
+    let dir = std::env::temp_dir().join(format!("wpbgi-two-solids-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let gltf = dir.join("two-spheres.gltf");
+    std::fs::write(&gltf, g.to_string()).unwrap();
+    let scene = Scene::load(&gltf).unwrap();
+    let settings = BakeSettings {
+        points: 3000,
+        light_samples: 4,
+        bounces: wpbgi::bounce::BounceSettings::exactly(0),
+        ..BakeSettings::from_quality(wpbgi::bake::Quality::Draft)
+    };
+    let baked = bake(&scene, &settings, &|_, _| {}).unwrap();
+    let path = dir.join("two-spheres.wpc");
+    write(
+        &path,
+        bake_hash(&scene, &settings.to_json()),
+        &baked,
+        serde_json::json!({}),
+    )
+    .unwrap();
+    let senders = Senders::from_cache(&BakedCache::read(&path, None).unwrap()).unwrap();
+    let spheres: Vec<u32> = (0..scene.meshes.len() as u32)
+        .filter(|&m| scene.meshes[m as usize].name.contains("sphere"))
+        .collect();
+    let [a, b] = spheres[..] else {
+        panic!("two sphere meshes: {spheres:?}");
+    };
+    // The meshes under each node, from its surfels.
+    let mut below: Vec<Vec<u32>> = vec![Vec::new(); senders.nodes.len()];
+    for j in (0..senders.nodes.len()).rev() {
+        let node = &senders.nodes[j];
+        below[j] = if node.is_leaf() {
+            vec![senders.surfels[node.surfel as usize].mesh]
+        } else {
+            let mut m: Vec<u32> = node
+                .children
+                .iter()
+                .filter(|&&c| (c as usize) < below.len())
+                .flat_map(|&c| below[c as usize].clone())
+                .collect();
+            m.sort_unstable();
+            m.dedup();
+            m
+        };
+    }
+    let (mut own, mut other, mut mixed) = (0, 0, 0);
+    for (j, meshes) in below.iter().enumerate() {
+        let j = j as u32;
+        match meshes[..] {
+            [m] if m == a || m == b => {
+                let other_sphere = if m == a { b } else { a };
+                assert!(senders.needs_leaves(j, m), "node {j} on its own solid");
+                assert!(
+                    !senders.needs_leaves(j, other_sphere),
+                    "node {j} on the other"
+                );
+                own += 1;
+                other += 1;
+            }
+            _ if meshes.contains(&a) || meshes.contains(&b) => {
+                assert!(senders.needs_leaves(j, a) && senders.needs_leaves(j, b));
+                mixed += 1;
+            }
+            _ => assert!(!senders.needs_leaves(j, a) && !senders.needs_leaves(j, b)),
+        }
+    }
+    assert!(
+        own > 100 && other > 100 && mixed > 0,
+        "{own} {other} {mixed}"
+    );
+}

@@ -545,9 +545,15 @@ impl Senders {
 
     /// Whether a receiver on `mesh` must reach the surfels of a solid below node `j` one by
     /// one: it lies on a solid itself, whose inward light only leaves carry (the light inside
-    /// a glass sphere, on its way to a caustic).
+    /// a glass sphere, on its way to a caustic). A node wholly on another closed mesh needs
+    /// no leaves: a solid's inward light reaches only its own surface, so the node's maps,
+    /// its outward light, are all the receiver sees of it (two glass objects would otherwise
+    /// reach each other's every surfel).
     pub fn needs_leaves(&self, j: u32, mesh: u32) -> bool {
-        self.nodes[j as usize].solid && self.solid_meshes.get(mesh as usize) == Some(&true)
+        let node = &self.nodes[j as usize];
+        node.solid
+            && self.solid_meshes.get(mesh as usize) == Some(&true)
+            && (node.closed_mesh == NONE || node.closed_mesh == mesh)
     }
 
     /// The surfel nearest `q` among those `accept` takes (branch and bound over the nodes'
