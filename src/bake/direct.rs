@@ -16,7 +16,7 @@
 //! f over texel pairs, gives the map (D = V·C, as in a bounce). For wider lobes point values are
 //! better: through the operator the glass of cbox-glossy (α = 0.02) blurred the caustic under
 //! it (relMSE +16 %). The K samples are evaluated as lanes ([`Bsdf::eval_lanes`]: the same
-//! values, several at a time), 2.3–2.5 times faster than one by one on the glass scenes.
+//! values, several at a time), 2.3–2.7 times faster than one by one on the glass scenes.
 //!
 //! For diffuse surfels, which store RGB only, the irradiance E = (1/K) Σₖ max(0, n·ωₖ) Lₑ,ₖ/pₖ
 //! (the outgoing radiance is then ρE/π). With many point and spot lights, a light tree gives
