@@ -16,7 +16,8 @@ mod common;
 
 use common::b64;
 use glam::Vec3;
-use wpbgi::bake::{bake, BakeSettings};
+use std::path::Path;
+use wpbgi::bake::{bake, BakeSettings, Baked};
 use wpbgi::bsdf::{Bsdf, Diffuse};
 use wpbgi::cache::store::{bake_hash, write, BakedCache};
 use wpbgi::gather::{splat_cut, Microbuffer, Senders};
@@ -92,16 +93,15 @@ fn senders() -> Senders {
             _ => panic!("diffuse surfels store RGB"),
         }
     }
-    let path = dir.join("square.wpc");
-    write(
-        &path,
-        bake_hash(&scene, &settings.to_json()),
-        &baked,
-        serde_json::json!({}),
-    )
-    .unwrap();
-    let cache = BakedCache::read(&path, None).unwrap();
-    Senders::from_cache(&cache).unwrap()
+    cached_senders(&scene, &settings, &baked, &dir.join("square.wpc"))
+}
+
+/// The senders of `baked` (of `scene` with `settings`) as a render reads them: written to a
+/// cache at `path` and read back.
+fn cached_senders(scene: &Scene, settings: &BakeSettings, baked: &Baked, path: &Path) -> Senders {
+    let hash = bake_hash(scene, &settings.to_json());
+    write(path, hash, baked, serde_json::json!({})).unwrap();
+    Senders::from_cache(&BakedCache::read(path, None).unwrap()).unwrap()
 }
 
 #[test]
@@ -187,15 +187,7 @@ fn a_solid_reaches_only_its_own_solid_as_leaves() {
         ..BakeSettings::from_quality(wpbgi::bake::Quality::Draft)
     };
     let baked = bake(&scene, &settings, &|_, _| {}).unwrap();
-    let path = dir.join("two-spheres.wpc");
-    write(
-        &path,
-        bake_hash(&scene, &settings.to_json()),
-        &baked,
-        serde_json::json!({}),
-    )
-    .unwrap();
-    let senders = Senders::from_cache(&BakedCache::read(&path, None).unwrap()).unwrap();
+    let senders = cached_senders(&scene, &settings, &baked, &dir.join("two-spheres.wpc"));
     let spheres: Vec<u32> = (0..scene.meshes.len() as u32)
         .filter(|&m| scene.meshes[m as usize].name.contains("sphere"))
         .collect();

@@ -50,11 +50,11 @@ impl RoughConductor {
             let (hx, hy, hz) = (ox + wi.x, oy + wi.y, oz + wi.z);
             let recip = 1.0 / (hx * hx + hy * hy + hz * hz).sqrt();
             let (mx, my, mz) = (hx * recip, hy * recip, hz * recip);
-            let d = self.distr.ggx_lane(mx, my, mz);
+            let d = self.distr.ggx_d(mx, my, mz);
             let wi_m = wi.x * mx + wi.y * my + wi.z * mz;
             let wo_m = ox * mx + oy * my + oz * mz;
-            let g = self.distr.ggx_smith_g1_lane(wi.to_array(), wi_m)
-                * self.distr.ggx_smith_g1_lane([ox, oy, oz], wo_m);
+            let g = self.distr.ggx_smith_g1(wi.to_array(), wi_m)
+                * self.distr.ggx_smith_g1([ox, oy, oz], wo_m);
             let value = self.fresnel(wi_m) * (d * g / cos_scale);
             *out = if oz > 0.0 && d != 0.0 {
                 value

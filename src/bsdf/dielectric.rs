@@ -69,9 +69,6 @@ impl RoughDielectric {
             TransportMode::Radiance => 1.0 / (eta_side * eta_side),
             TransportMode::Importance => 1.0,
         };
-        // Fresnel's indices on either side of a microfacet (see `fresnel_dielectric`).
-        let rcp_eta = 1.0 / self.eta;
-        let index_matched = self.eta == 1.0;
         let lanes = xs.iter().zip(ys).zip(zs).zip(out.iter_mut());
         for (((&ox, &oy), &oz), out) in lanes {
             // The half vector on the side of the macro normal.
@@ -85,26 +82,13 @@ impl RoughDielectric {
                 1.0
             };
             let (mx, my, mz) = (hx * recip * flip, hy * recip * flip, hz * recip * flip);
-            let d = self.distr.ggx_lane(mx, my, mz);
+            let d = self.distr.ggx_d(mx, my, mz);
             // Fresnel reflectance at wi·m.
             let wi_m = wi.x * mx + wi.y * my + wi.z * mz;
-            let (eta_it, eta_ti) = if wi_m >= 0.0 {
-                (self.eta, rcp_eta)
-            } else {
-                (rcp_eta, self.eta)
-            };
-            let cos_t = (1.0 - (1.0 - wi_m * wi_m) * (eta_ti * eta_ti))
-                .max(0.0)
-                .sqrt();
-            let cos_i = wi_m.abs();
-            let a_s = (cos_i - eta_it * cos_t) / (cos_i + eta_it * cos_t);
-            let a_p = (cos_t - eta_it * cos_i) / (cos_t + eta_it * cos_i);
-            let f = 0.5 * (a_s * a_s + a_p * a_p);
-            let f = if cos_i == 0.0 { 1.0 } else { f };
-            let f = if index_matched { 0.0 } else { f };
+            let f = fresnel_dielectric(wi_m, self.eta).r;
             let wo_m = ox * mx + oy * my + oz * mz;
-            let g = self.distr.ggx_smith_g1_lane(wi.to_array(), wi_m)
-                * self.distr.ggx_smith_g1_lane([ox, oy, oz], wo_m);
+            let g = self.distr.ggx_smith_g1(wi.to_array(), wi_m)
+                * self.distr.ggx_smith_g1([ox, oy, oz], wo_m);
             let reflected = f * d * g / cos_scale;
             let denom = wi_m + eta_side * wo_m;
             let transmitted =

@@ -61,15 +61,16 @@ impl Microfacet {
         }
     }
 
-    /// [`Microfacet::eval`] of a GGX distribution at the normal (`mx`, `my`, `mz`): the same
-    /// operations in the same order, without branches, for a loop the compiler vectorises
-    /// (see [`crate::bsdf::Bsdf::eval_lanes`]).
+    /// GGX's D at the normal (`mx`, `my`, `mz`), written without branches so that a loop over
+    /// many normals vectorises ([`crate::bsdf::Bsdf::eval_lanes`]); [`Microfacet::eval`] of a
+    /// GGX distribution is this.
     #[inline(always)]
-    pub fn ggx_lane(&self, mx: f32, my: f32, mz: f32) -> f32 {
+    pub fn ggx_d(&self, mx: f32, my: f32, mz: f32) -> f32 {
         let alpha_uv = self.alpha_u * self.alpha_v;
         let (sx, sy) = (mx / self.alpha_u, my / self.alpha_v);
         let q = sx * sx + sy * sy + mz * mz;
         let d = 1.0 / (PI * alpha_uv * q * q);
+        // Mitsuba drops values this small to keep later stages free of denormals and 0·inf.
         if d * mz > 1e-20 {
             d
         } else {
@@ -77,15 +78,16 @@ impl Microfacet {
         }
     }
 
-    /// [`Microfacet::smith_g1`] of a GGX distribution for the direction `v` with `v_m` = v·m,
-    /// as [`Microfacet::ggx_lane`] is its D.
+    /// GGX's G1 for the direction `v` with `v_m` = v·m, without branches as
+    /// [`Microfacet::ggx_d`]; [`Microfacet::smith_g1`] of a GGX distribution is this.
     #[inline(always)]
-    pub fn ggx_smith_g1_lane(&self, [vx, vy, vz]: [f32; 3], v_m: f32) -> f32 {
+    pub fn ggx_smith_g1(&self, [vx, vy, vz]: [f32; 3], v_m: f32) -> f32 {
         let (ax, ay) = (self.alpha_u * vx, self.alpha_v * vy);
         let xy_alpha_2 = ax * ax + ay * ay;
         let tan_theta_alpha_2 = xy_alpha_2 / (vz * vz);
         let result = 2.0 / (1.0 + (1.0 + tan_theta_alpha_2).sqrt());
         let result = if xy_alpha_2 == 0.0 { 1.0 } else { result };
+        // The back of a microfacet cannot be seen from the front of the macrosurface.
         if v_m * vz <= 0.0 {
             0.0
         } else {
@@ -95,23 +97,16 @@ impl Microfacet {
 
     /// The distribution of normals D(m).
     pub fn eval(&self, m: Vec3) -> f32 {
+        if self.kind == Distribution::Ggx {
+            return self.ggx_d(m.x, m.y, m.z);
+        }
         let alpha_uv = self.alpha_u * self.alpha_v;
-        let cos_theta = m.z;
-        let cos_theta_2 = cos_theta * cos_theta;
-        let sx = m.x / self.alpha_u;
-        let sy = m.y / self.alpha_v;
-        let result = match self.kind {
-            Distribution::Beckmann => {
-                (-(sx * sx + sy * sy) / cos_theta_2).exp()
-                    / (PI * alpha_uv * cos_theta_2 * cos_theta_2)
-            }
-            Distribution::Ggx => {
-                let q = sx * sx + sy * sy + m.z * m.z;
-                1.0 / (PI * alpha_uv * q * q)
-            }
-        };
-        // Mitsuba drops values this small to keep later stages free of denormals and 0·inf.
-        if result * cos_theta > 1e-20 {
+        let cos_theta_2 = m.z * m.z;
+        let (sx, sy) = (m.x / self.alpha_u, m.y / self.alpha_v);
+        let result = (-(sx * sx + sy * sy) / cos_theta_2).exp()
+            / (PI * alpha_uv * cos_theta_2 * cos_theta_2);
+        // As GGX's (see `ggx_d`).
+        if result * m.z > 1e-20 {
             result
         } else {
             0.0
@@ -120,27 +115,25 @@ impl Microfacet {
 
     /// Smith's one-direction masking function G1(v, m).
     pub fn smith_g1(&self, v: Vec3, m: Vec3) -> f32 {
+        if self.kind == Distribution::Ggx {
+            return self.ggx_smith_g1(v.to_array(), v.dot(m));
+        }
         let ax = self.alpha_u * v.x;
         let ay = self.alpha_v * v.y;
         let xy_alpha_2 = ax * ax + ay * ay;
         let tan_theta_alpha_2 = xy_alpha_2 / (v.z * v.z);
-        let mut result = match self.kind {
-            Distribution::Beckmann => {
-                // Rational approximation (< 0.35 % relative error), Walter et al. 2007.
-                let a = 1.0 / tan_theta_alpha_2.sqrt();
-                let a2 = a * a;
-                if a >= 1.6 {
-                    1.0
-                } else {
-                    (3.535 * a + 2.181 * a2) / (1.0 + 2.276 * a + 2.577 * a2)
-                }
-            }
-            Distribution::Ggx => 2.0 / (1.0 + (1.0 + tan_theta_alpha_2).sqrt()),
+        // Beckmann: a rational approximation (< 0.35 % relative error), Walter et al. 2007.
+        let a = 1.0 / tan_theta_alpha_2.sqrt();
+        let a2 = a * a;
+        let mut result = if a >= 1.6 {
+            1.0
+        } else {
+            (3.535 * a + 2.181 * a2) / (1.0 + 2.276 * a + 2.577 * a2)
         };
         if xy_alpha_2 == 0.0 {
             result = 1.0;
         }
-        // The back of a microfacet cannot be seen from the front of the macrosurface.
+        // As GGX's (see `ggx_smith_g1`).
         if v.dot(m) * v.z <= 0.0 {
             result = 0.0;
         }
