@@ -561,13 +561,8 @@ pub fn close_buffer(
         if mb.alpha[k] > 0.0 {
             continue;
         }
-        let nearest = senders.nearest_surfel(h.point, |r| {
-            r.mesh == h.mesh && Vec3::from(r.n).dot(h.normal) > 0.5
-        });
-        if let Some(i) = nearest {
-            let towards = mb.frame.to_world(-mb.pixels[k].dir);
-            let cos = Vec3::from(senders.surfels[i as usize].n).dot(towards);
-            let lookup = senders.surfel_lookup(i, towards, cos, s.mesh);
+        let towards = mb.frame.to_world(-mb.pixels[k].dir);
+        if let Some(lookup) = senders.lookup_at(h.point, h.mesh, h.normal, towards, s.mesh) {
             mb.fill_pixel_from(k, senders.evaluated(lookup), lookup);
         }
     }

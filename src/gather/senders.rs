@@ -556,6 +556,25 @@ impl Senders {
             && (node.closed_mesh == NONE || node.closed_mesh == mesh)
     }
 
+    /// Where the cache's radiance along `w` leaves the point `q` of mesh `mesh`, whose
+    /// geometric normal is `ng`, towards a receiver on mesh `receiver_mesh`: the surfel of
+    /// that mesh nearest `q` among those facing `ng`'s way (within 60°), read as a gather reads
+    /// a leaf ([`Senders::surfel_lookup`]). `None` where the mesh has no such surfel. (What a
+    /// ray from a receiver hits: the gaps its buffer's splats leave, a path-traced gather's
+    /// secondary hits.)
+    pub fn lookup_at(
+        &self,
+        q: Vec3,
+        mesh: u32,
+        ng: Vec3,
+        w: Vec3,
+        receiver_mesh: u32,
+    ) -> Option<Lookup> {
+        let i = self.nearest_surfel(q, |r| r.mesh == mesh && Vec3::from(r.n).dot(ng) > 0.5)?;
+        let cos = Vec3::from(self.surfels[i as usize].n).dot(w);
+        Some(self.surfel_lookup(i, w, cos, receiver_mesh))
+    }
+
     /// The surfel nearest `q` among those `accept` takes (branch and bound over the nodes'
     /// bounding spheres).
     pub fn nearest_surfel(&self, q: Vec3, accept: impl Fn(&SurfelRecord) -> bool) -> Option<u32> {

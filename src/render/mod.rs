@@ -10,11 +10,13 @@
 //!    a microbuffer ([`crate::gather`]), one by one (`pbgi`) or by clusters (`fpbgi`, the
 //!    default). Glossy receivers (roughness below `glossy_below`) always gather alone, through
 //!    a buffer refined by their BSDF (spec §7), since a shared uniform cluster buffer would
-//!    blur their lobe.
+//!    blur their lobe. Or (`paths`) each receiver traces rays drawn from its BSDF and takes
+//!    the cache's light where they hit ([`paths`]): noisy, no buffers.
 //!
 //! Every random number is keyed by (pixel, sample), and every tile is processed in a fixed
 //! order, so the image is the same for any thread count.
 
+pub mod paths;
 pub mod primary;
 
 use crate::cache::store::BakedCache;
@@ -40,6 +42,8 @@ pub enum GatherMode {
     Pbgi,
     /// Clustered receivers sharing the far field (spec §3).
     Fpbgi,
+    /// Rays drawn from each receiver's BSDF, ending in the cache ([`paths`]).
+    Paths,
 }
 
 /// Settings of a final render.
@@ -69,6 +73,8 @@ pub struct FinalSettings {
     /// FPBGI: clusters per tile and the far threshold r/d (spec §3.7).
     pub clusters: usize,
     pub far_eps: f32,
+    /// The path-traced gather's rays per receiver.
+    pub spp: u32,
     pub seed: u64,
 }
 
@@ -87,6 +93,7 @@ impl Default for FinalSettings {
             max_depth: -1,
             clusters: 100,
             far_eps: 0.1,
+            spp: 16,
             seed: 0,
         }
     }
@@ -168,6 +175,11 @@ pub fn render_final(
             "max depth must be -1 (unlimited) or at least 1".into(),
         ));
     }
+    if settings.spp == 0 {
+        return Err(Error::InvalidSetting(
+            "the paths gather needs at least 1 ray per receiver (spp)".into(),
+        ));
+    }
     if !(settings.far_eps >= 0.0 && settings.far_eps.is_finite()) || settings.clusters == 0 {
         return Err(Error::InvalidSetting(
             "the far threshold must be a non-negative number and clusters at least 1".into(),
@@ -216,7 +228,7 @@ pub fn render_final(
     let gathered: Vec<(Vec<(u32, Rgb)>, GatherStats)> = primary
         .par_iter()
         .map(|tile| {
-            let r = gather_tile(&senders, &tile.receivers, settings);
+            let r = gather_tile(&ctx, &senders, &tile.receivers, settings);
             let n = done.fetch_add(1, Ordering::Relaxed) + 1;
             progress("gather", n as f32 / tiles.len() as f32);
             r
@@ -405,6 +417,7 @@ fn is_glossy(r: &Receiver, settings: &FinalSettings) -> bool {
 
 /// Gather every receiver of a tile; returns (pixel, weighted indirect radiance) pairs.
 fn gather_tile(
+    ctx: &RenderContext,
     senders: &Senders,
     receivers: &[Receiver],
     settings: &FinalSettings,
@@ -413,6 +426,20 @@ fn gather_tile(
         receivers: receivers.len() as u64,
         ..Default::default()
     };
+    if settings.gather == GatherMode::Paths {
+        let out = receivers
+            .iter()
+            .enumerate()
+            .map(|(k, r)| {
+                let key = (settings.seed, k as u64);
+                (
+                    r.pixel,
+                    paths::path_gather(ctx, senders, r, settings.spp, key),
+                )
+            })
+            .collect();
+        return (out, stats);
+    }
     let mut out = Vec::with_capacity(receivers.len());
     let mut stack = Vec::new();
     let root = [0u32];

@@ -25,6 +25,10 @@ pub struct Receiver {
     /// Throughput from the camera sample to this point, over the pixel's sample count.
     pub weight: Rgb,
     pub p: Vec3,
+    /// The rounding bound of `p` and the hit triangle's geometric normal, to leave the
+    /// surface by ([`crate::geometry::offset::offset_origin`]).
+    pub err: Vec3,
+    pub ng: Vec3,
     /// The mesh it lies on.
     pub mesh: u32,
     pub frame: Frame,
@@ -154,6 +158,8 @@ pub fn trace_primary(
                 pixel,
                 weight: throughput * scale,
                 p: hit.p,
+                err: hit.err,
+                ng: hit.ng,
                 mesh: hit.mesh,
                 frame: hit.frame,
                 bsdf,

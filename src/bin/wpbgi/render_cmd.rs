@@ -16,6 +16,9 @@ pub enum GatherArg {
     Pbgi,
     /// Receivers clustered per 32×32 tile share the far field (faster, the same image).
     Fpbgi,
+    /// Rays drawn from each receiver's BSDF (--spp of them), taking the cache's light where
+    /// they hit: the first bounce traced, the rest from the cache.
+    Paths,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -69,6 +72,9 @@ pub struct RenderArgs {
     /// this (the thesis used 0.01 at 1024² in large scenes; see docs/render.md).
     #[arg(long, default_value_t = 0.1)]
     pub far: f32,
+    /// Paths gather: rays per receiver.
+    #[arg(long, default_value_t = 16)]
+    pub spp: u32,
     /// Seed of the random streams.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -143,7 +149,9 @@ pub fn render_command(a: RenderArgs) -> Result<()> {
         gather: match a.gather {
             GatherArg::Pbgi => GatherMode::Pbgi,
             GatherArg::Fpbgi => GatherMode::Fpbgi,
+            GatherArg::Paths => GatherMode::Paths,
         },
+        spp: a.spp,
         mb_size: a.mb_size,
         adaptive: !a.uniform,
         light_samples: a.light_samples,
@@ -185,6 +193,7 @@ pub fn render_command(a: RenderArgs) -> Result<()> {
         match a.gather {
             GatherArg::Pbgi => "pbgi",
             GatherArg::Fpbgi => "fpbgi",
+            GatherArg::Paths => "paths",
         },
         start.elapsed().as_secs_f64()
     );
