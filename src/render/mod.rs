@@ -18,7 +18,9 @@
 
 pub mod paths;
 pub mod primary;
+pub mod sparse;
 
+use crate::bsdf::{Bsdf, Diffuse};
 use crate::cache::store::BakedCache;
 use crate::error::{Error, Result};
 use crate::gather::fpbgi::{cluster, cluster_cut, member_buffer, ClusterReceivers};
@@ -32,6 +34,7 @@ use crate::spectrum::Rgb;
 use glam::{Vec2, Vec3};
 use primary::{trace_primary, CameraSample, PrimarySample, PrimarySettings, Receiver};
 use rayon::prelude::*;
+use sparse::SparsePlan;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
@@ -75,6 +78,9 @@ pub struct FinalSettings {
     pub far_eps: f32,
     /// The path-traced gather's rays per receiver.
     pub spp: u32,
+    /// Diffuse receivers gather on a sparse grid and interpolate between ([`sparse`]);
+    /// off, every receiver gathers.
+    pub sparse: bool,
     pub seed: u64,
 }
 
@@ -94,6 +100,7 @@ impl Default for FinalSettings {
             clusters: 100,
             far_eps: 0.1,
             spp: 16,
+            sparse: true,
             seed: 0,
         }
     }
@@ -117,6 +124,9 @@ pub struct GatherStats {
     pub cluster_cut: CutStats,
     /// Microbuffer pixels (after refinement) over all receivers.
     pub pixels: u64,
+    /// Receivers that took their irradiance from their cell's anchors instead of gathering
+    /// ([`sparse`]).
+    pub interpolated: u64,
 }
 
 impl GatherStats {
@@ -127,6 +137,7 @@ impl GatherStats {
         self.receiver_cut += o.receiver_cut;
         self.cluster_cut += o.cluster_cut;
         self.pixels += o.pixels;
+        self.interpolated += o.interpolated;
     }
 }
 
@@ -228,7 +239,10 @@ pub fn render_final(
     let gathered: Vec<(Vec<(u32, Rgb)>, GatherStats)> = primary
         .par_iter()
         .map(|tile| {
-            let r = gather_tile(&ctx, &senders, &tile.receivers, settings);
+            let (tx, ty) = (tile.origin.0 / TILE, tile.origin.1 / TILE);
+            let size = (TILE.min(w - tx * TILE), TILE.min(h - ty * TILE));
+            let rect = (tile.origin, size, w);
+            let r = gather_tile(&ctx, &senders, &tile.receivers, rect, settings);
             let n = done.fetch_add(1, Ordering::Relaxed) + 1;
             progress("gather", n as f32 / tiles.len() as f32);
             r
@@ -324,6 +338,8 @@ fn is_edge(centre: &[CentreHit], w: u32, h: u32, x: u32, y: u32) -> bool {
 
 /// A tile after the primary pass.
 struct TilePrimary {
+    /// The tile's first pixel (x, y).
+    origin: (u32, u32),
     pixels: Vec<(u32, PrimarySample)>,
     receivers: Vec<Receiver>,
     samples: u64,
@@ -339,6 +355,7 @@ fn primary_tile(
 ) -> TilePrimary {
     let (w, h) = (camera.width, camera.height);
     let mut out = TilePrimary {
+        origin: (tx * TILE, ty * TILE),
         pixels: Vec::new(),
         receivers: Vec::new(),
         samples: 0,
@@ -415,11 +432,13 @@ fn is_glossy(r: &Receiver, settings: &FinalSettings) -> bool {
     r.bsdf.alpha().is_some_and(|a| a < settings.glossy_below)
 }
 
-/// Gather every receiver of a tile; returns (pixel, weighted indirect radiance) pairs.
+/// Gather every receiver of a tile (at `origin`, `size` pixels, in an image `width` wide);
+/// returns (pixel, weighted indirect radiance) pairs.
 fn gather_tile(
     ctx: &RenderContext,
     senders: &Senders,
     receivers: &[Receiver],
+    (origin, size, width): ((u32, u32), (u32, u32), u32),
     settings: &FinalSettings,
 ) -> (Vec<(u32, Rgb)>, GatherStats) {
     let mut stats = GatherStats {
@@ -440,47 +459,113 @@ fn gather_tile(
             .collect();
         return (out, stats);
     }
-    let mut out = Vec::with_capacity(receivers.len());
-    let mut stack = Vec::new();
+    // The grid's anchors and the receivers that cannot interpolate gather first; then the
+    // others interpolate where their cell allows, and gather where it does not.
+    let plan = SparsePlan::new(receivers, origin, size, width, settings.sparse);
+    let first: Vec<usize> = (0..receivers.len()).filter(|&k| plan.first[k]).collect();
+    let mut value = vec![Rgb::ZERO; receivers.len()];
+    gather_set(
+        senders, receivers, &first, &plan, settings, &mut value, &mut stats,
+    );
+    let mut second = Vec::new();
+    for k in (0..receivers.len()).filter(|&k| !plan.first[k]) {
+        match plan.interpolate(receivers, k, |j| value[j]) {
+            Some(e) => value[k] = e,
+            None => second.push(k),
+        }
+    }
+    gather_set(
+        senders, receivers, &second, &plan, settings, &mut value, &mut stats,
+    );
+    stats.interpolated = (receivers.len() - first.len() - second.len()) as u64;
+    let out = receivers
+        .iter()
+        .enumerate()
+        .map(|(k, r)| {
+            let l = match &r.bsdf {
+                Bsdf::Diffuse(d) if plan.eligible(k) => d.reflectance * value[k],
+                _ => value[k],
+            };
+            (r.pixel, r.weight * l)
+        })
+        .collect();
+    (out, stats)
+}
+
+/// Gather receivers `which` into `value`: the irradiance of the eligible ones (see
+/// [`SparsePlan`]), the outgoing radiance of the others.
+fn gather_set(
+    senders: &Senders,
+    receivers: &[Receiver],
+    which: &[usize],
+    plan: &SparsePlan,
+    settings: &FinalSettings,
+    value: &mut [Rgb],
+    stats: &mut GatherStats,
+) {
     let root = [0u32];
     let start: &[u32] = if senders.nodes.is_empty() { &[] } else { &root };
-    let (clustered, alone): (Vec<&Receiver>, Vec<&Receiver>) = receivers
-        .iter()
-        .partition(|r| settings.gather == GatherMode::Fpbgi && !is_glossy(r, settings));
+    let white = Bsdf::Diffuse(Diffuse {
+        reflectance: Rgb::ONE,
+    });
+    let shade = |k: usize, mb: &Microbuffer| {
+        let r = &receivers[k];
+        mb.convolve(if plan.eligible(k) { &white } else { &r.bsdf }, r.view)
+    };
+    let mut stack = Vec::new();
+    let (clustered, alone): (Vec<usize>, Vec<usize>) = which.iter().partition(|&&k| {
+        settings.gather == GatherMode::Fpbgi && !is_glossy(&receivers[k], settings)
+    });
     let mut mb = Microbuffer::new(settings.mb_size, false, Frame::from_normal(Vec3::Z));
-    for r in alone {
+    for k in alone {
+        let r = &receivers[k];
         prepare_buffer(&mut mb, r, settings);
         stats.receiver_cut += splat_cut(senders, r.p, r.mesh, &mut mb, start, &mut stack);
         mb.resolve();
         stats.pixels += mb.pixels.len() as u64;
-        out.push((r.pixel, r.weight * mb.convolve(&r.bsdf, r.view)));
+        value[k] = shade(k, &mb);
     }
-    if !clustered.is_empty() && !start.is_empty() {
-        let points: Vec<(Vec3, Vec3)> = clustered.iter().map(|r| (r.p, r.frame.n)).collect();
-        let clusters = cluster(&points, settings.clusters);
-        stats.clustered = clustered.len() as u64;
-        stats.clusters = clusters.len() as u64;
-        for c in &clusters {
-            let active = clustered[c.active as usize];
-            let receivers = ClusterReceivers {
-                p: active.p,
-                mesh: active.mesh,
-                frame: active.frame,
-                radius: c.radius,
-                plane_slope: c.cone.map(f32::sin),
-                record_links: false,
-            };
-            let mut cut = cluster_cut(senders, &receivers, settings.far_eps, settings.mb_size);
-            stats.cluster_cut += cut.stats;
-            for &m in &c.members {
-                let r = clustered[m as usize];
-                prepare_buffer(&mut mb, r, settings);
-                stats.receiver_cut +=
-                    member_buffer(senders, &mut cut, r.p, r.mesh, &mut mb, &mut stack);
-                stats.pixels += mb.pixels.len() as u64;
-                out.push((r.pixel, r.weight * mb.convolve(&r.bsdf, r.view)));
-            }
+    if clustered.is_empty() || start.is_empty() {
+        return;
+    }
+    let points: Vec<(Vec3, Vec3)> = clustered
+        .iter()
+        .map(|&k| (receivers[k].p, receivers[k].frame.n))
+        .collect();
+    // `clusters` per tile of receivers: as many fewer as the set has fewer receivers than a
+    // tile has pixels, so that a cluster's shared cut still serves about as many members.
+    let per_tile = (TILE * TILE) as usize;
+    let count = settings
+        .clusters
+        .min((settings.clusters * points.len()).div_ceil(per_tile));
+    let clusters = cluster(&points, count);
+    stats.clustered += clustered.len() as u64;
+    stats.clusters += clusters.len() as u64;
+    for c in &clusters {
+        let active = &receivers[clustered[c.active as usize]];
+        let cluster_receivers = ClusterReceivers {
+            p: active.p,
+            mesh: active.mesh,
+            frame: active.frame,
+            radius: c.radius,
+            plane_slope: c.cone.map(f32::sin),
+            record_links: false,
+        };
+        let mut cut = cluster_cut(
+            senders,
+            &cluster_receivers,
+            settings.far_eps,
+            settings.mb_size,
+        );
+        stats.cluster_cut += cut.stats;
+        for &m in &c.members {
+            let k = clustered[m as usize];
+            let r = &receivers[k];
+            prepare_buffer(&mut mb, r, settings);
+            stats.receiver_cut +=
+                member_buffer(senders, &mut cut, r.p, r.mesh, &mut mb, &mut stack);
+            stats.pixels += mb.pixels.len() as u64;
+            value[k] = shade(k, &mb);
         }
     }
-    (out, stats)
 }

@@ -59,13 +59,18 @@ pub struct RenderArgs {
     /// Uniform microbuffers for glossy receivers too (no BSDF-importance refinement).
     #[arg(long)]
     pub uniform: bool,
+    /// Every receiver gathers (by default diffuse receivers gather on a grid of every 4th
+    /// pixel and interpolate between where the light is smooth: docs/render.md).
+    #[arg(long)]
+    pub dense: bool,
     /// Emitter samples per shading point for direct light.
     #[arg(long, default_value_t = 32)]
     pub light_samples: u32,
     /// Longest path in segments, as Mitsuba's max_depth (-1: everything the cache holds).
     #[arg(long, default_value_t = -1, allow_hyphen_values = true)]
     pub max_depth: i32,
-    /// FPBGI: clusters per 32×32 tile.
+    /// FPBGI: clusters per 32×32 tile of gathering receivers (fewer where a tile has fewer
+    /// receivers that gather than pixels).
     #[arg(long, default_value_t = 100)]
     pub clusters: usize,
     /// FPBGI: a node is far (shared by a cluster) when cluster radius / distance is at most
@@ -107,8 +112,8 @@ pub fn run_final(
 pub fn print_summary(out: &FinalOutput) {
     let s = &out.stats;
     eprintln!(
-        "  {} camera samples, {} receivers ({} in {} clusters)",
-        out.samples, s.receivers, s.clustered, s.clusters
+        "  {} camera samples, {} receivers ({} interpolated, {} in {} clusters)",
+        out.samples, s.receivers, s.interpolated, s.clustered, s.clusters
     );
     eprintln!(
         "  cut: {} nodes visited and {} splatted by receivers, {} and {} by clusters; {} near surfels split",
@@ -154,6 +159,7 @@ pub fn render_command(a: RenderArgs) -> Result<()> {
         spp: a.spp,
         mb_size: a.mb_size,
         adaptive: !a.uniform,
+        sparse: !a.dense,
         light_samples: a.light_samples,
         max_depth: a.max_depth,
         clusters: a.clusters,
