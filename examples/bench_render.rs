@@ -9,6 +9,12 @@
 //!
 //! `cargo run --release --example bench_render [-- SCENE_NAME]` (cbox-diffuse, cbox-rough or
 //! cbox-glossy from tests/data/mitsuba; default: all three for 1 and 2, glossy for 3).
+//!
+//! `cargo run --release --example bench_render -- modes [SCENE_NAME ...]` (issue 20): the
+//! gather modes on the default multi-bounce cache of each of the five reference scenes, at
+//! 256² against Mitsuba's max_depth 8 reference and at 512² against the first mode's image:
+//! every receiver gathering by FPBGI (the previous default), the sparse FPBGI gather (the
+//! default), and the paths gather at 16 and 64 rays, each with its render seconds.
 
 use std::time::Instant;
 use wpbgi::bake::{BakeSettings, Quality};
@@ -72,7 +78,82 @@ fn fpbgi_vs_pbgi(
     Ok(())
 }
 
+/// The gather modes compared by `bench_render modes`, the first being the one the others are
+/// measured against at 512².
+fn modes() -> Vec<(&'static str, FinalSettings)> {
+    let dense = FinalSettings {
+        sparse: false,
+        ..Default::default()
+    };
+    let paths = |spp| FinalSettings {
+        gather: GatherMode::Paths,
+        spp,
+        ..Default::default()
+    };
+    vec![
+        ("fpbgi, every receiver", dense),
+        ("fpbgi, sparse (default)", FinalSettings::default()),
+        ("paths, 16 rays", paths(16)),
+        ("paths, 64 rays", paths(64)),
+    ]
+}
+
+/// `bench_render modes`: one table row per scene, size and mode.
+fn compare_modes(names: &[String]) -> Result<(), Box<dyn std::error::Error>> {
+    println!("threads: {}", rayon::current_num_threads());
+    println!("| scene | size | mode | render s | gather s | relMSE | interpolated receivers |");
+    println!("|---|---|---|---:|---:|---|---:|");
+    for name in names {
+        let scene = Scene::load(&data(&format!("{name}.gltf")))?;
+        let reference = read_exr(&data(&format!("{name}_d8_ref.exr")))?;
+        let settings = BakeSettings::from_quality(Quality::Preview);
+        let (_, cache, _) = common::bake_cache(&scene, &settings, &format!("{name}-modes"))?;
+        for size in [256, 512] {
+            let camera = scene.default_camera(size, size)?;
+            let mut first: Option<FinalOutput> = None;
+            for (mode, settings) in modes() {
+                let t = Instant::now();
+                let out = render_final(&scene, &cache, &camera, &settings, &|_, _| {})?;
+                let seconds = t.elapsed().as_secs_f64();
+                // At 256² against Mitsuba; at 512² (no reference) against the first mode.
+                let against = if size == 256 {
+                    ("Mitsuba", &reference)
+                } else {
+                    ("first", &first.as_ref().unwrap_or(&out).beauty)
+                };
+                let (_, rel) = error_against(&out.beauty, against.1).ok_or("size")?;
+                println!(
+                    "| {name} | {size}² | {mode} | {seconds:.2} | {:.2} | {rel:.3e} ({}) | {} of {} |",
+                    gather_seconds(&out),
+                    against.0,
+                    out.stats.interpolated,
+                    out.stats.receivers
+                );
+                first.get_or_insert(out);
+            }
+        }
+    }
+    Ok(())
+}
+
 fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let mut args = std::env::args().skip(1).peekable();
+    if args.peek().map(String::as_str) == Some("modes") {
+        let names: Vec<String> = args.skip(1).collect();
+        let five = [
+            "cbox-diffuse",
+            "cbox-rough",
+            "cbox-glossy",
+            "cbox-mirror",
+            "caustic",
+        ];
+        let names = if names.is_empty() {
+            five.map(String::from).to_vec()
+        } else {
+            names
+        };
+        return compare_modes(&names);
+    }
     let only = std::env::args().nth(1);
     let names: Vec<String> = match &only {
         Some(n) => vec![n.clone()],
