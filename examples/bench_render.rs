@@ -18,6 +18,7 @@
 
 use std::time::Instant;
 use wpbgi::bake::{BakeSettings, Quality};
+use wpbgi::bounce::BounceSettings;
 use wpbgi::cache::store::BakedCache;
 use wpbgi::image::{error_against, read_exr};
 use wpbgi::render::{render_final, FinalOutput, FinalSettings, GatherMode, GatherStats};
@@ -106,7 +107,11 @@ fn compare_modes(names: &[String]) -> Result<(), Box<dyn std::error::Error>> {
     for name in names {
         let scene = Scene::load(&data(&format!("{name}.gltf")))?;
         let reference = read_exr(&data(&format!("{name}_d8_ref.exr")))?;
-        let settings = BakeSettings::from_quality(Quality::Preview);
+        // What `wpbgi bake SCENE` does: the preview preset with automatic bounces.
+        let settings = BakeSettings {
+            bounces: BounceSettings::auto(),
+            ..BakeSettings::from_quality(Quality::Preview)
+        };
         let (_, cache, _) = common::bake_cache(&scene, &settings, &format!("{name}-modes"))?;
         for size in [256, 512] {
             let camera = scene.default_camera(size, size)?;
