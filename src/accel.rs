@@ -10,7 +10,7 @@
 //! and every traversal uses a unit direction (t never exceeds the diagonal inside the scene), so
 //! the dilation always covers the drift. Negative-zero direction components are made positive
 //! (see [`unit`]), and the traversal ray starts slightly behind the true origin because obvhs
-//! culls nodes that end before an absolute t of 1e-4 (see [`ORIGIN_SHIFT`]).
+//! culls nodes that end before an absolute t of 1e-4 (see `ORIGIN_SHIFT`).
 
 use crate::geometry::triangle::{TriangleHit, WatertightRay};
 use crate::scene::Scene;

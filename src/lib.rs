@@ -2,7 +2,7 @@
 //!
 //! Wavelet point-based global illumination for glTF and USD pipelines. This crate reads a scene
 //! whose materials are Mitsuba 3's `diffuse`, `roughconductor` and `roughdielectric`, and renders
-//! it; the reference path tracer in [`reference`] is the ground truth that every faster method in
+//! it; the reference path tracer in [`reference`](mod@reference) is the ground truth that every faster method in
 //! the crate is measured against.
 //!
 //! The library never prints and never exits: every fallible operation returns

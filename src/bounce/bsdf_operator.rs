@@ -35,8 +35,8 @@
 //! - [`BsdfOperator::outgoing`] drops the negative values thresholding leaves and scales the
 //!   outgoing flux to what the albedo lets through, so thresholding neither creates energy (a
 //!   stiff scene's bounces would diverge) nor loses it (they would fall short).
-//! - RGB: V holds RGB coefficients (a conductor's Fresnel is coloured), and D[b] = Σ_a C[a] ⊙
-//!   V[b][a] channel by channel.
+//! - RGB: V holds RGB coefficients (a conductor's Fresnel is coloured), and D\[b\] = Σ_a C\[a\] ⊙
+//!   V\[b\]\[a\] channel by channel.
 
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::gather::microbuffer::Microbuffer;
@@ -260,7 +260,7 @@ pub fn kernel(bsdf: &Bsdf, n: u32) -> Kernel {
 
 /// A BSDF's dense kernel on the texel grid.
 pub struct Kernel {
-    /// K[o][i].
+    /// K\[o\]\[i\].
     pub rows: Vec<Vec<Rgb>>,
     /// Per incoming texel, the fraction of its flux the BSDF sends out (both sides).
     pub albedo: Vec<Rgb>,

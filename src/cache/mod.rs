@@ -114,7 +114,7 @@ pub fn write(path: &Path, hash: [u8; 16], sections: &[(&str, &[u8])]) -> Result<
     .map_err(|e| werr(e.to_string()))
 }
 
-/// The bytes of a cache holding `sections`, in memory (what [`write`] would write), for a
+/// The bytes of a cache holding `sections`, in memory (what [`write()`] would write), for a
 /// reader that needs a cache that never goes to disk: the bake's bounces read the tree of
 /// the previous bounce this way.
 pub fn to_bytes(hash: [u8; 16], sections: &[(&str, &[u8])]) -> Result<Vec<u8>, String> {

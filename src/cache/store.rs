@@ -332,7 +332,7 @@ impl BakedCache {
         Self::from_cache(Cache::parse(path, bytes, None)?)
     }
 
-    /// The cache that [`write`] would write of `baked`, without a file (`path` only names it
+    /// The cache that [`write()`] would write of `baked`, without a file (`path` only names it
     /// in errors).
     pub fn in_memory(path: &Path, baked: &Baked) -> Result<BakedCache, CacheError> {
         let werr = |reason: String| CacheError::Write {

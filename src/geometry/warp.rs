@@ -23,7 +23,7 @@ pub fn square_to_uniform_disk_concentric(u: Vec2) -> Vec2 {
 
 /// Inverse of [`square_to_uniform_disk_concentric`] (Shirley & Chiu, as Mitsuba's
 /// `uniform_disk_to_square_concentric`). Each octant's angle is the arctangent of the smaller
-/// coordinate over the larger, in [−1, 1], where [`atan_unit`] needs no range reduction (the
+/// coordinate over the larger, in [−1, 1], where `atan_unit` needs no range reduction (the
 /// microbuffer looks up every splat here, and libm's `atan2` took 10 % of a render).
 #[inline]
 pub fn uniform_disk_to_square_concentric(p: Vec2) -> Vec2 {

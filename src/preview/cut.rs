@@ -59,7 +59,7 @@ pub enum Colouring {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Footprint {
     /// Splatted onto the G-buffer with radiance cache splatting's weight, over
-    /// [`SPLAT_SPREAD`] radii.
+    /// its sphere and [`SPLAT_RIM`] disc radii.
     Splat,
     /// A depth-tested disc of the node's radius in its plane (a curved node's disc faces the
     /// eye): the point-cloud view.
