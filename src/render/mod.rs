@@ -288,11 +288,21 @@ pub fn render_final(
     Ok(out)
 }
 
-/// The primary hit through each pixel centre: mesh, shading normal, distance, and whether
-/// the surface is smooth enough to start a specular chain.
-type CentreHit = Option<(u32, Vec3, f32, bool)>;
+/// The primary hit through a pixel's centre.
+#[derive(Clone, Copy)]
+struct CentreHit {
+    mesh: u32,
+    normal: Vec3,
+    depth: f32,
+    /// Smooth enough to start a specular chain.
+    smooth: bool,
+}
 
-fn centre_hits(ctx: &RenderContext, camera: &Camera, specular_below: f32) -> Vec<CentreHit> {
+fn centre_hits(
+    ctx: &RenderContext,
+    camera: &Camera,
+    specular_below: f32,
+) -> Vec<Option<CentreHit>> {
     let (w, h) = (camera.width, camera.height);
     (0..w * h)
         .into_par_iter()
@@ -301,11 +311,13 @@ fn centre_hits(ctx: &RenderContext, camera: &Camera, specular_below: f32) -> Vec
             let (o, d) = camera.generate_ray(film);
             intersect(ctx, o, d).map(|hit| {
                 let m = &ctx.scene.materials[ctx.scene.meshes[hit.mesh as usize].material];
-                let smooth = m
-                    .bsdf_at(&ctx.scene.textures, hit.uv)
-                    .alpha()
-                    .is_some_and(|a| a < specular_below);
-                (hit.mesh, hit.frame.n, hit.t, smooth)
+                let bsdf = m.bsdf_at(&ctx.scene.textures, hit.uv);
+                CentreHit {
+                    mesh: hit.mesh,
+                    normal: hit.frame.n,
+                    depth: hit.t,
+                    smooth: bsdf.alpha().is_some_and(|a| a < specular_below),
+                }
             })
         })
         .collect()
@@ -314,9 +326,9 @@ fn centre_hits(ctx: &RenderContext, camera: &Camera, specular_below: f32) -> Vec
 /// Whether pixel `(x, y)` needs many samples: it lies on an edge of what its centre rays see,
 /// or it sees a mirror or clear glass (whose reflected and refracted edges the centre ray
 /// cannot tell).
-fn is_edge(centre: &[CentreHit], w: u32, h: u32, x: u32, y: u32) -> bool {
+fn is_edge(centre: &[Option<CentreHit>], w: u32, h: u32, x: u32, y: u32) -> bool {
     let here = centre[(y * w + x) as usize];
-    if here.is_some_and(|c| c.3) {
+    if here.is_some_and(|c| c.smooth) {
         return true;
     }
     let neighbours = [(-1i64, 0i64), (1, 0), (0, -1), (0, 1)];
@@ -329,7 +341,9 @@ fn is_edge(centre: &[CentreHit], w: u32, h: u32, x: u32, y: u32) -> bool {
         match (here, there) {
             (None, None) => false,
             (Some(a), Some(b)) => {
-                a.0 != b.0 || a.1.dot(b.1) < 0.9 || (a.2 - b.2).abs() > 0.05 * a.2.min(b.2)
+                a.mesh != b.mesh
+                    || a.normal.dot(b.normal) < 0.9
+                    || (a.depth - b.depth).abs() > 0.05 * a.depth.min(b.depth)
             }
             _ => true,
         }
@@ -348,7 +362,7 @@ struct TilePrimary {
 fn primary_tile(
     ctx: &RenderContext,
     camera: &Camera,
-    centre: &[CentreHit],
+    centre: &[Option<CentreHit>],
     settings: &PrimarySettings,
     tx: u32,
     ty: u32,
