@@ -41,9 +41,6 @@ const SCENES: [&str; 5] = [
     "caustic",
 ];
 
-/// Samples per pixel of the Mitsuba anchor.
-const ANCHOR_SPP: [u32; 2] = [16, 256];
-
 /// One scene's anchors, at the first surfel count.
 struct Anchors {
     name: String,
@@ -55,7 +52,7 @@ struct Anchors {
     recorded: f64,
     previous: Option<f64>,
     same_cache: bool,
-    /// Per spp of [`ANCHOR_SPP`]: Mitsuba's seconds and relMSE, raw and with OIDN.
+    /// Per spp of [`common::ANCHOR_SPP`]: Mitsuba's seconds and relMSE, raw and with OIDN.
     mitsuba: Vec<(u32, Value)>,
 }
 
@@ -145,7 +142,7 @@ fn main() -> common::Result<()> {
                 .transpose()?;
             let mitsuba = python
                 .as_ref()
-                .map(|py| mitsuba_anchor(Path::new(py), &scene_path, &reference_path))
+                .map(|py| common::mitsuba_anchor(Path::new(py), &scene_path, &reference_path))
                 .transpose()?
                 .unwrap_or_default();
             anchors.push(Anchors {
@@ -269,32 +266,4 @@ fn previous_bounces(bin: &Path, scene: &Path, points: usize) -> common::Result<f
         .as_array()
         .ok_or("the previous binary reported no bounce times")?;
     Ok(seconds.iter().filter_map(Value::as_f64).sum())
-}
-
-/// `scripts/anchor/mitsuba_oidn.py` on one scene: one JSON object per spp of [`ANCHOR_SPP`].
-fn mitsuba_anchor(
-    python: &Path,
-    scene: &Path,
-    reference: &Path,
-) -> common::Result<Vec<(u32, Value)>> {
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/anchor/mitsuba_oidn.py");
-    let run = Command::new(python)
-        .arg(script)
-        .arg(scene)
-        .arg(reference)
-        .arg("8")
-        .args(ANCHOR_SPP.map(|s| s.to_string()))
-        .output()?;
-    if !run.status.success() {
-        return Err(format!(
-            "the Mitsuba anchor failed: {}",
-            String::from_utf8_lossy(&run.stderr)
-        )
-        .into());
-    }
-    Ok(String::from_utf8_lossy(&run.stdout)
-        .lines()
-        .filter_map(|l| serde_json::from_str::<Value>(l).ok())
-        .filter_map(|v| Some((v["spp"].as_u64()? as u32, v)))
-        .collect())
 }

@@ -14,7 +14,11 @@
 //! gather modes on the default multi-bounce cache of each of the five reference scenes, at
 //! 256² against Mitsuba's max_depth 8 reference and at 512² against the first mode's image:
 //! every receiver gathering by FPBGI (the previous default), the sparse FPBGI gather (the
-//! default), and the paths gather at 16 and 64 rays, each with its render seconds.
+//! default), and the paths gather at 16 and 64 rays, each with its render seconds. At 256²,
+//! this version's default `wpbgi render` of the same cache (`cargo build --release` first)
+//! beside, with `WPBGI_PREVIOUS=/path/to/an/older/wpbgi`, that binary's, and with
+//! `WPBGI_ANCHOR_PYTHON` (see `bench_bounces`) Mitsuba + OIDN at 256 spp, with the ratios.
+//! `WPBGI_SIZES=256` renders 256² only.
 
 use std::time::Instant;
 use wpbgi::bake::{BakeSettings, Quality};
@@ -99,11 +103,67 @@ fn modes() -> Vec<(&'static str, FinalSettings)> {
     ]
 }
 
-/// `bench_render modes`: one table row per scene, size and mode.
+/// An anchor's render seconds and relMSE against Mitsuba's max_depth 8 reference at 256².
+type Anchor = Option<(f64, f64)>;
+
+/// `wpbgi render` of binary `bin` (its defaults) on `cache` at 256², as a user runs it, from
+/// the error record it writes beside its image: its render seconds and relMSE.
+fn cli_render(
+    bin: &std::path::Path,
+    name: &str,
+    cache: &BakedCache,
+) -> Result<(f64, f64), Box<dyn std::error::Error>> {
+    let out = std::env::temp_dir().join("wpbgi-bench-cli-render.exr");
+    let run = std::process::Command::new(bin)
+        .arg("render")
+        .arg(data(&format!("{name}.gltf")))
+        .arg("--cache")
+        .arg(&cache.cache.path)
+        .args(["--size", "256x256", "-o"])
+        .arg(&out)
+        .arg("--reference")
+        .arg(data(&format!("{name}_d8_ref.exr")))
+        .output()?;
+    if !run.status.success() {
+        return Err(format!(
+            "{}: {}",
+            bin.display(),
+            String::from_utf8_lossy(&run.stderr)
+        )
+        .into());
+    }
+    let record: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.with_extension("error.json"))?)?;
+    let field = |k: &str| record[k].as_f64().ok_or("no error record");
+    Ok((field("render_s")?, field("rel_mse")?))
+}
+
+/// Mitsuba + OIDN at 256 spp on scene `name` (`scripts/anchor`), through `python`.
+fn oidn_anchor(python: &std::path::Path, name: &str) -> Result<Anchor, Box<dyn std::error::Error>> {
+    let scene = data(&format!("{name}.gltf"));
+    let runs = common::mitsuba_anchor(python, &scene, &data(&format!("{name}_d8_ref.exr")))?;
+    Ok(runs
+        .iter()
+        .find(|(spp, _)| *spp == 256)
+        .and_then(|(_, v)| Some((v["oidn_total_s"].as_f64()?, v["oidn"][1].as_f64()?))))
+}
+
+/// `bench_render modes`: one table row per scene, size and mode, rendered in this process;
+/// and at 256² this version's default `wpbgi render` beside the previous version's
+/// (`WPBGI_PREVIOUS`) and Mitsuba + OIDN at 256 spp (`WPBGI_ANCHOR_PYTHON`), each a fresh
+/// process, with the ratios, from the same run. `WPBGI_SIZES=256` skips 512².
 fn compare_modes(names: &[String]) -> Result<(), Box<dyn std::error::Error>> {
+    let previous = std::env::var_os("WPBGI_PREVIOUS");
+    let python = std::env::var_os("WPBGI_ANCHOR_PYTHON");
+    let this_bin = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("target/release/wpbgi");
+    let sizes: Vec<u32> = std::env::var("WPBGI_SIZES")
+        .ok()
+        .map(|v| v.split(',').filter_map(|s| s.parse().ok()).collect())
+        .unwrap_or_else(|| vec![256, 512]);
     println!("threads: {}", rayon::current_num_threads());
     println!("| scene | size | mode | render s | gather s | relMSE | interpolated receivers |");
     println!("|---|---|---|---:|---:|---|---:|");
+    let mut anchors: Vec<(String, [Anchor; 3])> = Vec::new();
     for name in names {
         let scene = Scene::load(&data(&format!("{name}.gltf")))?;
         let reference = read_exr(&data(&format!("{name}_d8_ref.exr")))?;
@@ -113,7 +173,7 @@ fn compare_modes(names: &[String]) -> Result<(), Box<dyn std::error::Error>> {
             ..BakeSettings::from_quality(Quality::Preview)
         };
         let (_, cache, _) = common::bake_cache(&scene, &settings, &format!("{name}-modes"))?;
-        for size in [256, 512] {
+        for &size in &sizes {
             let camera = scene.default_camera(size, size)?;
             let mut first: Option<FinalOutput> = None;
             for (mode, settings) in modes() {
@@ -121,22 +181,67 @@ fn compare_modes(names: &[String]) -> Result<(), Box<dyn std::error::Error>> {
                 let out = render_final(&scene, &cache, &camera, &settings, &|_, _| {})?;
                 let seconds = t.elapsed().as_secs_f64();
                 // At 256² against Mitsuba; at 512² (no reference) against the first mode.
-                let against = if size == 256 {
+                let (against, image) = if size == 256 {
                     ("Mitsuba", &reference)
                 } else {
                     ("first", &first.as_ref().unwrap_or(&out).beauty)
                 };
-                let (_, rel) = error_against(&out.beauty, against.1).ok_or("size")?;
+                let (_, rel) = error_against(&out.beauty, image).ok_or("size")?;
                 println!(
-                    "| {name} | {size}² | {mode} | {seconds:.2} | {:.2} | {rel:.3e} ({}) | {} of {} |",
+                    "| {name} | {size}² | {mode} | {seconds:.2} | {:.2} | {rel:.3e} ({against}) | {} of {} |",
                     gather_seconds(&out),
-                    against.0,
                     out.stats.interpolated,
                     out.stats.receivers
                 );
                 first.get_or_insert(out);
             }
         }
+        // Fresh processes: a render in this one, after a bake of several GB, ran up to 25 %
+        // slower than the same render from the command line on the glass scenes.
+        let this = match this_bin.exists() {
+            true => Some(cli_render(&this_bin, name, &cache)?),
+            false => None,
+        };
+        let before = match &previous {
+            Some(bin) => Some(cli_render(std::path::Path::new(bin), name, &cache)?),
+            None => None,
+        };
+        let oidn = match &python {
+            Some(py) => oidn_anchor(std::path::Path::new(py), name)?,
+            None => None,
+        };
+        anchors.push((name.clone(), [this, before, oidn]));
+    }
+    println!();
+    println!(
+        "`wpbgi render` (defaults) at 256², this version against the previous one and Mitsuba + \
+         OIDN at 256 spp, same run (render s, relMSE against Mitsuba's max_depth 8):"
+    );
+    println!(
+        "| scene | this version | previous version | Mitsuba + OIDN | previous s / this | \
+         relMSE / previous's | this s / OIDN's | relMSE / OIDN's |"
+    );
+    println!("|---|---|---|---|---:|---:|---:|---:|");
+    let shown = |a: &Anchor| a.map_or("not run".into(), |(s, r)| format!("{s:.2}, {r:.3e}"));
+    let ratio = |a: Option<f64>, b: Option<f64>| match (a, b) {
+        (Some(a), Some(b)) => format!("{:.2}", a / b),
+        _ => "-".into(),
+    };
+    for (name, [this, before, oidn]) in &anchors {
+        let (s, r) = (this.map(|a| a.0), this.map(|a| a.1));
+        println!(
+            "| {name} | {} | {} | {} | {} | {} | {} | {} |",
+            shown(this),
+            shown(before),
+            shown(oidn),
+            ratio(before.map(|a| a.0), s),
+            ratio(r, before.map(|a| a.1)),
+            ratio(s, oidn.map(|a| a.0)),
+            ratio(r, oidn.map(|a| a.1)),
+        );
+    }
+    if !this_bin.exists() {
+        println!("(this version's binary not found: `cargo build --release` first)");
     }
     Ok(())
 }

@@ -1,7 +1,9 @@
 //! What the benchmarks share: the reference scenes, a bake written to and read back from a
 //! cache file, and the path tracer given a wall-clock budget.
 
+use serde_json::Value;
 use std::path::{Path, PathBuf};
+use std::process::Command;
 use std::time::{Duration, Instant};
 use wpbgi::bake::{bake, BakeSettings, Baked};
 use wpbgi::cache::store::{bake_hash, write, BakedCache};
@@ -48,4 +50,31 @@ pub fn path_tracer_for(
         ..Default::default()
     };
     Ok(render(scene, camera, &settings, &|_| {})?)
+}
+
+/// The sample counts the Mitsuba anchor runs at.
+pub const ANCHOR_SPP: [u32; 2] = [16, 256];
+
+/// `scripts/anchor/mitsuba_oidn.py` on one scene: one JSON object per spp of [`ANCHOR_SPP`].
+pub fn mitsuba_anchor(python: &Path, scene: &Path, reference: &Path) -> Result<Vec<(u32, Value)>> {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/anchor/mitsuba_oidn.py");
+    let run = Command::new(python)
+        .arg(script)
+        .arg(scene)
+        .arg(reference)
+        .arg("8")
+        .args(ANCHOR_SPP.map(|s| s.to_string()))
+        .output()?;
+    if !run.status.success() {
+        return Err(format!(
+            "the Mitsuba anchor failed: {}",
+            String::from_utf8_lossy(&run.stderr)
+        )
+        .into());
+    }
+    Ok(String::from_utf8_lossy(&run.stdout)
+        .lines()
+        .filter_map(|l| serde_json::from_str::<Value>(l).ok())
+        .filter_map(|v| Some((v["spp"].as_u64()? as u32, v)))
+        .collect())
 }

@@ -476,13 +476,15 @@ fn gather_tile(
     // The grid's anchors and the receivers that cannot interpolate gather first; then the
     // others interpolate where their cell allows, and gather where it does not.
     let plan = SparsePlan::new(receivers, origin, size, width, settings.sparse);
-    let first: Vec<usize> = (0..receivers.len()).filter(|&k| plan.first[k]).collect();
+    let first: Vec<usize> = (0..receivers.len())
+        .filter(|&k| plan.gathers_first(k))
+        .collect();
     let mut value = vec![Rgb::ZERO; receivers.len()];
     gather_set(
         senders, receivers, &first, &plan, settings, &mut value, &mut stats,
     );
     let mut second = Vec::new();
-    for k in (0..receivers.len()).filter(|&k| !plan.first[k]) {
+    for k in (0..receivers.len()).filter(|&k| !plan.gathers_first(k)) {
         match plan.interpolate(receivers, k, |j| value[j]) {
             Some(e) => value[k] = e,
             None => second.push(k),

@@ -39,13 +39,18 @@ pub struct SparsePlan {
     /// Per receiver: its pixel's receiver is alone and diffuse (see the module docs).
     eligible: Vec<bool>,
     /// Per receiver: it gathers in the first pass (anchors and the ineligible).
-    pub first: Vec<bool>,
+    first: Vec<bool>,
     /// Per pixel of the tile (row-major within it): its eligible receiver, or `u32::MAX`.
     at: Vec<u32>,
     /// The tile's origin in the image, its size, and the image's width.
     origin: (u32, u32),
     size: (u32, u32),
     width: u32,
+}
+
+/// Image pixel `pixel`'s coordinates within the tile at `origin`, in an image `width` wide.
+fn local(pixel: u32, origin: (u32, u32), width: u32) -> (u32, u32) {
+    (pixel % width - origin.0, pixel / width - origin.1)
 }
 
 /// Whether tile-local coordinate `c` of a tile `n` pixels wide is on the anchor grid.
@@ -70,25 +75,29 @@ impl SparsePlan {
         width: u32,
         sparse: bool,
     ) -> SparsePlan {
-        let local = |pixel: u32| {
-            let (x, y) = (pixel % width - origin.0, pixel / width - origin.1);
-            (x, y, (y * size.0 + x) as usize)
-        };
+        // Each receiver's tile-local pixel, and its index in the tile.
+        let cells: Vec<(u32, u32, usize)> = receivers
+            .iter()
+            .map(|r| {
+                let (x, y) = local(r.pixel, origin, width);
+                (x, y, (y * size.0 + x) as usize)
+            })
+            .collect();
         let mut count = vec![0u32; (size.0 * size.1) as usize];
-        for r in receivers {
-            count[local(r.pixel).2] += 1;
+        for &(_, _, i) in &cells {
+            count[i] += 1;
         }
         let eligible: Vec<bool> = receivers
             .iter()
-            .map(|r| sparse && matches!(r.bsdf, Bsdf::Diffuse(_)) && count[local(r.pixel).2] == 1)
+            .zip(&cells)
+            .map(|(r, c)| sparse && matches!(r.bsdf, Bsdf::Diffuse(_)) && count[c.2] == 1)
             .collect();
         let mut at = vec![u32::MAX; count.len()];
-        let first = receivers
+        let first = cells
             .iter()
             .zip(&eligible)
             .enumerate()
-            .map(|(k, (r, &e))| {
-                let (x, y, i) = local(r.pixel);
+            .map(|(k, (&(x, y, i), &e))| {
                 if e {
                     at[i] = k as u32;
                 }
@@ -105,6 +114,11 @@ impl SparsePlan {
         }
     }
 
+    /// Whether receiver `k` gathers in the first pass (an anchor, or not eligible).
+    pub fn gathers_first(&self, k: usize) -> bool {
+        self.first[k]
+    }
+
     /// Whether receiver `k` is eligible: its gather's value is its irradiance E.
     pub fn eligible(&self, k: usize) -> bool {
         self.eligible[k]
@@ -119,10 +133,7 @@ impl SparsePlan {
         value: impl Fn(usize) -> Rgb,
     ) -> Option<Rgb> {
         let r = &receivers[k];
-        let (x, y) = (
-            r.pixel % self.width - self.origin.0,
-            r.pixel / self.width - self.origin.1,
-        );
+        let (x, y) = local(r.pixel, self.origin, self.width);
         let ((x0, x1), (y0, y1)) = (cell_of(x, self.size.0), cell_of(y, self.size.1));
         let fx = (x - x0) as f32 / (x1 - x0) as f32;
         let fy = (y - y0) as f32 / (y1 - y0) as f32;
@@ -189,7 +200,9 @@ mod tests {
     fn interpolates_within_a_surface_where_the_corners_agree() {
         let receivers = plane();
         let plan = SparsePlan::new(&receivers, (0, 0), (8, 8), 8, true);
-        let anchors: Vec<u32> = (0..64).filter(|&k| plan.first[k as usize]).collect();
+        let anchors: Vec<u32> = (0..64)
+            .filter(|&k| plan.gathers_first(k as usize))
+            .collect();
         let expected: Vec<u32> = (0..64)
             .filter(|k| [0, 4, 7].contains(&(k % 8)) && [0, 4, 7].contains(&(k / 8)))
             .collect();
@@ -199,7 +212,7 @@ mod tests {
             let (x, y) = ((k % 8) as f32, (k / 8) as f32);
             Rgb::splat(1.0 + 0.01 * x + 0.02 * y + 0.001 * x * y)
         };
-        for k in (0..64).filter(|&k| !plan.first[k]) {
+        for k in (0..64).filter(|&k| !plan.gathers_first(k)) {
             let got = plan.interpolate(&receivers, k, e).expect("interpolates");
             assert!(
                 (got - e(k)).abs().max_element() < 1e-6,
@@ -232,9 +245,9 @@ mod tests {
             k: Rgb::ONE,
             specular_reflectance: Rgb::ONE,
         });
-        assert!(SparsePlan::new(&shiny, (0, 0), (8, 8), 8, true).first[k]);
+        assert!(SparsePlan::new(&shiny, (0, 0), (8, 8), 8, true).gathers_first(k));
         // Off, everyone gathers.
         let dense = SparsePlan::new(&receivers, (0, 0), (8, 8), 8, false);
-        assert!(dense.first.iter().all(|&f| f));
+        assert!((0..64).all(|k| dense.gathers_first(k)));
     }
 }
