@@ -412,6 +412,7 @@ fn primary_tile(
                     pixel,
                     weight,
                     gather_weight: gathers.then(|| weight * block as f32),
+                    quarter: (side > 1).then_some(quarter as u8),
                 };
                 let r = trace_primary(ctx, settings, cs, &mut sampler, &mut out.receivers);
                 sum.direct += r.direct;
@@ -474,7 +475,9 @@ fn gather_tile(
         return (out, stats);
     }
     // The grid's anchors and the receivers that cannot interpolate gather first; then the
-    // others interpolate where their cell allows, and gather where it does not.
+    // others interpolate where their cell allows; where it does not, the finer grid's
+    // receivers gather, the rest interpolate from the finer cells, and what still fails
+    // gathers.
     let plan = SparsePlan::new(receivers, origin, size, width, settings.sparse);
     let first: Vec<usize> = (0..receivers.len())
         .filter(|&k| plan.gathers_first(k))
@@ -483,17 +486,28 @@ fn gather_tile(
     gather_set(
         senders, receivers, &first, &plan, settings, &mut value, &mut stats,
     );
-    let mut second = Vec::new();
+    let (mut fine, mut finer) = (Vec::new(), Vec::new());
     for k in (0..receivers.len()).filter(|&k| !plan.gathers_first(k)) {
-        match plan.interpolate(receivers, k, |j| value[j]) {
+        match plan.interpolate(receivers, k, sparse::CELL, |j| value[j]) {
             Some(e) => value[k] = e,
-            None => second.push(k),
+            None if plan.on_fine_grid(receivers, k) => fine.push(k),
+            None => finer.push(k),
         }
     }
     gather_set(
-        senders, receivers, &second, &plan, settings, &mut value, &mut stats,
+        senders, receivers, &fine, &plan, settings, &mut value, &mut stats,
     );
-    stats.interpolated = (receivers.len() - first.len() - second.len()) as u64;
+    let mut last = Vec::new();
+    for k in finer {
+        match plan.interpolate(receivers, k, sparse::FINE_CELL, |j| value[j]) {
+            Some(e) => value[k] = e,
+            None => last.push(k),
+        }
+    }
+    gather_set(
+        senders, receivers, &last, &plan, settings, &mut value, &mut stats,
+    );
+    stats.interpolated = (receivers.len() - first.len() - fine.len() - last.len()) as u64;
     let out = receivers
         .iter()
         .enumerate()

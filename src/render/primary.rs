@@ -35,6 +35,24 @@ pub struct Receiver {
     pub bsdf: Bsdf,
     /// Direction towards the viewer, in `frame`.
     pub view: Vec3,
+    /// Which specular chain led here from the camera: 0 for a primary hit, otherwise a hash
+    /// of the meshes it met and the branch it took at each (reflection or refraction).
+    /// Neighbouring pixels' receivers with the same chain see one surface through the same
+    /// mirrors and glass, as primary hits see it directly ([`super::sparse`]).
+    pub chain: u64,
+    /// The quarter of its pixel whose gathering sample it came from (0–3, x first), or `None`
+    /// for a pixel of one sample.
+    pub quarter: Option<u8>,
+}
+
+/// The chain `chain` continued at mesh `mesh` by branch `branch` (see [`Receiver::chain`]):
+/// a SplitMix64 step over the pair, never 0.
+fn extend_chain(chain: u64, mesh: u32, branch: usize) -> u64 {
+    let mut z =
+        chain ^ ((u64::from(mesh) << 8) | branch as u64).wrapping_add(0x9e37_79b9_7f4a_7c15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    (z ^ (z >> 31)).max(1)
 }
 
 /// What one camera sample contributes directly, and the first hit's AOVs.
@@ -87,6 +105,8 @@ pub struct CameraSample {
     pub pixel: u32,
     pub weight: Rgb,
     pub gather_weight: Option<Rgb>,
+    /// The quarter of the pixel it gathers for, when the pixel has several samples.
+    pub quarter: Option<u8>,
 }
 
 /// Trace camera sample `cs`, pushing its receivers.
@@ -103,15 +123,16 @@ pub fn trace_primary(
         pixel,
         weight,
         gather_weight,
+        quarter,
     } = cs;
     let gather_scale = gather_weight.map(|g| g / weight);
     let mut out = PrimarySample {
         depth: f32::INFINITY,
         ..Default::default()
     };
-    let mut stack = vec![(o, d, weight, 0u32)];
+    let mut stack = vec![(o, d, weight, 0u32, 0u64)];
     let mut first = true;
-    while let Some((o, d, throughput, chain)) = stack.pop() {
+    while let Some((o, d, throughput, chain, path)) = stack.pop() {
         let Some(hit) = intersect(ctx, o, d) else {
             // The environment, seen directly or along the chain.
             if let Some(env) = &ctx.scene.environment {
@@ -137,11 +158,12 @@ pub fn trace_primary(
         let smooth = bsdf.alpha().is_some_and(|a| a < settings.specular_below);
         if smooth {
             if chain < settings.chain_depth && within(settings.max_depth, chain + 2) {
-                for (wo, w) in specular_branches(&bsdf, view, sampler) {
+                for (branch, wo, w) in specular_branches(&bsdf, view, sampler) {
                     let t = throughput * w;
                     if max_component(t) > 1e-4 * max_component(weight) && t.is_finite() {
                         let world = hit.frame.to_world(wo).normalize();
-                        stack.push((hit.spawn(world), world, t, chain + 1));
+                        let path = extend_chain(path, hit.mesh, branch);
+                        stack.push((hit.spawn(world), world, t, chain + 1, path));
                     }
                 }
             }
@@ -164,6 +186,8 @@ pub fn trace_primary(
                 frame: hit.frame,
                 bsdf,
                 view,
+                chain: path,
+                quarter,
             });
         }
     }
@@ -176,7 +200,8 @@ pub fn trace_primary(
 /// The branches of a smooth surface: its mirror reflection and (for dielectrics) its
 /// refraction, each with its weight, so that the chain is deterministic instead of picking a
 /// branch at random. The BSDF is still sampled (its roughness, however small, is Mitsuba's).
-fn specular_branches(bsdf: &Bsdf, view: Vec3, sampler: &mut Sampler) -> Vec<(Vec3, Rgb)> {
+/// Each branch comes with its index: 0 reflects, 1 refracts.
+fn specular_branches(bsdf: &Bsdf, view: Vec3, sampler: &mut Sampler) -> Vec<(usize, Vec3, Rgb)> {
     let u = sampler.next_2d();
     let sample = |u0: f32| bsdf.sample(view, u0, u, TransportMode::Radiance);
     match bsdf {
@@ -187,18 +212,18 @@ fn specular_branches(bsdf: &Bsdf, view: Vec3, sampler: &mut Sampler) -> Vec<(Vec
             let mut out = Vec::new();
             if f > 0.0 {
                 if let Some(s) = sample(0.0) {
-                    out.push((s.wo, s.weight * f));
+                    out.push((0, s.wo, s.weight * f));
                 }
             }
             if f < 1.0 {
                 if let Some(s) = sample(1.0 - f32::EPSILON) {
-                    out.push((s.wo, s.weight * (1.0 - f)));
+                    out.push((1, s.wo, s.weight * (1.0 - f)));
                 }
             }
             out
         }
         _ => sample(sampler.next_1d())
-            .map(|s| (s.wo, s.weight))
+            .map(|s| (usize::from(s.wo.z < 0.0), s.wo, s.weight))
             .into_iter()
             .collect(),
     }

@@ -5,15 +5,31 @@
 //! shadows of indirect light; the albedo that multiplies it (a texture) may vary fast. So a
 //! tile's diffuse receivers are split:
 //!
-//! - **Eligible** receivers: a diffuse BSDF, alone in their pixel (edge pixels, with four
-//!   gathering samples, and specular chains always gather).
+//! - **Layers.** A pixel's receivers are its primary hit and the ends of its specular chains
+//!   (through a mirror, into and out of a glass), each with the signature of its chain
+//!   ([`Receiver::chain`]: the meshes met and the branches taken). The receivers of one chain
+//!   over neighbouring pixels see one surface through the same mirrors and glass, as the
+//!   primary hits see it directly: each chain is a layer of the image, interpolated as the
+//!   primary layer is.
+//! - **Quarters.** A pixel of many samples (an edge, a mirror, a glass) gathers once per
+//!   quarter of it; the receivers of one quarter over the pixels are a layer too, which
+//!   takes its corners from the same quarter of its anchors' pixels or from pixels of one
+//!   sample.
+//! - **Eligible** receivers: a diffuse BSDF, alone in their pixel's layer and quarter.
 //! - **Anchors**: the eligible receivers on the grid of every [`CELL`]-th row and column of
 //!   the tile (and its last row and column). They gather, and keep their irradiance E (the
 //!   cosine-weighted incident light over π: the outgoing radiance of a white diffuse surface).
-//! - The others take E from the four anchors at the corners of their cell, bilinearly, when
-//!   all four exist, lie on the receiver's mesh and plane (normals within 18°, offsets from
-//!   its tangent plane within a tenth of the distance) and agree with each other to
-//!   [`CONTRAST`] in luminance; otherwise they gather. Each multiplies E by its own albedo.
+//! - The others take E from their layer's receivers at the corners of their cell,
+//!   bilinearly, when all four exist, lie on the receiver's mesh and plane (normals within
+//!   18°, offsets from its tangent plane within a tenth of the distance) and agree with each
+//!   other to [`CONTRAST`] in luminance. A corner is the receiver of the same quarter, else
+//!   that of a whole pixel, else the first quarter on the receiver's surface. Each receiver
+//!   multiplies E by its own albedo.
+//! - **Finer cells.** Where a cell fails (an edge or a contact crosses it, a corner is
+//!   missing), the receivers on the grid of every [`FINE_CELL`]-th row and column inside it
+//!   gather, and the rest interpolate from the finer cells around them by the same rules;
+//!   what fails there gathers. An edge through a cell then costs the gathers along it, not
+//!   the whole cell.
 //!
 //! Everything is decided within the tile, in receiver order: the image is the same for any
 //! thread count.
@@ -21,9 +37,13 @@
 use super::primary::Receiver;
 use crate::bsdf::Bsdf;
 use crate::spectrum::{luminance, Rgb};
+use std::collections::HashMap;
 
 /// Pixels between anchors along a row or column.
 pub const CELL: u32 = 4;
+
+/// Pixels between the receivers that gather inside a cell that cannot interpolate.
+pub const FINE_CELL: u32 = 2;
 
 /// The most the brightest corner of a cell may exceed the darkest, relative to it, for the
 /// receivers inside to interpolate (see docs/render.md for the measure).
@@ -36,33 +56,43 @@ const SAME_PLANE: f32 = 0.1;
 
 /// Which of a tile's receivers gather, and how the others are interpolated.
 pub struct SparsePlan {
-    /// Per receiver: its pixel's receiver is alone and diffuse (see the module docs).
+    /// Per receiver: diffuse and alone in its pixel's layer and quarter (see the module docs).
     eligible: Vec<bool>,
     /// Per receiver: it gathers in the first pass (anchors and the ineligible).
     first: Vec<bool>,
-    /// Per pixel of the tile (row-major within it): its eligible receiver, or `u32::MAX`.
-    at: Vec<u32>,
+    /// Every eligible receiver by its place in the tile's layers.
+    at: HashMap<Key, u32>,
     /// The tile's origin in the image, its size, and the image's width.
     origin: (u32, u32),
     size: (u32, u32),
     width: u32,
 }
 
+/// A receiver's place in a tile's layers: its pixel's index in the tile (row-major), its
+/// chain and its quarter ([`Receiver::chain`], [`Receiver::quarter`]).
+type Key = (u32, u64, Option<u8>);
+
 /// Image pixel `pixel`'s coordinates within the tile at `origin`, in an image `width` wide.
 fn local(pixel: u32, origin: (u32, u32), width: u32) -> (u32, u32) {
     (pixel % width - origin.0, pixel / width - origin.1)
 }
 
-/// Whether tile-local coordinate `c` of a tile `n` pixels wide is on the anchor grid.
-fn on_grid(c: u32, n: u32) -> bool {
-    c.is_multiple_of(CELL) || c + 1 == n
+/// Whether tile-local coordinate `c` of a tile `n` pixels wide is on the grid of every
+/// `cell`-th line (and the last).
+fn on_grid(c: u32, n: u32, cell: u32) -> bool {
+    c.is_multiple_of(cell) || c + 1 == n
 }
 
-/// The anchor coordinates around `c` (`c` itself off the grid): the grid line at or below,
-/// and the next one above.
-fn cell_of(c: u32, n: u32) -> (u32, u32) {
-    let low = c - c % CELL;
-    (low, (low + CELL).min(n - 1))
+/// The grid lines of that grid around `c`, and where `c` lies between them (0 to 1).
+fn cell_of(c: u32, n: u32, cell: u32) -> (u32, u32, f32) {
+    let low = c - c % cell;
+    let high = (low + cell).min(n - 1);
+    let f = if high > low {
+        (c - low) as f32 / (high - low) as f32
+    } else {
+        0.0
+    };
+    (low, high, f)
 }
 
 impl SparsePlan {
@@ -75,33 +105,37 @@ impl SparsePlan {
         width: u32,
         sparse: bool,
     ) -> SparsePlan {
-        // Each receiver's tile-local pixel, and its index in the tile.
-        let cells: Vec<(u32, u32, usize)> = receivers
+        // Each receiver's tile-local pixel, and its place in the layers.
+        let cells: Vec<(u32, u32, Key)> = receivers
             .iter()
             .map(|r| {
                 let (x, y) = local(r.pixel, origin, width);
-                (x, y, (y * size.0 + x) as usize)
+                (x, y, (y * size.0 + x, r.chain, r.quarter))
             })
             .collect();
-        let mut count = vec![0u32; (size.0 * size.1) as usize];
-        for &(_, _, i) in &cells {
-            count[i] += 1;
+        let mut count: HashMap<Key, u32> = HashMap::new();
+        if sparse {
+            for &(_, _, key) in &cells {
+                *count.entry(key).or_default() += 1;
+            }
         }
         let eligible: Vec<bool> = receivers
             .iter()
             .zip(&cells)
-            .map(|(r, c)| sparse && matches!(r.bsdf, Bsdf::Diffuse(_)) && count[c.2] == 1)
+            .map(|(r, c)| {
+                sparse && matches!(r.bsdf, Bsdf::Diffuse(_)) && count.get(&c.2) == Some(&1)
+            })
             .collect();
-        let mut at = vec![u32::MAX; count.len()];
+        let mut at = HashMap::new();
         let first = cells
             .iter()
             .zip(&eligible)
             .enumerate()
-            .map(|(k, (&(x, y, i), &e))| {
+            .map(|(k, (&(x, y, key), &e))| {
                 if e {
-                    at[i] = k as u32;
+                    at.insert(key, k as u32);
                 }
-                !e || (on_grid(x, size.0) && on_grid(y, size.1))
+                !e || (on_grid(x, size.0, CELL) && on_grid(y, size.1, CELL))
             })
             .collect();
         SparsePlan {
@@ -124,39 +158,59 @@ impl SparsePlan {
         self.eligible[k]
     }
 
-    /// The irradiance of receiver `k` (not on the grid) from its cell's corners, given each
-    /// anchor's (`value(j)` for receiver j), or `None` where it must gather.
+    /// Whether receiver `k` lies on the finer grid ([`FINE_CELL`]): it gathers when its cell
+    /// cannot interpolate.
+    pub fn on_fine_grid(&self, receivers: &[Receiver], k: usize) -> bool {
+        let (x, y) = local(receivers[k].pixel, self.origin, self.width);
+        on_grid(x, self.size.0, FINE_CELL) && on_grid(y, self.size.1, FINE_CELL)
+    }
+
+    /// The receiver at the corner `pixel` (tile-local index) of receiver `r`'s cell: the
+    /// eligible receiver of its layer there (see the module docs), on `r`'s surface.
+    fn corner(&self, receivers: &[Receiver], r: &Receiver, pixel: u32) -> Option<usize> {
+        let quarters = [r.quarter, None, Some(0), Some(1), Some(2), Some(3)];
+        let mut tried = Vec::with_capacity(quarters.len());
+        quarters.into_iter().find_map(|q| {
+            if tried.contains(&q) {
+                return None;
+            }
+            tried.push(q);
+            let j = *self.at.get(&(pixel, r.chain, q))? as usize;
+            let c = &receivers[j];
+            let offset = c.p - r.p;
+            let same_surface = c.mesh == r.mesh
+                && c.frame.n.dot(r.frame.n) >= SAME_NORMAL
+                && r.frame.n.dot(offset).abs() <= SAME_PLANE * offset.length();
+            same_surface.then_some(j)
+        })
+    }
+
+    /// The irradiance of receiver `k` from the corners of its cell on the grid of every
+    /// `cell`-th line, given theirs (`value(j)` for receiver j), or `None` where it cannot
+    /// interpolate.
     pub fn interpolate(
         &self,
         receivers: &[Receiver],
         k: usize,
+        cell: u32,
         value: impl Fn(usize) -> Rgb,
     ) -> Option<Rgb> {
         let r = &receivers[k];
         let (x, y) = local(r.pixel, self.origin, self.width);
-        let ((x0, x1), (y0, y1)) = (cell_of(x, self.size.0), cell_of(y, self.size.1));
-        let fx = (x - x0) as f32 / (x1 - x0) as f32;
-        let fy = (y - y0) as f32 / (y1 - y0) as f32;
+        let (x0, x1, fx) = cell_of(x, self.size.0, cell);
+        let (y0, y1, fy) = cell_of(y, self.size.1, cell);
         let corners = [
             ((x0, y0), (1.0 - fx) * (1.0 - fy)),
             ((x1, y0), fx * (1.0 - fy)),
             ((x0, y1), (1.0 - fx) * fy),
             ((x1, y1), fx * fy),
         ];
-        // Every corner must be an anchor on the receiver's surface.
         let mut sum = Rgb::ZERO;
         let (mut lo, mut hi) = (f32::INFINITY, 0.0f32);
-        for ((cx, cy), w) in corners {
-            let j = self.at[(cy * self.size.0 + cx) as usize];
-            let c = receivers.get(j as usize)?;
-            let offset = c.p - r.p;
-            let same_surface = c.mesh == r.mesh
-                && c.frame.n.dot(r.frame.n) >= SAME_NORMAL
-                && r.frame.n.dot(offset).abs() <= SAME_PLANE * offset.length();
-            if !same_surface {
-                return None;
-            }
-            let e = value(j as usize);
+        // A receiver on a grid line takes its two corners on that line.
+        for ((cx, cy), w) in corners.into_iter().filter(|&(_, w)| w > 0.0) {
+            let j = self.corner(receivers, r, cy * self.size.0 + cx)?;
+            let e = value(j);
             (lo, hi) = (lo.min(luminance(e)), hi.max(luminance(e)));
             sum += e * w;
         }
@@ -188,6 +242,8 @@ mod tests {
                     reflectance: Rgb::splat(0.5),
                 }),
                 view: Vec3::Z,
+                chain: 0,
+                quarter: None,
             })
             .collect()
     }
@@ -213,7 +269,9 @@ mod tests {
             Rgb::splat(1.0 + 0.01 * x + 0.02 * y + 0.001 * x * y)
         };
         for k in (0..64).filter(|&k| !plan.gathers_first(k)) {
-            let got = plan.interpolate(&receivers, k, e).expect("interpolates");
+            let got = plan
+                .interpolate(&receivers, k, CELL, e)
+                .expect("interpolates");
             assert!(
                 (got - e(k)).abs().max_element() < 1e-6,
                 "{k}: {got} vs {}",
@@ -226,7 +284,7 @@ mod tests {
         let changed = |f: &dyn Fn(&mut Receiver)| {
             let mut r = receivers.clone();
             f(&mut r[corner]);
-            SparsePlan::new(&r, (0, 0), (8, 8), 8, true).interpolate(&r, k, e)
+            SparsePlan::new(&r, (0, 0), (8, 8), 8, true).interpolate(&r, k, CELL, e)
         };
         assert!(changed(&|r| r.mesh = 1).is_none(), "another mesh");
         let turned = Frame::from_normal(Vec3::new(0.0, 0.4, 1.0).normalize());
@@ -234,7 +292,7 @@ mod tests {
         assert!(changed(&|r| r.p.z = 0.5).is_none(), "a step off the plane");
         let bright = |j: usize| if j == corner { e(j) * 1.4 } else { e(j) };
         assert!(
-            plan.interpolate(&receivers, k, bright).is_none(),
+            plan.interpolate(&receivers, k, CELL, bright).is_none(),
             "disagreeing corners"
         );
         // A conductor is not eligible: it gathers.
@@ -249,5 +307,136 @@ mod tests {
         // Off, everyone gathers.
         let dense = SparsePlan::new(&receivers, (0, 0), (8, 8), 8, false);
         assert!((0..64).all(|k| dense.gathers_first(k)));
+    }
+
+    /// E = 1 + 0.01 x + 0.02 y + 0.001 x y at pixel (x, y) of a tile `side` wide: bilinear,
+    /// with corners within [`CONTRAST`] of each other.
+    fn bilinear(p: Vec3) -> Rgb {
+        Rgb::splat(1.0 + 0.01 * p.x + 0.02 * p.y + 0.001 * p.x * p.y)
+    }
+
+    /// Interpolate a tile as the render does (first pass, coarse cells, the finer grid, finer
+    /// cells), with every gather returning `bilinear` at the receiver; returns each
+    /// receiver's value and whether it gathered.
+    fn passes(receivers: &[Receiver], size: (u32, u32)) -> Vec<(Rgb, bool)> {
+        let plan = SparsePlan::new(receivers, (0, 0), size, size.0, true);
+        let mut out: Vec<Option<(Rgb, bool)>> = (0..receivers.len())
+            .map(|k| {
+                plan.gathers_first(k)
+                    .then(|| (bilinear(receivers[k].p), true))
+            })
+            .collect();
+        let mut finer = Vec::new();
+        for k in 0..receivers.len() {
+            if out[k].is_some() {
+                continue;
+            }
+            let value = |j: usize| out[j].expect("a corner has its value").0;
+            out[k] = match plan.interpolate(receivers, k, CELL, value) {
+                Some(e) => Some((e, false)),
+                None if plan.on_fine_grid(receivers, k) => Some((bilinear(receivers[k].p), true)),
+                None => {
+                    finer.push(k);
+                    None
+                }
+            };
+        }
+        for k in finer {
+            let value = |j: usize| out[j].expect("a corner has its value").0;
+            out[k] = Some(match plan.interpolate(receivers, k, FINE_CELL, value) {
+                Some(e) => (e, false),
+                None => (bilinear(receivers[k].p), true),
+            });
+        }
+        out.into_iter()
+            .map(|v| v.expect("every receiver has a value"))
+            .collect()
+    }
+
+    /// A cell with a corner on another surface: the finer grid inside it gathers, and the
+    /// receivers between interpolate from the finer cells that stay on the surface (exactly,
+    /// for bilinear E); only the pixels next to the foreign corner gather besides.
+    #[test]
+    fn a_failed_cell_interpolates_from_finer_cells() {
+        let mut receivers = plane();
+        let corner = 7 * 8 + 7;
+        receivers[corner].mesh = 1;
+        let out = passes(&receivers, (8, 8));
+        for (k, &(e, _)) in out.iter().enumerate() {
+            let want = bilinear(receivers[k].p);
+            assert!((e - want).abs().max_element() < 1e-6, "{k}: {e} vs {want}");
+        }
+        let gathered: Vec<usize> = (0..64).filter(|&k| out[k].1).collect();
+        // Besides the coarse grid, only the finer grid's pixels whose coarse cell failed gather:
+        // (6, 6), (7, 6) and (6, 7). The other five of the failed cell's eight, (5, 5),
+        // (5, 6), (6, 5), (7, 5) and (5, 7), interpolate from finer cells clear of (7, 7).
+        let coarse = [0, 4, 7, 32, 36, 39, 56, 60, 63];
+        let more: Vec<usize> = gathered
+            .iter()
+            .copied()
+            .filter(|k| !coarse.contains(k))
+            .collect();
+        assert_eq!(more, [6 * 8 + 6, 6 * 8 + 7, 7 * 8 + 6]);
+        assert!(!out[5 * 8 + 5].1, "(5, 5) interpolates from its finer cell");
+    }
+
+    /// Each chain is a layer: the receivers seen through a mirror (another chain, another
+    /// surface) interpolate from their own layer's anchors, not from the primary hits of the
+    /// same pixels; the four quarters of a pixel of many samples interpolate each from the
+    /// corners' whole pixels; two receivers of one chain in one pixel gather.
+    #[test]
+    fn chains_and_quarters_are_layers_of_their_own() {
+        let primary = plane();
+        let mirrored: Vec<Receiver> = primary
+            .iter()
+            .map(|r| Receiver {
+                p: r.p + Vec3::new(100.0, 50.0, -10.0),
+                mesh: 3,
+                chain: 42,
+                ..r.clone()
+            })
+            .collect();
+        let mut receivers: Vec<Receiver> = primary.into_iter().chain(mirrored).collect();
+        // Pixel (5, 5) of the primary layer becomes four quarters.
+        let centre = 5 * 8 + 5;
+        let quarter = |q: u8| Receiver {
+            quarter: Some(q),
+            ..receivers[centre].clone()
+        };
+        let quarters: Vec<Receiver> = (1..4).map(quarter).collect();
+        receivers[centre] = quarter(0);
+        receivers.extend(quarters);
+        let out = passes(&receivers, (8, 8));
+        for (k, &(e, gathered)) in out.iter().enumerate() {
+            let want = bilinear(receivers[k].p);
+            assert!((e - want).abs().max_element() < 1e-5, "{k}: {e} vs {want}");
+            let (x, y) = (receivers[k].pixel % 8, receivers[k].pixel / 8);
+            let anchor = [0, 4, 7].contains(&x) && [0, 4, 7].contains(&y);
+            assert_eq!(gathered, anchor, "{k} at ({x}, {y})");
+        }
+        // Two receivers of one chain in one pixel (not told apart by quarter) gather.
+        let mut twice = receivers.clone();
+        twice.push(twice[64 + centre].clone());
+        let plan = SparsePlan::new(&twice, (0, 0), (8, 8), 8, true);
+        assert!(plan.gathers_first(64 + centre) && plan.gathers_first(twice.len() - 1));
+    }
+
+    /// A tile narrower than a cell past a grid line (5 pixels: columns 0, 4 on the grid, 4 the
+    /// last) interpolates finitely: a cell of zero width takes its one line.
+    #[test]
+    fn narrow_tiles_interpolate_finitely() {
+        let receivers: Vec<Receiver> = plane()
+            .into_iter()
+            .filter(|r| r.pixel % 8 < 5)
+            .map(|r| Receiver {
+                pixel: (r.pixel / 8) * 5 + r.pixel % 8,
+                ..r
+            })
+            .collect();
+        let out = passes(&receivers, (5, 8));
+        for (k, &(e, _)) in out.iter().enumerate() {
+            let want = bilinear(receivers[k].p);
+            assert!((e - want).abs().max_element() < 1e-6, "{k}: {e} vs {want}");
+        }
     }
 }

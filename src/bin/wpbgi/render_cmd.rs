@@ -60,7 +60,8 @@ pub struct RenderArgs {
     #[arg(long)]
     pub uniform: bool,
     /// Every receiver gathers (by default diffuse receivers gather on a grid of every 4th
-    /// pixel and interpolate between where the light is smooth: docs/render.md).
+    /// pixel, every 2nd where a cell fails, and interpolate between where the light is smooth
+    /// on one surface, seen directly or through the same mirrors and glass: docs/render.md).
     #[arg(long)]
     pub dense: bool,
     /// Emitter samples per shading point for direct light.
