@@ -58,7 +58,8 @@ fn depth3() -> FinalSettings {
 }
 
 /// Measured at 128² (draft cache of 20 000 surfels, default settings), relMSE / MSE:
-/// cbox-diffuse 2.0e-4 / 4.6e-5, cbox-rough 3.4e-4 / 4.9e-5, cbox-glossy 7.1e-4 / 6.7e-5.
+/// cbox-diffuse 2.0e-4 / 4.6e-5, cbox-rough 3.6e-4 / 4.9e-5, cbox-glossy 7.3e-4 / 6.8e-5
+/// (before the sparse grid's chain layers: 2.0e-4, 3.5e-4 and 7.3e-4).
 /// The bounds leave 1.6–2× on the relMSE and 2× on the MSE, which a few edge pixels of the
 /// light (radiance 18 against 0) dominate: a leak of one pixel row of the ceiling above the
 /// emitter cost +60 % relMSE, and a jittered instead of a (0, 2) edge pattern 3× the MSE.
@@ -98,8 +99,8 @@ fn cbox_glossy_matches_mitsuba_at_depth_3() {
 /// FPBGI shares the far field among the receivers of a cluster: the same image within relMSE
 /// 1e-4 of plain PBGI, for less work (nodes visited plus splats, clusters' included; a count,
 /// not a time, so that the test does not depend on the machine). Measured at 128²: relMSE
-/// 2.5e-5, 1.74× less work (both on the sparse grid; 3.0e-5 and 1.56× with every receiver
-/// gathering); the clusters are relatively larger at this resolution (at 256²
+/// 1.6e-5, 1.62× less work (both on the sparse grid, with its finer cells; 3.0e-5 and 1.56×
+/// with every receiver gathering); the clusters are relatively larger at this resolution (at 256²
 /// the benchmark `bench_render` measures the speed-up in time).
 #[test]
 fn fpbgi_matches_pbgi_for_less_work() {
@@ -170,9 +171,10 @@ fn paths_gather_converges_to_mitsuba() {
 /// The sparse gather (the default): diffuse receivers on a grid of every fourth pixel gather,
 /// and those between interpolate where their cell's corners lie on their surface and agree
 /// (`wpbgi::render::sparse`). The same image as every receiver gathering, for fewer gathers.
-/// Measured at 128² (cbox-diffuse, depth 3): relMSE 3.7e-5 between the two, 6 932 of 20 460
-/// receivers interpolated (34 %; at 256², where cells are smaller on the walls, 59 %). Bounds:
-/// 1.6× the relMSE, 30 % interpolated.
+/// Measured at 128² (cbox-diffuse, depth 3): relMSE 3.9e-5 between the two, 10 343 of 20 460
+/// receivers interpolated (51 %, with the finer cells; 34 % with the grid of every fourth
+/// pixel alone; 70 % at 256² on the default cache, where cells are smaller on the walls).
+/// Bounds: 1.5× the relMSE, 45 % interpolated.
 #[test]
 fn sparse_gather_matches_every_receiver_gathering() {
     let (scene, cache) = baked("cbox-diffuse");
@@ -191,7 +193,7 @@ fn sparse_gather_matches_every_receiver_gathering() {
     assert_eq!(every.stats.interpolated, 0);
     assert!(rel <= 6e-5, "relMSE between the two: {rel:.3e}");
     assert!(
-        s.interpolated * 10 >= s.receivers * 3,
+        s.interpolated * 20 >= s.receivers * 9,
         "{} of {}",
         s.interpolated,
         s.receivers

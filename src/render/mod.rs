@@ -475,39 +475,15 @@ fn gather_tile(
         return (out, stats);
     }
     // The grid's anchors and the receivers that cannot interpolate gather first; then the
-    // others interpolate where their cell allows; where it does not, the finer grid's
-    // receivers gather, the rest interpolate from the finer cells, and what still fails
-    // gathers.
+    // others interpolate where their cell allows, finer grids gathering where it does not.
     let plan = SparsePlan::new(receivers, origin, size, width, settings.sparse);
-    let first: Vec<usize> = (0..receivers.len())
-        .filter(|&k| plan.gathers_first(k))
-        .collect();
     let mut value = vec![Rgb::ZERO; receivers.len()];
-    gather_set(
-        senders, receivers, &first, &plan, settings, &mut value, &mut stats,
-    );
-    let (mut fine, mut finer) = (Vec::new(), Vec::new());
-    for k in (0..receivers.len()).filter(|&k| !plan.gathers_first(k)) {
-        match plan.interpolate(receivers, k, sparse::CELL, |j| value[j]) {
-            Some(e) => value[k] = e,
-            None if plan.on_fine_grid(receivers, k) => fine.push(k),
-            None => finer.push(k),
-        }
-    }
-    gather_set(
-        senders, receivers, &fine, &plan, settings, &mut value, &mut stats,
-    );
-    let mut last = Vec::new();
-    for k in finer {
-        match plan.interpolate(receivers, k, sparse::FINE_CELL, |j| value[j]) {
-            Some(e) => value[k] = e,
-            None => last.push(k),
-        }
-    }
-    gather_set(
-        senders, receivers, &last, &plan, settings, &mut value, &mut stats,
-    );
-    stats.interpolated = (receivers.len() - first.len() - fine.len() - last.len()) as u64;
+    let interpolated = plan.run(receivers, &mut value, |which, value| {
+        gather_set(
+            senders, receivers, which, &plan, settings, value, &mut stats,
+        )
+    });
+    stats.interpolated = interpolated as u64;
     let out = receivers
         .iter()
         .enumerate()

@@ -11,12 +11,15 @@
 //!   over neighbouring pixels see one surface through the same mirrors and glass, as the
 //!   primary hits see it directly: each chain is a layer of the image, interpolated as the
 //!   primary layer is.
-//! - **Quarters.** A pixel of many samples (an edge, a mirror, a glass) gathers once per
-//!   quarter of it; the receivers of one quarter over the pixels are a layer too, which
-//!   takes its corners from the same quarter of its anchors' pixels or from pixels of one
-//!   sample.
-//! - **Eligible** receivers: a diffuse BSDF, alone in their pixel's layer and quarter.
-//! - **Anchors**: the eligible receivers on the grid of every [`CELL`]-th row and column of
+//! - **Quarters.** A pixel of many samples gathers once per quarter of it. On a mirror or a
+//!   clear glass, the receivers of one quarter over the pixels are a layer too, which takes
+//!   its corners from the same quarter of its anchors' pixels, else from pixels of one
+//!   sample, else from the first quarter there on its surface. On a geometric edge (the
+//!   quarters of primary hits) they keep their own gathers: interpolating them from whole
+//!   pixels across the edge cost 4–9 % relMSE at 128² (cbox-rough, cbox-glossy).
+//! - **Eligible** receivers: a diffuse BSDF, alone in their pixel's layer and quarter, not a
+//!   quarter of a geometric edge.
+//! - **Anchors**: the eligible receivers on the grid of every `CELLS[0]`-th row and column of
 //!   the tile (and its last row and column). They gather, and keep their irradiance E (the
 //!   cosine-weighted incident light over π: the outgoing radiance of a white diffuse surface).
 //! - The others take E from their layer's receivers at the corners of their cell,
@@ -26,8 +29,7 @@
 //!   that of a whole pixel, else the first quarter on the receiver's surface. Each receiver
 //!   multiplies E by its own albedo.
 //! - **Finer cells.** Where a cell fails (an edge or a contact crosses it, a corner is
-//!   missing), the receivers on the grid of every [`FINE_CELL`]-th row and column inside it
-//!   gather, and the rest interpolate from the finer cells around them by the same rules;
+//!   missing), the receivers on the grid of the next of [`CELLS`] inside it gather, and the rest interpolate from the finer cells around them by the same rules;
 //!   what fails there gathers. An edge through a cell then costs the gathers along it, not
 //!   the whole cell.
 //!
@@ -39,11 +41,9 @@ use crate::bsdf::Bsdf;
 use crate::spectrum::{luminance, Rgb};
 use std::collections::HashMap;
 
-/// Pixels between anchors along a row or column.
-pub const CELL: u32 = 4;
-
-/// Pixels between the receivers that gather inside a cell that cannot interpolate.
-pub const FINE_CELL: u32 = 2;
+/// Pixels between the gathering receivers along a row or column: the anchors' grid first,
+/// then the finer grids inside the cells that cannot interpolate.
+pub const CELLS: [u32; 2] = [4, 2];
 
 /// The most the brightest corner of a cell may exceed the darkest, relative to it, for the
 /// receivers inside to interpolate (see docs/render.md for the measure).
@@ -56,7 +56,8 @@ const SAME_PLANE: f32 = 0.1;
 
 /// Which of a tile's receivers gather, and how the others are interpolated.
 pub struct SparsePlan {
-    /// Per receiver: diffuse and alone in its pixel's layer and quarter (see the module docs).
+    /// Per receiver: diffuse, alone in its pixel's layer and quarter, and not a quarter of a
+    /// geometric edge (see the module docs).
     eligible: Vec<bool>,
     /// Per receiver: it gathers in the first pass (anchors and the ineligible).
     first: Vec<bool>,
@@ -123,7 +124,10 @@ impl SparsePlan {
             .iter()
             .zip(&cells)
             .map(|(r, c)| {
-                sparse && matches!(r.bsdf, Bsdf::Diffuse(_)) && count.get(&c.2) == Some(&1)
+                sparse
+                    && matches!(r.bsdf, Bsdf::Diffuse(_))
+                    && count.get(&c.2) == Some(&1)
+                    && !(r.chain == 0 && r.quarter.is_some())
             })
             .collect();
         let mut at = HashMap::new();
@@ -135,7 +139,7 @@ impl SparsePlan {
                 if e {
                     at.insert(key, k as u32);
                 }
-                !e || (on_grid(x, size.0, CELL) && on_grid(y, size.1, CELL))
+                !e || (on_grid(x, size.0, CELLS[0]) && on_grid(y, size.1, CELLS[0]))
             })
             .collect();
         SparsePlan {
@@ -153,16 +157,49 @@ impl SparsePlan {
         self.first[k]
     }
 
+    /// Every receiver's value in `value`: the first pass's and each finer grid's receivers
+    /// gathered by `gather` (given which receivers, and the values so far, it fills theirs),
+    /// the others interpolated between (see the module docs). Returns how many interpolated.
+    pub fn run(
+        &self,
+        receivers: &[Receiver],
+        value: &mut [Rgb],
+        mut gather: impl FnMut(&[usize], &mut [Rgb]),
+    ) -> usize {
+        let first: Vec<usize> = (0..receivers.len()).filter(|&k| self.first[k]).collect();
+        gather(&first, value);
+        let mut pending: Vec<usize> = (0..receivers.len()).filter(|&k| !self.first[k]).collect();
+        let mut interpolated = 0;
+        for (level, &cell) in CELLS.iter().enumerate() {
+            let finer = CELLS.get(level + 1).copied();
+            let (mut now, mut later) = (Vec::new(), Vec::new());
+            for k in pending {
+                match self.interpolate(receivers, k, cell, |j| value[j]) {
+                    Some(e) => {
+                        value[k] = e;
+                        interpolated += 1;
+                    }
+                    None => match finer {
+                        Some(f) if !self.on_grid_of(receivers, k, f) => later.push(k),
+                        _ => now.push(k),
+                    },
+                }
+            }
+            gather(&now, value);
+            pending = later;
+        }
+        interpolated
+    }
+
     /// Whether receiver `k` is eligible: its gather's value is its irradiance E.
     pub fn eligible(&self, k: usize) -> bool {
         self.eligible[k]
     }
 
-    /// Whether receiver `k` lies on the finer grid ([`FINE_CELL`]): it gathers when its cell
-    /// cannot interpolate.
-    pub fn on_fine_grid(&self, receivers: &[Receiver], k: usize) -> bool {
+    /// Whether receiver `k` lies on the grid of every `cell`-th row and column.
+    fn on_grid_of(&self, receivers: &[Receiver], k: usize, cell: u32) -> bool {
         let (x, y) = local(receivers[k].pixel, self.origin, self.width);
-        on_grid(x, self.size.0, FINE_CELL) && on_grid(y, self.size.1, FINE_CELL)
+        on_grid(x, self.size.0, cell) && on_grid(y, self.size.1, cell)
     }
 
     /// The receiver at the corner `pixel` (tile-local index) of receiver `r`'s cell: the
@@ -270,7 +307,7 @@ mod tests {
         };
         for k in (0..64).filter(|&k| !plan.gathers_first(k)) {
             let got = plan
-                .interpolate(&receivers, k, CELL, e)
+                .interpolate(&receivers, k, CELLS[0], e)
                 .expect("interpolates");
             assert!(
                 (got - e(k)).abs().max_element() < 1e-6,
@@ -284,7 +321,7 @@ mod tests {
         let changed = |f: &dyn Fn(&mut Receiver)| {
             let mut r = receivers.clone();
             f(&mut r[corner]);
-            SparsePlan::new(&r, (0, 0), (8, 8), 8, true).interpolate(&r, k, CELL, e)
+            SparsePlan::new(&r, (0, 0), (8, 8), 8, true).interpolate(&r, k, CELLS[0], e)
         };
         assert!(changed(&|r| r.mesh = 1).is_none(), "another mesh");
         let turned = Frame::from_normal(Vec3::new(0.0, 0.4, 1.0).normalize());
@@ -292,7 +329,7 @@ mod tests {
         assert!(changed(&|r| r.p.z = 0.5).is_none(), "a step off the plane");
         let bright = |j: usize| if j == corner { e(j) * 1.4 } else { e(j) };
         assert!(
-            plan.interpolate(&receivers, k, CELL, bright).is_none(),
+            plan.interpolate(&receivers, k, CELLS[0], bright).is_none(),
             "disagreeing corners"
         );
         // A conductor is not eligible: it gathers.
@@ -315,42 +352,22 @@ mod tests {
         Rgb::splat(1.0 + 0.01 * p.x + 0.02 * p.y + 0.001 * p.x * p.y)
     }
 
-    /// Interpolate a tile as the render does (first pass, coarse cells, the finer grid, finer
-    /// cells), with every gather returning `bilinear` at the receiver; returns each
-    /// receiver's value and whether it gathered.
+    /// Interpolate a tile as the render does ([`SparsePlan::run`]), with every gather
+    /// returning `bilinear` at the receiver; returns each receiver's value and whether it
+    /// gathered.
     fn passes(receivers: &[Receiver], size: (u32, u32)) -> Vec<(Rgb, bool)> {
         let plan = SparsePlan::new(receivers, (0, 0), size, size.0, true);
-        let mut out: Vec<Option<(Rgb, bool)>> = (0..receivers.len())
-            .map(|k| {
-                plan.gathers_first(k)
-                    .then(|| (bilinear(receivers[k].p), true))
-            })
-            .collect();
-        let mut finer = Vec::new();
-        for k in 0..receivers.len() {
-            if out[k].is_some() {
-                continue;
+        let mut value = vec![Rgb::splat(f32::NAN); receivers.len()];
+        let mut gathered = vec![false; receivers.len()];
+        let interpolated = plan.run(receivers, &mut value, |which, value| {
+            for &k in which {
+                assert!(!gathered[k], "{k} gathers twice");
+                gathered[k] = true;
+                value[k] = bilinear(receivers[k].p);
             }
-            let value = |j: usize| out[j].expect("a corner has its value").0;
-            out[k] = match plan.interpolate(receivers, k, CELL, value) {
-                Some(e) => Some((e, false)),
-                None if plan.on_fine_grid(receivers, k) => Some((bilinear(receivers[k].p), true)),
-                None => {
-                    finer.push(k);
-                    None
-                }
-            };
-        }
-        for k in finer {
-            let value = |j: usize| out[j].expect("a corner has its value").0;
-            out[k] = Some(match plan.interpolate(receivers, k, FINE_CELL, value) {
-                Some(e) => (e, false),
-                None => (bilinear(receivers[k].p), true),
-            });
-        }
-        out.into_iter()
-            .map(|v| v.expect("every receiver has a value"))
-            .collect()
+        });
+        assert_eq!(interpolated, gathered.iter().filter(|g| !**g).count());
+        value.into_iter().zip(gathered).collect()
     }
 
     /// A cell with a corner on another surface: the finer grid inside it gathers, and the
@@ -382,8 +399,9 @@ mod tests {
 
     /// Each chain is a layer: the receivers seen through a mirror (another chain, another
     /// surface) interpolate from their own layer's anchors, not from the primary hits of the
-    /// same pixels; the four quarters of a pixel of many samples interpolate each from the
-    /// corners' whole pixels; two receivers of one chain in one pixel gather.
+    /// same pixels; the four quarters of a mirror's pixel of many samples interpolate each from
+    /// the corners' whole pixels. The quarters of a pixel on a geometric edge (primary hits)
+    /// gather, and so do two receivers of one chain in one pixel.
     #[test]
     fn chains_and_quarters_are_layers_of_their_own() {
         let primary = plane();
@@ -397,8 +415,8 @@ mod tests {
             })
             .collect();
         let mut receivers: Vec<Receiver> = primary.into_iter().chain(mirrored).collect();
-        // Pixel (5, 5) of the primary layer becomes four quarters.
-        let centre = 5 * 8 + 5;
+        // Pixel (5, 5) of the mirrored layer becomes four quarters.
+        let centre = 64 + 5 * 8 + 5;
         let quarter = |q: u8| Receiver {
             quarter: Some(q),
             ..receivers[centre].clone()
@@ -414,11 +432,22 @@ mod tests {
             let anchor = [0, 4, 7].contains(&x) && [0, 4, 7].contains(&y);
             assert_eq!(gathered, anchor, "{k} at ({x}, {y})");
         }
+        // The same quarters on the primary layer: an edge pixel's, which gather.
+        let mut edge = receivers.clone();
+        for r in edge.iter_mut().filter(|r| r.quarter.is_some()) {
+            r.chain = 0;
+            r.mesh = 0;
+        }
+        let plan = SparsePlan::new(&edge, (0, 0), (8, 8), 8, true);
+        assert!((0..edge.len())
+            .filter(|&k| edge[k].quarter.is_some())
+            .all(|k| plan.gathers_first(k)));
         // Two receivers of one chain in one pixel (not told apart by quarter) gather.
+        let pixel = 64 + 5 * 8 + 6;
         let mut twice = receivers.clone();
-        twice.push(twice[64 + centre].clone());
+        twice.push(twice[pixel].clone());
         let plan = SparsePlan::new(&twice, (0, 0), (8, 8), 8, true);
-        assert!(plan.gathers_first(64 + centre) && plan.gathers_first(twice.len() - 1));
+        assert!(plan.gathers_first(pixel) && plan.gathers_first(twice.len() - 1));
     }
 
     /// A tile narrower than a cell past a grid line (5 pixels: columns 0, 4 on the grid, 4 the
