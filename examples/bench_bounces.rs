@@ -242,21 +242,15 @@ fn regather_ratio(scene: &Scene, settings: &BakeSettings) -> common::Result<(f64
 /// its `--json` summary).
 fn previous_bounces(bin: &Path, scene: &Path, points: usize) -> common::Result<f64> {
     let out = std::env::temp_dir().join("wpbgi-bench-previous.wpc");
-    let run = Command::new(bin)
-        .arg("bake")
-        .arg(scene)
-        .arg("-o")
-        .arg(&out)
-        .args(["--points", &points.to_string(), "--bounces", "3", "--json"])
-        .output()?;
-    if !run.status.success() {
-        return Err(format!(
-            "{} failed: {}",
-            bin.display(),
-            String::from_utf8_lossy(&run.stderr)
-        )
-        .into());
-    }
+    let run = common::run_ok(
+        &bin.display().to_string(),
+        Command::new(bin)
+            .arg("bake")
+            .arg(scene)
+            .arg("-o")
+            .arg(&out)
+            .args(["--points", &points.to_string(), "--bounces", "3", "--json"]),
+    )?;
     let done = String::from_utf8_lossy(&run.stderr)
         .lines()
         .filter_map(|l| serde_json::from_str::<Value>(l).ok())

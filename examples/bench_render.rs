@@ -114,24 +114,18 @@ fn cli_render(
     cache: &BakedCache,
 ) -> Result<(f64, f64), Box<dyn std::error::Error>> {
     let out = std::env::temp_dir().join("wpbgi-bench-cli-render.exr");
-    let run = std::process::Command::new(bin)
-        .arg("render")
-        .arg(data(&format!("{name}.gltf")))
-        .arg("--cache")
-        .arg(&cache.cache.path)
-        .args(["--size", "256x256", "-o"])
-        .arg(&out)
-        .arg("--reference")
-        .arg(data(&format!("{name}_d8_ref.exr")))
-        .output()?;
-    if !run.status.success() {
-        return Err(format!(
-            "{}: {}",
-            bin.display(),
-            String::from_utf8_lossy(&run.stderr)
-        )
-        .into());
-    }
+    common::run_ok(
+        &bin.display().to_string(),
+        std::process::Command::new(bin)
+            .arg("render")
+            .arg(data(&format!("{name}.gltf")))
+            .arg("--cache")
+            .arg(&cache.cache.path)
+            .args(["--size", "256x256", "-o"])
+            .arg(&out)
+            .arg("--reference")
+            .arg(data(&format!("{name}_d8_ref.exr"))),
+    )?;
     let record: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.with_extension("error.json"))?)?;
     let field = |k: &str| record[k].as_f64().ok_or("no error record");

@@ -14,9 +14,12 @@ pub struct Sampler {
     dim: u32,
 }
 
+/// SplitMix64's increment, 2^64 / φ.
+pub(crate) const GOLDEN_GAMMA: u64 = 0x9e37_79b9_7f4a_7c15;
+
 /// SplitMix64's finaliser: a bijective 64-bit mix with full avalanche.
 #[inline]
-fn mix64(mut z: u64) -> u64 {
+pub(crate) fn mix64(mut z: u64) -> u64 {
     z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
     z ^ (z >> 31)
@@ -28,7 +31,7 @@ impl Sampler {
     pub fn new(seed: u64, stream: u64, index: u64) -> Self {
         let key = mix64(
             mix64(seed ^ 0x6a09_e667_f3bc_c908).wrapping_add(stream)
-                ^ mix64(index.wrapping_add(0x9e37_79b9_7f4a_7c15)),
+                ^ mix64(index.wrapping_add(GOLDEN_GAMMA)),
         );
         Sampler { key, dim: 0 }
     }
@@ -38,7 +41,7 @@ impl Sampler {
     pub fn next_1d(&mut self) -> f32 {
         let bits = mix64(
             self.key
-                .wrapping_add((self.dim as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15)),
+                .wrapping_add((self.dim as u64).wrapping_mul(GOLDEN_GAMMA)),
         );
         self.dim += 1;
         // 24 high bits: every value is exactly representable and strictly below 1.

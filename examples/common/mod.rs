@@ -13,6 +13,16 @@ use wpbgi::scene::Scene;
 
 pub type Result<T> = std::result::Result<T, Box<dyn std::error::Error>>;
 
+/// Run `command` (named `what` in the error) and return its output, or its stderr as the
+/// error when it fails.
+pub fn run_ok(what: &str, command: &mut Command) -> Result<std::process::Output> {
+    let run = command.output()?;
+    if !run.status.success() {
+        return Err(format!("{what} failed: {}", String::from_utf8_lossy(&run.stderr)).into());
+    }
+    Ok(run)
+}
+
 /// A file of tests/data/mitsuba.
 pub fn data(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -58,20 +68,15 @@ pub const ANCHOR_SPP: [u32; 2] = [16, 256];
 /// `scripts/anchor/mitsuba_oidn.py` on one scene: one JSON object per spp of [`ANCHOR_SPP`].
 pub fn mitsuba_anchor(python: &Path, scene: &Path, reference: &Path) -> Result<Vec<(u32, Value)>> {
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/anchor/mitsuba_oidn.py");
-    let run = Command::new(python)
-        .arg(script)
-        .arg(scene)
-        .arg(reference)
-        .arg("8")
-        .args(ANCHOR_SPP.map(|s| s.to_string()))
-        .output()?;
-    if !run.status.success() {
-        return Err(format!(
-            "the Mitsuba anchor failed: {}",
-            String::from_utf8_lossy(&run.stderr)
-        )
-        .into());
-    }
+    let run = run_ok(
+        "the Mitsuba anchor",
+        Command::new(python)
+            .arg(script)
+            .arg(scene)
+            .arg(reference)
+            .arg("8")
+            .args(ANCHOR_SPP.map(|s| s.to_string())),
+    )?;
     Ok(String::from_utf8_lossy(&run.stdout)
         .lines()
         .filter_map(|l| serde_json::from_str::<Value>(l).ok())

@@ -13,7 +13,7 @@ use crate::bsdf::fresnel::fresnel_dielectric;
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::geometry::frame::Frame;
 use crate::reference::{intersect, mis, RenderContext, SurfaceHit};
-use crate::sampler::{sobol02, Sampler};
+use crate::sampler::{mix64, sobol02, Sampler, GOLDEN_GAMMA};
 use crate::spectrum::{max_component, Rgb};
 use glam::Vec3;
 
@@ -48,11 +48,8 @@ pub struct Receiver {
 /// The chain `chain` continued at mesh `mesh` by branch `branch` (see [`Receiver::chain`]):
 /// a SplitMix64 step over the pair, never 0.
 fn extend_chain(chain: u64, mesh: u32, branch: usize) -> u64 {
-    let mut z =
-        chain ^ ((u64::from(mesh) << 8) | branch as u64).wrapping_add(0x9e37_79b9_7f4a_7c15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    (z ^ (z >> 31)).max(1)
+    let step = ((u64::from(mesh) << 8) | branch as u64).wrapping_add(GOLDEN_GAMMA);
+    mix64(chain ^ step).max(1)
 }
 
 /// What one camera sample contributes directly, and the first hit's AOVs.

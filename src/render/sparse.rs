@@ -152,11 +152,6 @@ impl SparsePlan {
         }
     }
 
-    /// Whether receiver `k` gathers in the first pass (an anchor, or not eligible).
-    pub fn gathers_first(&self, k: usize) -> bool {
-        self.first[k]
-    }
-
     /// Every receiver's value in `value`: the first pass's and each finer grid's receivers
     /// gathered by `gather` (given which receivers, and the values so far, it fills theirs),
     /// the others interpolated between (see the module docs). Returns how many interpolated.
@@ -205,13 +200,10 @@ impl SparsePlan {
     /// The receiver at the corner `pixel` (tile-local index) of receiver `r`'s cell: the
     /// eligible receiver of its layer there (see the module docs), on `r`'s surface.
     fn corner(&self, receivers: &[Receiver], r: &Receiver, pixel: u32) -> Option<usize> {
-        let quarters = [r.quarter, None, Some(0), Some(1), Some(2), Some(3)];
-        let mut tried = Vec::with_capacity(quarters.len());
-        quarters.into_iter().find_map(|q| {
-            if tried.contains(&q) {
-                return None;
-            }
-            tried.push(q);
+        let others = [None, Some(0), Some(1), Some(2), Some(3)];
+        let mut quarters =
+            std::iter::once(r.quarter).chain(others.into_iter().filter(|&q| q != r.quarter));
+        quarters.find_map(|q| {
             let j = *self.at.get(&(pixel, r.chain, q))? as usize;
             let c = &receivers[j];
             let offset = c.p - r.p;
@@ -225,7 +217,7 @@ impl SparsePlan {
     /// The irradiance of receiver `k` from the corners of its cell on the grid of every
     /// `cell`-th line, given theirs (`value(j)` for receiver j), or `None` where it cannot
     /// interpolate.
-    pub fn interpolate(
+    fn interpolate(
         &self,
         receivers: &[Receiver],
         k: usize,
@@ -293,9 +285,7 @@ mod tests {
     fn interpolates_within_a_surface_where_the_corners_agree() {
         let receivers = plane();
         let plan = SparsePlan::new(&receivers, (0, 0), (8, 8), 8, true);
-        let anchors: Vec<u32> = (0..64)
-            .filter(|&k| plan.gathers_first(k as usize))
-            .collect();
+        let anchors: Vec<u32> = (0..64).filter(|&k| plan.first[k as usize]).collect();
         let expected: Vec<u32> = (0..64)
             .filter(|k| [0, 4, 7].contains(&(k % 8)) && [0, 4, 7].contains(&(k / 8)))
             .collect();
@@ -305,7 +295,7 @@ mod tests {
             let (x, y) = ((k % 8) as f32, (k / 8) as f32);
             Rgb::splat(1.0 + 0.01 * x + 0.02 * y + 0.001 * x * y)
         };
-        for k in (0..64).filter(|&k| !plan.gathers_first(k)) {
+        for k in (0..64).filter(|&k| !plan.first[k]) {
             let got = plan
                 .interpolate(&receivers, k, CELLS[0], e)
                 .expect("interpolates");
@@ -340,10 +330,10 @@ mod tests {
             k: Rgb::ONE,
             specular_reflectance: Rgb::ONE,
         });
-        assert!(SparsePlan::new(&shiny, (0, 0), (8, 8), 8, true).gathers_first(k));
+        assert!(SparsePlan::new(&shiny, (0, 0), (8, 8), 8, true).first[k]);
         // Off, everyone gathers.
         let dense = SparsePlan::new(&receivers, (0, 0), (8, 8), 8, false);
-        assert!((0..64).all(|k| dense.gathers_first(k)));
+        assert!((0..64).all(|k| dense.first[k]));
     }
 
     /// E = 1 + 0.01 x + 0.02 y + 0.001 x y at pixel (x, y) of a tile `side` wide: bilinear,
@@ -441,13 +431,13 @@ mod tests {
         let plan = SparsePlan::new(&edge, (0, 0), (8, 8), 8, true);
         assert!((0..edge.len())
             .filter(|&k| edge[k].quarter.is_some())
-            .all(|k| plan.gathers_first(k)));
+            .all(|k| plan.first[k]));
         // Two receivers of one chain in one pixel (not told apart by quarter) gather.
         let pixel = 64 + 5 * 8 + 6;
         let mut twice = receivers.clone();
         twice.push(twice[pixel].clone());
         let plan = SparsePlan::new(&twice, (0, 0), (8, 8), 8, true);
-        assert!(plan.gathers_first(pixel) && plan.gathers_first(twice.len() - 1));
+        assert!(plan.first[pixel] && plan.first[twice.len() - 1]);
     }
 
     /// A tile narrower than a cell past a grid line (5 pixels: columns 0, 4 on the grid, 4 the
