@@ -5,27 +5,32 @@
 use crate::error::{Error, Result};
 use std::path::{Path, PathBuf};
 
-/// Write through a temporary file next to `path`, then rename it into place. `write` receives
-/// the temporary path; on its failure the temporary file is removed.
-pub fn write_atomically(
-    path: &Path,
-    write: impl FnOnce(&Path) -> std::result::Result<(), String>,
-) -> Result<()> {
-    let output_error = |reason: String| Error::Output {
-        path: path.to_path_buf(),
-        reason,
-    };
-    let name = path
-        .file_name()
-        .ok_or_else(|| output_error("not a file name".into()))?
-        .to_string_lossy()
-        .into_owned();
+/// The temporary file this process writes `path` through: hidden, next to it, named after
+/// the process (two processes writing one path do not share it), with the extension last
+/// (some writers pick the format from it). `None` for a path without a file name.
+pub fn temporary_path(path: &Path) -> Option<PathBuf> {
+    let name = path.file_name()?.to_string_lossy().into_owned();
     let ext = path
         .extension()
         .map(|e| e.to_string_lossy().into_owned())
         .unwrap_or_default();
-    // The extension stays last: some writers pick the format from it.
-    let tmp: PathBuf = path.with_file_name(format!(".{name}.{}.tmp.{ext}", std::process::id()));
+    Some(path.with_file_name(format!(".{name}.{}.tmp.{ext}", std::process::id())))
+}
+
+/// Write through a temporary file next to `path` ([`temporary_path`]), then rename it into
+/// place. `write` receives the temporary path; on its failure the temporary file is removed.
+pub fn write_atomically(
+    path: &Path,
+    write: impl FnOnce(&Path) -> std::result::Result<(), String>,
+) -> Result<()> {
+    let tmp = temporary_path(path).ok_or_else(|| Error::Output {
+        path: path.to_path_buf(),
+        reason: "not a file name".into(),
+    })?;
+    let output_error = |reason: String| Error::Output {
+        path: path.to_path_buf(),
+        reason,
+    };
     if let Err(e) = write(&tmp) {
         let _ = std::fs::remove_file(&tmp);
         return Err(output_error(e));

@@ -80,7 +80,8 @@ pub enum Error {
     #[error(transparent)]
     Cache(#[from] crate::cache::CacheError),
 
-    #[error("the bake was cancelled")]
+    /// The bake or render was stopped by its cancel flag.
+    #[error("cancelled")]
     Cancelled,
 }
 

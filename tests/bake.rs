@@ -273,10 +273,7 @@ fn a_cancelled_bake_stops_in_the_stage_that_sees_the_flag() {
             .find(|&&s| seen.iter().any(|(x, _)| x == s));
         assert_eq!(later, None, "stopped at {stop_at}: {seen:?}");
     }
-    assert_eq!(
-        wpbgi::Error::Cancelled.to_string(),
-        "the bake was cancelled"
-    );
+    assert_eq!(wpbgi::Error::Cancelled.to_string(), "cancelled");
 }
 
 /// A bake that cannot fit says so before any work, naming the figure: no progress is

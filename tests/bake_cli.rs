@@ -242,3 +242,87 @@ fn render_writes_layers_and_refuses_stale_caches() {
     let msg = String::from_utf8_lossy(&out.stderr);
     assert!(msg.contains("stale") && msg.lines().count() == 1, "{msg}");
 }
+
+/// Ctrl-C (SIGINT) during a bake and during a render: the command exits with 130 within a
+/// second (issue 22) and the file at its output path is the one that was there before.
+#[cfg(unix)]
+#[test]
+fn ctrl_c_stops_bake_and_render_with_130_and_keeps_the_previous_outputs() {
+    let d = dir("sigint");
+    let cache = d.join("scene.wpc");
+    bake_ok(&cache);
+    let image = d.join("out.exr");
+    let rendered = wpbgi(&[
+        "render",
+        scene().to_str().expect("utf-8"),
+        "--cache",
+        cache.to_str().expect("utf-8"),
+        "-o",
+        image.to_str().expect("utf-8"),
+        "--size",
+        "32x32",
+    ]);
+    assert!(rendered.status.success());
+    let (cache_before, image_before) = (
+        std::fs::read(&cache).expect("cache"),
+        std::fs::read(&image).expect("image"),
+    );
+    let s = scene();
+    let bake_args = [
+        "bake",
+        s.to_str().expect("utf-8"),
+        "-o",
+        cache.to_str().expect("utf-8"),
+        "--points",
+        "400000",
+    ];
+    let render_args = [
+        "render",
+        s.to_str().expect("utf-8"),
+        "--cache",
+        cache.to_str().expect("utf-8"),
+        "-o",
+        image.to_str().expect("utf-8"),
+        "--size",
+        "2048x2048",
+    ];
+    for (what, args) in [("bake", &bake_args[..]), ("render", &render_args[..])] {
+        for delay_ms in [300u64, 1500] {
+            let child = Command::new(WPBGI)
+                .args(args)
+                .stderr(std::process::Stdio::piped())
+                .spawn()
+                .expect("starts");
+            std::thread::sleep(Duration::from_millis(delay_ms));
+            let sent = std::time::Instant::now();
+            let kill = Command::new("kill")
+                .args(["-INT", &child.id().to_string()])
+                .status()
+                .expect("kill runs");
+            assert!(kill.success());
+            let out = child.wait_with_output().expect("waits");
+            let took = sent.elapsed();
+            let stderr = String::from_utf8_lossy(&out.stderr);
+            assert_eq!(
+                out.status.code(),
+                Some(130),
+                "{what} interrupted at {delay_ms} ms: {stderr}"
+            );
+            assert!(
+                took < Duration::from_secs(1),
+                "{what} interrupted at {delay_ms} ms took {took:?} to stop"
+            );
+            assert!(stderr.contains("interrupted"), "{stderr}");
+            assert!(std::fs::read(&cache).expect("cache") == cache_before);
+            assert!(std::fs::read(&image).expect("image") == image_before);
+        }
+    }
+    // No temporary file was left beside the outputs.
+    let left: Vec<_> = std::fs::read_dir(&d)
+        .expect("dir")
+        .filter_map(|e| e.ok())
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| n.contains(".tmp."))
+        .collect();
+    assert!(left.is_empty(), "{left:?}");
+}

@@ -35,7 +35,7 @@ use glam::{Vec2, Vec3};
 use primary::{trace_primary, CameraSample, PrimarySample, PrimarySettings, Receiver};
 use rayon::prelude::*;
 use sparse::SparsePlan;
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::Instant;
 
 /// How receivers gather.
@@ -169,6 +169,33 @@ pub fn render_final(
     settings: &FinalSettings,
     progress: &(dyn Fn(&str, f32) + Sync),
 ) -> Result<FinalOutput> {
+    render_final_cancellable(
+        scene,
+        cache,
+        camera,
+        settings,
+        progress,
+        &AtomicBool::new(false),
+    )
+}
+
+/// [`render_final`], stopping with [`Error::Cancelled`] soon after `cancel` is set (by another
+/// thread or a signal handler): the flag is looked at per tile of [`TILE`]² pixels.
+pub fn render_final_cancellable(
+    scene: &Scene,
+    cache: &BakedCache,
+    camera: &Camera,
+    settings: &FinalSettings,
+    progress: &(dyn Fn(&str, f32) + Sync),
+    cancel: &AtomicBool,
+) -> Result<FinalOutput> {
+    let stop = || {
+        if cancel.load(Ordering::Relaxed) {
+            Err(Error::Cancelled)
+        } else {
+            Ok(())
+        }
+    };
     if camera.width == 0 || camera.height == 0 || camera.width > 16384 || camera.height > 16384 {
         return Err(Error::InvalidSetting(format!(
             "image size {}x{} must be between 1 and 16384 on each side",
@@ -226,12 +253,13 @@ pub fn render_final(
     let primary: Vec<TilePrimary> = tiles
         .par_iter()
         .map(|&(tx, ty)| {
+            stop()?;
             let r = primary_tile(&ctx, camera, &centre, &primary_settings, tx, ty);
             let n = done.fetch_add(1, Ordering::Relaxed) + 1;
             progress("primary", n as f32 / tiles.len() as f32);
-            r
+            Ok(r)
         })
-        .collect();
+        .collect::<Result<_>>()?;
     timings.push(("primary and direct", t.elapsed().as_secs_f64()));
 
     let t = Instant::now();
@@ -239,15 +267,16 @@ pub fn render_final(
     let gathered: Vec<(Vec<(u32, Rgb)>, GatherStats)> = primary
         .par_iter()
         .map(|tile| {
+            stop()?;
             let (tx, ty) = (tile.origin.0 / TILE, tile.origin.1 / TILE);
             let size = (TILE.min(w - tx * TILE), TILE.min(h - ty * TILE));
             let rect = (tile.origin, size, w);
             let r = gather_tile(&ctx, &senders, &tile.receivers, rect, settings);
             let n = done.fetch_add(1, Ordering::Relaxed) + 1;
             progress("gather", n as f32 / tiles.len() as f32);
-            r
+            Ok(r)
         })
-        .collect();
+        .collect::<Result<_>>()?;
     timings.push(("gather", t.elapsed().as_secs_f64()));
 
     let mut out = FinalOutput {

@@ -6,7 +6,7 @@ use serde_json::{json, Value};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-use wpbgi::bake::{bake, BakeSettings, Quality};
+use wpbgi::bake::{bake_cancellable, BakeSettings, Quality};
 use wpbgi::bounce::BounceSettings;
 use wpbgi::cache::store::{bake_hash, BakedCache};
 
@@ -14,7 +14,7 @@ use wpbgi::cache::store::{bake_hash, BakedCache};
 pub enum QualityArg {
     /// 20 000 surfels, 64 light samples each.
     Draft,
-    /// 100 000 surfels, 32 light samples (denser surfels need fewer each).
+    /// 50 000 surfels, 32 light samples (denser surfels need fewer each).
     Preview,
     /// 500 000 surfels, 256 light samples.
     Final,
@@ -193,7 +193,8 @@ pub fn bake_command(a: BakeArgs) -> Result<()> {
             b.update(stage, f);
         }
     };
-    let baked = bake(&scene, &settings, &progress)?;
+    crate::interrupt::guard_outputs([a.output.clone()]);
+    let baked = bake_cancellable(&scene, &settings, &progress, crate::interrupt::flag())?;
     bar.as_ref().map(crate::StagedBar::finish);
     let coefficients = baked.coded.stored_counts().1;
     let t = Instant::now();

@@ -3,6 +3,7 @@
 
 mod bake_cmd;
 mod compare_cmd;
+mod interrupt;
 mod preview_cmd;
 mod render_cmd;
 
@@ -258,6 +259,12 @@ fn reference(a: ReferenceArgs) -> Result<()> {
         },
         ..Default::default()
     };
+    interrupt::guard_outputs(
+        [a.output.clone()]
+            .into_iter()
+            .chain(a.variance.clone())
+            .chain(a.png.clone()),
+    );
     let out = run_render(&scene, &camera, &settings)?;
     write_exr(&a.output, &out.mean)?;
     if let Some(p) = &a.variance {
@@ -328,6 +335,7 @@ fn demo(a: DemoArgs) -> Result<()> {
 
 fn main() {
     let cli = Cli::parse();
+    interrupt::install();
     if cli.time_code.is_some_and(|t| !t.is_finite()) {
         eprintln!("error: --time-code must be a finite number");
         std::process::exit(2);
@@ -354,6 +362,10 @@ fn main() {
         Command::Compare(a) => compare_cmd::compare_command(a),
     };
     if let Err(e) = result {
+        let cancelled = matches!(e.downcast_ref(), Some(wpbgi::Error::Cancelled));
+        if cancelled || interrupt::interrupted() {
+            interrupt::exit_interrupted();
+        }
         eprintln!("error: {e:#}");
         std::process::exit(1);
     }

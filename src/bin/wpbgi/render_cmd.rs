@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use std::time::Instant;
 use wpbgi::cache::store::BakedCache;
 use wpbgi::image::{read_exr, write_exr_layers, write_png, Image};
-use wpbgi::render::{render_final, FinalOutput, FinalSettings, GatherMode};
+use wpbgi::render::{render_final_cancellable, FinalOutput, FinalSettings, GatherMode};
 use wpbgi::scene::{Camera, Scene};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -95,7 +95,7 @@ pub struct RenderArgs {
     pub camera: CameraArgs,
 }
 
-/// Render with a progress bar.
+/// Render with a progress bar, stopping on Ctrl-C (see [`crate::interrupt`]).
 pub fn run_final(
     scene: &Scene,
     cache: &BakedCache,
@@ -103,9 +103,14 @@ pub fn run_final(
     settings: &FinalSettings,
 ) -> Result<FinalOutput> {
     let bar = crate::StagedBar::new("rendering");
-    let out = render_final(scene, cache, camera, settings, &|stage, f| {
-        bar.update(stage, f)
-    })?;
+    let out = render_final_cancellable(
+        scene,
+        cache,
+        camera,
+        settings,
+        &|stage, f| bar.update(stage, f),
+        crate::interrupt::flag(),
+    )?;
     bar.finish();
     Ok(out)
 }
@@ -173,6 +178,7 @@ pub fn render_command(a: RenderArgs) -> Result<()> {
         wpbgi::compare::check_size(r, camera.width, camera.height)
             .map_err(|m| anyhow::anyhow!("{}: {m} (set --size)", path.display()))?;
     }
+    crate::interrupt::guard_outputs([a.output.clone()].into_iter().chain(a.png.clone()));
     let out = run_final(&scene, &cache, &camera, &settings)?;
     let all = a.aov.contains(&Aov::All);
     let wanted = |x: Aov| all || a.aov.contains(&x);
