@@ -29,6 +29,23 @@ impl Image {
         self.pixels[(y * self.width + x) as usize]
     }
 
+    /// The `width` × `height` pixels from (`x`, `y`) on; `None` past the image's edge.
+    pub fn crop(&self, x: u32, y: u32, width: u32, height: u32) -> Option<Image> {
+        if u64::from(x) + u64::from(width) > u64::from(self.width)
+            || u64::from(y) + u64::from(height) > u64::from(self.height)
+        {
+            return None;
+        }
+        let pixels = (y..y + height)
+            .flat_map(|row| (x..x + width).map(move |col| self.get(col, row)))
+            .collect();
+        Some(Image {
+            width,
+            height,
+            pixels,
+        })
+    }
+
     /// Mean over all pixels.
     pub fn mean(&self) -> Rgb {
         let s: glam::DVec3 = self.pixels.iter().map(|p| p.as_dvec3()).sum();
@@ -48,38 +65,133 @@ pub fn write_exr(path: &Path, img: &Image) -> Result<()> {
     write_exr_layers(path, img, &[])
 }
 
-/// Lossless compression with the blocks in increasing order: the default order is the order
-/// in which parallel compression finishes, which made two writes of one image differ.
-fn deterministic_encoding() -> exr::prelude::Encoding {
-    exr::prelude::Encoding {
-        line_order: exr::prelude::LineOrder::Increasing,
-        ..exr::prelude::Encoding::FAST_LOSSLESS
-    }
-}
-
 /// Write a float32 OpenEXR file holding `beauty` as its R, G, B channels and each of `aovs` as
 /// `NAME.R`, `NAME.G`, `NAME.B` in the same part (the layered-channel convention compositing
 /// tools read as layers).
 pub fn write_exr_layers(path: &Path, beauty: &Image, aovs: &[(&str, &Image)]) -> Result<()> {
-    use exr::prelude::*;
-    let layers = std::iter::once(("", beauty)).chain(aovs.iter().copied());
-    let mut channels = SmallVec::<[AnyChannel<FlatSamples>; 4]>::new();
-    for (name, img) in layers {
-        if img.width != beauty.width || img.height != beauty.height {
-            return Err(output_error(path, format!("layer {name} has another size")));
+    let channels = ExrChannels {
+        beauty,
+        layers: aovs.to_vec(),
+        ..ExrChannels::of(beauty)
+    };
+    write_exr_channels(path, &channels, &ExrOptions::lossless_float(beauty))
+}
+
+/// How an EXR stores its samples.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ExrPrecision {
+    /// 16-bit floats (half the size; 11 bits of mantissa, values up to 65 504).
+    Half,
+    /// 32-bit floats.
+    #[default]
+    Float,
+}
+
+/// An EXR's lossless compression (OpenEXR's names).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ExrCompression {
+    None,
+    /// Run lengths: fast, large.
+    Rle,
+    /// zlib per scan line.
+    Zips,
+    /// zlib per 16 scan lines: the usual default of compositing tools.
+    #[default]
+    Zip,
+    /// Wavelet and Huffman: small files of noisy images.
+    Piz,
+}
+
+/// The channels of an EXR: the beauty as R, G, B (and A), depth as Z, normals as N.X, N.Y,
+/// N.Z, and RGB layers as NAME.R, NAME.G, NAME.B: OpenEXR's standard names, which
+/// compositing tools map to their alpha, depth and normal passes.
+#[derive(Clone, Debug)]
+pub struct ExrChannels<'a> {
+    pub beauty: &'a Image,
+    /// Coverage, one value per pixel.
+    pub alpha: Option<&'a [f32]>,
+    /// Depth, one value per pixel.
+    pub z: Option<&'a [f32]>,
+    pub normal: Option<&'a Image>,
+    pub layers: Vec<(&'a str, &'a Image)>,
+}
+
+impl<'a> ExrChannels<'a> {
+    /// The beauty alone.
+    pub fn of(beauty: &'a Image) -> Self {
+        ExrChannels {
+            beauty,
+            alpha: None,
+            z: None,
+            normal: None,
+            layers: Vec::new(),
         }
-        if img.pixels.iter().any(|p| !p.is_finite()) {
-            return Err(output_error(
-                path,
-                format!(
-                    "the {} holds NaN or infinite values (a bug: please report it)",
-                    if name.is_empty() {
-                        "image".to_string()
-                    } else {
-                        format!("layer \"{name}\"")
-                    }
-                ),
-            ));
+    }
+}
+
+/// How an EXR is written: its samples, its windows and its header.
+#[derive(Clone, Debug, Default)]
+pub struct ExrOptions {
+    pub precision: ExrPrecision,
+    pub compression: ExrCompression,
+    /// The display window's size: the whole image (the pixels written may be a part of it).
+    pub display: (u32, u32),
+    /// Where the pixels written lie in the display window: its data window's corner.
+    pub origin: (u32, u32),
+    pub header: ExrHeader,
+}
+
+impl ExrOptions {
+    /// Float samples of the whole of `image`, no metadata.
+    pub fn lossless_float(image: &Image) -> Self {
+        ExrOptions {
+            display: (image.width, image.height),
+            ..Default::default()
+        }
+    }
+}
+
+/// Header attributes, under OpenEXR's standard names (its "Standard Attributes" document).
+#[derive(Clone, Debug, Default)]
+pub struct ExrHeader {
+    /// `software`.
+    pub software: Option<String>,
+    /// `worldToCamera` and `worldToNDC`: row-major, for row vectors (p · M), as OpenEXR
+    /// stores Imath's M44f.
+    pub world_to_camera: Option<[f32; 16]>,
+    pub world_to_ndc: Option<[f32; 16]>,
+    /// `capDate` ("YYYY:MM:DD hh:mm:ss") and `utcOffset` (seconds, UTC − local).
+    pub capture_date: Option<(String, f32)>,
+    /// Free text in `comments`.
+    pub comments: Option<String>,
+    /// A text attribute `wpbgi`: the renderer's own record (settings, cache hash, time).
+    pub wpbgi: Option<String>,
+}
+
+/// Write `channels` as one OpenEXR part (see [`ExrChannels`]) with `options`.
+pub fn write_exr_channels(path: &Path, channels: &ExrChannels, options: &ExrOptions) -> Result<()> {
+    use exr::prelude::{
+        AnyChannel, AnyChannels, AttributeValue, Blocks, Compression, Encoding, FlatSamples,
+        IntegerBounds, Layer, LayerAttributes, LineOrder, SmallVec, Text, Vec2, WritableImage,
+    };
+    let beauty = channels.beauty;
+    let (w, h) = (beauty.width, beauty.height);
+    let count = w as usize * h as usize;
+    let (dx, dy) = options.display;
+    let (ox, oy) = options.origin;
+    if u64::from(ox) + u64::from(w) > u64::from(dx) || u64::from(oy) + u64::from(h) > u64::from(dy)
+    {
+        return Err(output_error(
+            path,
+            format!(
+                "a {w}x{h} image at ({ox}, {oy}) does not lie within its {dx}x{dy} display window"
+            ),
+        ));
+    }
+    let mut planes: Vec<(String, Vec<f32>)> = Vec::new();
+    let mut rgb = |name: &str, img: &Image| -> Result<()> {
+        if (img.width, img.height) != (w, h) {
+            return Err(output_error(path, format!("layer {name} has another size")));
         }
         for (c, letter) in ["R", "G", "B"].iter().enumerate() {
             let full = if name.is_empty() {
@@ -87,23 +199,124 @@ pub fn write_exr_layers(path: &Path, beauty: &Image, aovs: &[(&str, &Image)]) ->
             } else {
                 format!("{name}.{letter}")
             };
-            let samples: Vec<f32> = img.pixels.iter().map(|p| p[c]).collect();
-            channels.push(AnyChannel::new(full.as_str(), FlatSamples::F32(samples)));
+            planes.push((full, img.pixels.iter().map(|p| p[c]).collect()));
+        }
+        Ok(())
+    };
+    rgb("", beauty)?;
+    for (name, img) in &channels.layers {
+        rgb(name, img)?;
+    }
+    if let Some(n) = channels.normal {
+        if (n.width, n.height) != (w, h) {
+            return Err(output_error(path, "the normals have another size"));
+        }
+        for (c, axis) in ["X", "Y", "Z"].iter().enumerate() {
+            planes.push((format!("N.{axis}"), n.pixels.iter().map(|p| p[c]).collect()));
         }
     }
-    let size = (beauty.width as usize, beauty.height as usize);
+    for (name, values) in [("A", channels.alpha), ("Z", channels.z)] {
+        if let Some(v) = values {
+            if v.len() != count {
+                return Err(output_error(
+                    path,
+                    format!("channel {name} has another size"),
+                ));
+            }
+            planes.push((name.to_string(), v.to_vec()));
+        }
+    }
+    if let Some((name, _)) = planes
+        .iter()
+        .find(|(_, v)| v.iter().any(|x| !x.is_finite()))
+    {
+        return Err(output_error(
+            path,
+            format!("channel {name} holds NaN or infinite values (a bug: please report it)"),
+        ));
+    }
+    let channel_list: SmallVec<[AnyChannel<FlatSamples>; 4]> = planes
+        .into_iter()
+        .map(|(name, v)| {
+            let samples = match options.precision {
+                ExrPrecision::Float => FlatSamples::F32(v),
+                ExrPrecision::Half => {
+                    FlatSamples::F16(v.into_iter().map(exr::prelude::f16::from_f32).collect())
+                }
+            };
+            AnyChannel::new(name.as_str(), samples)
+        })
+        .collect();
+    let compression = match options.compression {
+        ExrCompression::None => Compression::Uncompressed,
+        ExrCompression::Rle => Compression::RLE,
+        ExrCompression::Zips => Compression::ZIP1,
+        ExrCompression::Zip => Compression::ZIP16,
+        ExrCompression::Piz => Compression::PIZ,
+    };
+    // Blocks in increasing order: the default order is the order in which parallel
+    // compression finishes, which made two writes of one image differ.
+    let encoding = Encoding {
+        compression,
+        blocks: Blocks::ScanLines,
+        line_order: LineOrder::Increasing,
+    };
+    let header = &options.header;
+    let text = |s: &str| Text::new_or_none(s);
+    let mut attributes = LayerAttributes {
+        layer_position: Vec2(ox as i32, oy as i32),
+        software_name: header.software.as_deref().and_then(text),
+        world_to_camera: header.world_to_camera,
+        world_to_normalized_device: header.world_to_ndc,
+        capture_date: header.capture_date.as_ref().and_then(|(d, _)| text(d)),
+        utc_offset: header.capture_date.as_ref().map(|(_, o)| *o),
+        comments: header.comments.as_deref().and_then(text),
+        ..LayerAttributes::default()
+    };
+    // One attribute of our own at most: the crate writes its own attributes in its hash
+    // map's (random) order, and files must come out byte for byte the same.
+    if let Some(t) = header.wpbgi.as_deref().and_then(text) {
+        attributes
+            .other
+            .insert(Text::new_or_panic("wpbgi"), AttributeValue::Text(t));
+    }
     let layer = Layer::new(
-        size,
-        LayerAttributes::default(),
-        deterministic_encoding(),
-        AnyChannels::sort(channels),
+        (w as usize, h as usize),
+        attributes,
+        encoding,
+        AnyChannels::sort(channel_list),
     );
+    let mut image = exr::prelude::Image::from_layer(layer);
+    image.attributes.display_window =
+        IntegerBounds::new(Vec2(0, 0), Vec2(dx as usize, dy as usize));
     write_atomically(path, |tmp| {
-        exr::prelude::Image::from_layer(layer)
-            .write()
-            .to_file(tmp)
-            .map_err(|e| e.to_string())
+        image.write().to_file(tmp).map_err(|e| e.to_string())
     })
+}
+
+/// `capDate` and `utcOffset` for a time in seconds since the Unix epoch, in UTC.
+pub fn exr_capture_date(unix_seconds: u64) -> (String, f32) {
+    let days = (unix_seconds / 86_400) as i64;
+    let secs = unix_seconds % 86_400;
+    // Civil date from days since 1970-01-01 (H. Hinnant's algorithm).
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z.rem_euclid(146_097);
+    let yoe = (doe - doe / 1_460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let day = doy - (153 * mp + 2) / 5 + 1;
+    let month = if mp < 10 { mp + 3 } else { mp - 9 };
+    let year = yoe + era * 400 + i64::from(month <= 2);
+    (
+        format!(
+            "{year:04}:{month:02}:{day:02} {:02}:{:02}:{:02}",
+            secs / 3600,
+            secs / 60 % 60,
+            secs % 60
+        ),
+        0.0,
+    )
 }
 
 /// Mean squared error and relative MSE, the mean of (x − ref)² / (ref² + 0.01), over all

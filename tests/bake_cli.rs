@@ -197,20 +197,26 @@ fn render_writes_layers_and_refuses_stale_caches() {
     bake_ok(&cache);
     let image = d.join("out.exr");
     let render_with = |scene: &Path, image: &Path, threads: &str| {
-        wpbgi(&[
-            "render",
-            scene.to_str().expect("utf-8"),
-            "--cache",
-            cache.to_str().expect("utf-8"),
-            "-o",
-            image.to_str().expect("utf-8"),
-            "--size",
-            "128x128",
-            "--aov",
-            "all",
-            "--threads",
-            threads,
-        ])
+        Command::new(WPBGI)
+            .args([
+                "render",
+                scene.to_str().expect("utf-8"),
+                "--cache",
+                cache.to_str().expect("utf-8"),
+                "-o",
+                image.to_str().expect("utf-8"),
+                "--size",
+                "128x128",
+                "--aov",
+                "all",
+                "--threads",
+                threads,
+            ])
+            // A fixed capture date and no render time in the header: the file is then the
+            // same byte for byte.
+            .env("SOURCE_DATE_EPOCH", "1764000000")
+            .output()
+            .expect("runs")
     };
     let render = |scene: &Path| render_with(scene, &image, "2");
     let out = render(&scene());
@@ -223,12 +229,102 @@ fn render_writes_layers_and_refuses_stale_caches() {
     assert_eq!((beauty.width, beauty.height), (128, 128));
     assert!(beauty.mean().max_element() > 0.0);
     let bytes = std::fs::read(&image).expect("exr");
-    for layer in ["direct.R", "indirect.G", "albedo.B", "normal.R", "depth.R"] {
+    // The channels under OpenEXR's standard names, read back.
+    let read = exr::prelude::read_all_flat_layers_from_file(&image).expect("reads");
+    let layer = &read.layer_data[0];
+    let channel = |name: &str| -> Vec<f32> {
+        let c = layer
+            .channel_data
+            .list
+            .iter()
+            .find(|c| c.name == *name)
+            .unwrap_or_else(|| panic!("no channel {name}"));
+        c.sample_data.values_as_f32().collect()
+    };
+    for name in ["direct.R", "indirect.G", "albedo.B", "N.X", "N.Y"] {
+        channel(name);
+    }
+    // Coverage is positive exactly where some camera sample hits the scene (a depth), and
+    // the box covers most of the frame whole.
+    let (a, z, nz) = (channel("A"), channel("Z"), channel("N.Z"));
+    assert!(a.iter().all(|&x| (0.0..=1.0).contains(&x)));
+    for ((&a, &z), &n) in a.iter().zip(&z).zip(&nz) {
+        assert_eq!(a > 0.0, z > 0.0, "coverage {a} against depth {z}");
+        assert!(n.abs() <= 1.0 + 1e-5);
+    }
+    assert!(a.iter().filter(|&&x| x == 1.0).count() > 128 * 128 / 2);
+    // The header: software, capture date, camera matrices and wpbgi's record.
+    let attributes = &read.layer_data[0].attributes;
+    assert_eq!(
+        attributes.software_name.as_ref().map(|t| t.to_string()),
+        Some(format!("wpbgi {}", env!("CARGO_PKG_VERSION")))
+    );
+    assert_eq!(
+        attributes.capture_date.as_ref().map(|t| t.to_string()),
+        Some("2025:11:24 16:00:00".to_string())
+    );
+    let record = match attributes.other.get(&exr::prelude::Text::from("wpbgi")) {
+        Some(exr::prelude::AttributeValue::Text(t)) => t.to_string(),
+        other => panic!("no wpbgi attribute: {other:?}"),
+    };
+    let record: serde_json::Value = serde_json::from_str(&record).expect("JSON");
+    assert_eq!(record["cache_hash"].as_str().map(str::len), Some(32));
+    assert_eq!(record["settings"]["gather"], "fpbgi");
+    assert!(record.get("render_seconds").is_none());
+    // worldToCamera takes the camera to the origin; worldToNDC takes a point on the ray
+    // through a pixel to that pixel's normalised device coordinates.
+    let scene_data = wpbgi::scene::Scene::load(&scene()).expect("scene");
+    let camera = scene_data.default_camera(128, 128).expect("camera");
+    let row = |m: &[f32; 16], p: glam::Vec3| {
+        let v = [p.x, p.y, p.z, 1.0];
+        let mut out = [0.0f32; 4];
+        for (c, o) in out.iter_mut().enumerate() {
+            *o = (0..4).map(|r| v[r] * m[4 * r + c]).sum();
+        }
+        out
+    };
+    let to_camera = attributes.world_to_camera.expect("worldToCamera");
+    let at_eye = row(&to_camera, camera.position);
+    assert!(at_eye[..3].iter().all(|x| x.abs() < 1e-4), "{at_eye:?}");
+    let ahead = row(&to_camera, camera.position + camera.forward);
+    assert!((ahead[2] + 1.0).abs() < 1e-5, "{ahead:?}");
+    let to_ndc = attributes.world_to_normalized_device.expect("worldToNDC");
+    for (px, py) in [(0.0f32, 0.0f32), (31.5, 100.25), (128.0, 64.0)] {
+        let (o, dir) = camera.generate_ray(glam::Vec2::new(px, py));
+        let q = row(&to_ndc, o + 3.0 * dir);
+        let ndc = (q[0] / q[3], q[1] / q[3]);
+        let want = (2.0 * px / 128.0 - 1.0, 1.0 - 2.0 * py / 128.0);
         assert!(
-            bytes.windows(layer.len()).any(|w| w == layer.as_bytes()),
-            "no channel {layer}"
+            (ndc.0 - want.0).abs() < 1e-4 && (ndc.1 - want.1).abs() < 1e-4,
+            "pixel ({px}, {py}): {ndc:?} against {want:?}"
         );
     }
+    // Half precision: the same channels, a smaller file, values within half's rounding.
+    let half = d.join("half.exr");
+    let out = wpbgi(&[
+        "render",
+        scene().to_str().expect("utf-8"),
+        "--cache",
+        cache.to_str().expect("utf-8"),
+        "-o",
+        half.to_str().expect("utf-8"),
+        "--size",
+        "128x128",
+        "--exr-precision",
+        "half",
+        "--exr-compression",
+        "piz",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let h = wpbgi::image::read_exr(&half).expect("half EXR");
+    for (x, y) in h.pixels.iter().zip(&beauty.pixels) {
+        assert!((*x - *y).abs().max_element() <= 1e-3 * y.max_element().max(1e-2));
+    }
+    assert!(std::fs::metadata(&half).expect("half").len() < bytes.len() as u64);
     // The file, not only the image, is the same for any thread count (the EXR's blocks were
     // once written in the order parallel compression finished them).
     let one = d.join("one.exr");
@@ -325,4 +421,115 @@ fn ctrl_c_stops_bake_and_render_with_130_and_keeps_the_previous_outputs() {
         .filter(|n| n.contains(".tmp."))
         .collect();
     assert!(left.is_empty(), "{left:?}");
+}
+
+/// `render --crop`: four crops, cut across tiles and image edges, assemble into the whole
+/// image bit for bit in every channel, each EXR placing its data window in the whole image's
+/// display window; a crop past the image is refused in one sentence.
+#[test]
+fn crops_assemble_into_the_whole_image() {
+    let d = dir("crop");
+    let cache = d.join("scene.wpc");
+    bake_ok(&cache);
+    let render = |out: &Path, crop: Option<&str>| {
+        let mut args = vec![
+            "render".to_string(),
+            scene().to_string_lossy().into_owned(),
+            "--cache".into(),
+            cache.to_string_lossy().into_owned(),
+            "-o".into(),
+            out.to_string_lossy().into_owned(),
+            "--size".into(),
+            "80x72".into(),
+            "--aov".into(),
+            "all".into(),
+        ];
+        if let Some(c) = crop {
+            args.extend(["--crop".to_string(), c.to_string()]);
+        }
+        Command::new(WPBGI).args(&args).output().expect("runs")
+    };
+    let whole = d.join("whole.exr");
+    let out = render(&whole, None);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let read = |p: &Path| exr::prelude::read_all_flat_layers_from_file(p).expect("reads");
+    let full = read(&whole);
+    let full_layer = &full.layer_data[0];
+    let names: Vec<String> = full_layer
+        .channel_data
+        .list
+        .iter()
+        .map(|c| c.name.to_string())
+        .collect();
+    assert!(names.len() >= 17, "{names:?}");
+    let bits =
+        |layer: &exr::prelude::Layer<exr::prelude::AnyChannels<exr::prelude::FlatSamples>>,
+         name: &str|
+         -> Vec<u32> {
+            let c = layer
+                .channel_data
+                .list
+                .iter()
+                .find(|c| c.name.to_string() == name)
+                .unwrap_or_else(|| panic!("no channel {name}"));
+            c.sample_data.values_as_f32().map(f32::to_bits).collect()
+        };
+    let mut covered = vec![0u32; 80 * 72];
+    for (i, [x0, y0, x1, y1]) in [
+        [0u32, 0, 37, 30],
+        [37, 0, 80, 30],
+        [0, 30, 37, 72],
+        [37, 30, 80, 72],
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        let part = d.join(format!("part{i}.exr"));
+        let out = render(&part, Some(&format!("{x0},{y0},{x1},{y1}")));
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let img = read(&part);
+        assert_eq!(img.attributes.display_window.size.width(), 80);
+        assert_eq!(img.attributes.display_window.size.height(), 72);
+        let layer = &img.layer_data[0];
+        assert_eq!(
+            (
+                layer.attributes.layer_position.x(),
+                layer.attributes.layer_position.y()
+            ),
+            (x0 as i32, y0 as i32)
+        );
+        assert_eq!(
+            (layer.size.width(), layer.size.height()),
+            ((x1 - x0) as usize, (y1 - y0) as usize)
+        );
+        for name in &names {
+            let (whole_bits, part_bits) = (bits(full_layer, name), bits(layer, name));
+            for y in y0..y1 {
+                for x in x0..x1 {
+                    let k = ((y - y0) * (x1 - x0) + (x - x0)) as usize;
+                    assert_eq!(
+                        part_bits[k],
+                        whole_bits[(y * 80 + x) as usize],
+                        "channel {name}, pixel ({x}, {y})"
+                    );
+                    if name == "R" {
+                        covered[(y * 80 + x) as usize] += 1;
+                    }
+                }
+            }
+        }
+    }
+    assert!(covered.iter().all(|&c| c == 1));
+    let out = render(&d.join("bad.exr"), Some("10,10,81,20"));
+    assert!(!out.status.success());
+    let msg = String::from_utf8_lossy(&out.stderr);
+    assert!(msg.contains("crop") && msg.lines().count() == 1, "{msg}");
 }

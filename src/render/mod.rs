@@ -82,6 +82,10 @@ pub struct FinalSettings {
     /// off, every receiver gathers.
     pub sparse: bool,
     pub seed: u64,
+    /// Render only the pixels x0 ≤ x < x1, y0 ≤ y < y1 of the camera's image (`[x0, y0, x1,
+    /// y1]`). Every pixel comes out as in the whole image, bit for bit: the render works in
+    /// tiles of the whole image and keeps the crop's part of those it touches.
+    pub crop: Option<[u32; 4]>,
 }
 
 impl Default for FinalSettings {
@@ -102,6 +106,7 @@ impl Default for FinalSettings {
             spp: 16,
             sparse: true,
             seed: 0,
+            crop: None,
         }
     }
 }
@@ -153,11 +158,16 @@ pub struct FinalOutput {
     pub normal: Image,
     /// Distance to the first hit (0 where none), in all three channels.
     pub depth: Image,
+    /// Coverage: per pixel, the fraction of its camera samples that hit the scene.
+    pub alpha: Vec<f32>,
     /// Seconds per stage, in order.
     pub timings: Vec<(&'static str, f64)>,
     pub stats: GatherStats,
     /// Camera samples taken (adaptive anti-aliasing).
     pub samples: u64,
+    /// Where the images lie in the camera's whole image: their top-left pixel ((0, 0) but
+    /// for a crop).
+    pub origin: (u32, u32),
 }
 
 /// Render `camera`'s view of `scene` from `cache` (already checked to belong to the scene).
@@ -223,6 +233,14 @@ pub fn render_final_cancellable(
             "the far threshold must be a non-negative number and clusters at least 1".into(),
         ));
     }
+    let (w, h) = (camera.width, camera.height);
+    let [x0, y0, x1, y1] = settings.crop.unwrap_or([0, 0, w, h]);
+    if !(x0 < x1 && x1 <= w && y0 < y1 && y1 <= h) {
+        return Err(Error::InvalidSetting(format!(
+            "the crop {x0},{y0},{x1},{y1} is not a non-empty part of the {w}x{h} image \
+             (x0,y0,x1,y1: the pixels x0 ≤ x < x1, y0 ≤ y < y1)"
+        )));
+    }
     scene.check_renderable()?;
     let mut timings = Vec::new();
     let t = Instant::now();
@@ -236,11 +254,11 @@ pub fn render_final_cancellable(
     let senders = Senders::from_cache(cache).map_err(Error::Cache)?;
     timings.push(("load", t.elapsed().as_secs_f64()));
 
-    let (w, h) = (camera.width, camera.height);
     let t = Instant::now();
     let centre = centre_hits(&ctx, camera, settings.specular_below);
-    let tiles: Vec<(u32, u32)> = (0..h.div_ceil(TILE))
-        .flat_map(|ty| (0..w.div_ceil(TILE)).map(move |tx| (tx, ty)))
+    // The tiles of the whole image that the crop touches.
+    let tiles: Vec<(u32, u32)> = (y0 / TILE..y1.div_ceil(TILE))
+        .flat_map(|ty| (x0 / TILE..x1.div_ceil(TILE)).map(move |tx| (tx, ty)))
         .collect();
     let primary_settings = PrimarySettings {
         max_depth: settings.max_depth,
@@ -279,31 +297,48 @@ pub fn render_final_cancellable(
         .collect::<Result<_>>()?;
     timings.push(("gather", t.elapsed().as_secs_f64()));
 
+    let (cw, ch) = (x1 - x0, y1 - y0);
     let mut out = FinalOutput {
-        beauty: Image::new(w, h),
-        direct: Image::new(w, h),
-        indirect: Image::new(w, h),
-        albedo: Image::new(w, h),
-        normal: Image::new(w, h),
-        depth: Image::new(w, h),
+        beauty: Image::new(cw, ch),
+        direct: Image::new(cw, ch),
+        indirect: Image::new(cw, ch),
+        albedo: Image::new(cw, ch),
+        normal: Image::new(cw, ch),
+        depth: Image::new(cw, ch),
+        alpha: vec![0.0; cw as usize * ch as usize],
         timings,
         stats: GatherStats::default(),
         samples: 0,
+        origin: (x0, y0),
+    };
+    // A pixel of the whole image → its index in the crop.
+    let in_crop = |pixel: u32| {
+        let (x, y) = (pixel % w, pixel / w);
+        (x0..x1)
+            .contains(&x)
+            .then_some(())
+            .filter(|_| (y0..y1).contains(&y))
+            .map(|_| ((y - y0) * cw + (x - x0)) as usize)
     };
     for tile in &primary {
         out.samples += tile.samples;
         for (pixel, s) in &tile.pixels {
-            let i = *pixel as usize;
+            let Some(i) = in_crop(*pixel) else {
+                continue;
+            };
             out.direct.pixels[i] = s.direct;
             out.albedo.pixels[i] = s.albedo;
             out.normal.pixels[i] = s.normal;
             out.depth.pixels[i] = Vec3::splat(if s.depth.is_finite() { s.depth } else { 0.0 });
+            out.alpha[i] = s.alpha.min(1.0);
         }
     }
     for (values, stats) in &gathered {
         out.stats.add(stats);
         for (pixel, l) in values {
-            out.indirect.pixels[*pixel as usize] += *l;
+            if let Some(i) = in_crop(*pixel) {
+                out.indirect.pixels[i] += *l;
+            }
         }
     }
     for i in 0..out.beauty.pixels.len() {
@@ -448,6 +483,9 @@ fn primary_tile(
                 sum.albedo += r.albedo * weight;
                 sum.normal += r.normal * weight;
                 depth = depth.min(r.depth);
+                if r.depth.is_finite() {
+                    sum.alpha += 1.0 / count as f32;
+                }
             }
             sum.normal = sum.normal.normalize_or_zero();
             sum.depth = depth;

@@ -61,6 +61,9 @@ pub struct PrimarySample {
     pub normal: Vec3,
     /// Distance to the first hit (∞ for none).
     pub depth: f32,
+    /// Coverage: the fraction of the pixel's camera samples that hit the scene (set per
+    /// pixel by the render; 0 for one sample).
+    pub alpha: f32,
 }
 
 /// The settings the primary pass reads.

@@ -71,6 +71,84 @@ impl Camera {
         self
     }
 
+    /// OpenEXR's `worldToCamera`: row-major, for row vectors (p · M), into a camera space
+    /// with x right, y up and the view along −z (Imath's convention).
+    pub fn world_to_camera(&self) -> [f32; 16] {
+        let e = self.position;
+        let (x, y, z) = (self.right, self.up, -self.forward);
+        [
+            x.x,
+            y.x,
+            z.x,
+            0.0, //
+            x.y,
+            y.y,
+            z.y,
+            0.0, //
+            x.z,
+            y.z,
+            z.z,
+            0.0, //
+            -e.dot(x),
+            -e.dot(y),
+            -e.dot(z),
+            1.0,
+        ]
+    }
+
+    /// OpenEXR's `worldToNDC`, for row vectors: after the division by w, x and y run over
+    /// [−1, 1] across the image's width and height (y up), as in [`Camera::generate_ray`];
+    /// z/w is the reciprocal of the depth along the view (perspective) or the depth itself
+    /// (orthographic).
+    pub fn world_to_ndc(&self) -> [f32; 16] {
+        let projection: [f32; 16] = match self.projection {
+            Projection::Perspective { yfov } => {
+                let t = (0.5 * yfov).tan();
+                let aspect = self.width as f32 / self.height as f32;
+                [
+                    1.0 / (t * aspect),
+                    0.0,
+                    0.0,
+                    0.0, //
+                    0.0,
+                    1.0 / t,
+                    0.0,
+                    0.0, //
+                    0.0,
+                    0.0,
+                    0.0,
+                    -1.0, //
+                    0.0,
+                    0.0,
+                    1.0,
+                    0.0,
+                ]
+            }
+            Projection::Orthographic { xmag, ymag } => [
+                1.0 / xmag,
+                0.0,
+                0.0,
+                0.0, //
+                0.0,
+                1.0 / ymag,
+                0.0,
+                0.0, //
+                0.0,
+                0.0,
+                -1.0,
+                0.0, //
+                0.0,
+                0.0,
+                0.0,
+                1.0,
+            ],
+        };
+        let a = glam::Mat4::from_cols_array(&self.world_to_camera());
+        let b = glam::Mat4::from_cols_array(&projection);
+        // Row-major arrays read as column-major are the transposes: (A·B)ᵀ = Bᵀ·Aᵀ.
+        (b * a).to_cols_array()
+    }
+
     /// Primary ray through film position `p` (in pixels, `[0, width) × [0, height)`):
     /// `(origin, unit direction)`.
     pub fn generate_ray(&self, p: Vec2) -> (Vec3, Vec3) {

@@ -6,7 +6,10 @@ use clap::{Args, ValueEnum};
 use std::path::PathBuf;
 use std::time::Instant;
 use wpbgi::cache::store::BakedCache;
-use wpbgi::image::{read_exr, write_exr_layers, write_png, Image};
+use wpbgi::image::{
+    exr_capture_date, read_exr, write_exr_channels, write_png, ExrChannels, ExrCompression,
+    ExrHeader, ExrOptions, ExrPrecision, Image,
+};
 use wpbgi::render::{render_final_cancellable, FinalOutput, FinalSettings, GatherMode};
 use wpbgi::scene::{Camera, Scene};
 
@@ -22,6 +25,27 @@ pub enum GatherArg {
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ExrPrecisionArg {
+    /// 16-bit floats: half the size, 11 bits of mantissa, values up to 65 504.
+    Half,
+    /// 32-bit floats.
+    Float,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
+pub enum ExrCompressionArg {
+    None,
+    /// Run lengths: fast, large.
+    Rle,
+    /// zlib per scan line.
+    Zips,
+    /// zlib per 16 scan lines (what compositing tools write by default).
+    Zip,
+    /// Wavelet and Huffman: small files of noisy images.
+    Piz,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum Aov {
     /// Emission and direct light.
     Direct,
@@ -29,9 +53,9 @@ pub enum Aov {
     Indirect,
     /// Surface colour of the first hit.
     Albedo,
-    /// World-space shading normal of the first hit.
+    /// World-space shading normal of the first hit (N.X, N.Y, N.Z).
     Normal,
-    /// Distance to the first hit.
+    /// Distance to the first hit (Z; 0 where none).
     Depth,
     /// All of the above.
     All,
@@ -44,9 +68,19 @@ pub struct RenderArgs {
     /// The cache (.wpc); refused if the scene or its bake settings changed since.
     #[arg(long)]
     pub cache: PathBuf,
-    /// Output image (OpenEXR, float32; the beauty as R, G, B and each AOV as NAME.R/G/B).
+    /// Output image (OpenEXR: the beauty as R, G, B and its coverage as A; --aov depth as Z,
+    /// normal as N.X/N.Y/N.Z, the others as NAME.R/G/B; the header carries software,
+    /// worldToCamera, worldToNDC, capDate and a `wpbgi` text attribute with the settings, the
+    /// cache's hash and the render's seconds. With SOURCE_DATE_EPOCH set, capDate is that time
+    /// and the seconds are left out, so that two renders give the same file byte for byte).
     #[arg(short, long)]
     pub output: PathBuf,
+    /// Sample precision of the EXR.
+    #[arg(long, value_enum, default_value = "float")]
+    pub exr_precision: ExrPrecisionArg,
+    /// Lossless compression of the EXR.
+    #[arg(long, value_enum, default_value = "zip")]
+    pub exr_compression: ExrCompressionArg,
     /// How receivers gather the cache's light.
     #[arg(long, value_enum, default_value = "fpbgi")]
     pub gather: GatherArg,
@@ -84,6 +118,11 @@ pub struct RenderArgs {
     /// Seed of the random streams.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// Render only the pixels x0 ≤ x < x1, y0 ≤ y < y1 (x0,y0,x1,y1), each exactly as in
+    /// the whole image: the EXR's data window is the crop, its display window the whole
+    /// image, so crops assemble into the whole image byte for byte (tiles for a farm).
+    #[arg(long, value_parser = parse_crop)]
+    pub crop: Option<[u32; 4]>,
     /// Also write an sRGB PNG preview.
     #[arg(long)]
     pub png: Option<PathBuf>,
@@ -93,6 +132,17 @@ pub struct RenderArgs {
     pub reference: Option<PathBuf>,
     #[command(flatten)]
     pub camera: CameraArgs,
+}
+
+/// `x0,y0,x1,y1` as four pixel bounds.
+fn parse_crop(s: &str) -> std::result::Result<[u32; 4], String> {
+    let v: Vec<u32> = s
+        .split(',')
+        .map(|t| t.trim().parse::<u32>())
+        .collect::<std::result::Result<_, _>>()
+        .map_err(|_| format!("expected x0,y0,x1,y1 (four pixel bounds), got \"{s}\""))?;
+    <[u32; 4]>::try_from(v)
+        .map_err(|_| format!("expected x0,y0,x1,y1 (four pixel bounds), got \"{s}\""))
 }
 
 /// Render with a progress bar, stopping on Ctrl-C (see [`crate::interrupt`]).
@@ -113,6 +163,53 @@ pub fn run_final(
     )?;
     bar.finish();
     Ok(out)
+}
+
+/// The EXR options of a render of `camera`: precision, compression and the header (see
+/// `--output`), with `record` (wpbgi's settings) and the render's `seconds` in its `wpbgi`
+/// attribute.
+pub fn exr_options(
+    camera: &Camera,
+    mut record: serde_json::Value,
+    seconds: f64,
+    precision: ExrPrecisionArg,
+    compression: ExrCompressionArg,
+) -> ExrOptions {
+    // The reproducible-builds convention: a fixed date, and no time measured.
+    let fixed = std::env::var("SOURCE_DATE_EPOCH")
+        .ok()
+        .and_then(|s| s.trim().parse::<u64>().ok());
+    let now = fixed.unwrap_or_else(|| {
+        std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_secs())
+    });
+    if fixed.is_none() {
+        record["render_seconds"] = serde_json::json!(seconds);
+    }
+    ExrOptions {
+        precision: match precision {
+            ExrPrecisionArg::Half => ExrPrecision::Half,
+            ExrPrecisionArg::Float => ExrPrecision::Float,
+        },
+        compression: match compression {
+            ExrCompressionArg::None => ExrCompression::None,
+            ExrCompressionArg::Rle => ExrCompression::Rle,
+            ExrCompressionArg::Zips => ExrCompression::Zips,
+            ExrCompressionArg::Zip => ExrCompression::Zip,
+            ExrCompressionArg::Piz => ExrCompression::Piz,
+        },
+        display: (camera.width, camera.height),
+        origin: (0, 0),
+        header: ExrHeader {
+            software: Some(format!("wpbgi {}", env!("CARGO_PKG_VERSION"))),
+            world_to_camera: Some(camera.world_to_camera()),
+            world_to_ndc: Some(camera.world_to_ndc()),
+            capture_date: Some(exr_capture_date(now)),
+            comments: None,
+            wpbgi: Some(record.to_string()),
+        },
+    }
 }
 
 pub fn print_summary(out: &FinalOutput) {
@@ -171,6 +268,7 @@ pub fn render_command(a: RenderArgs) -> Result<()> {
         clusters: a.clusters,
         far_eps: a.far,
         seed: a.seed,
+        crop: a.crop,
         ..Default::default()
     };
     let reference = a.reference.as_deref().map(read_exr).transpose()?;
@@ -178,6 +276,13 @@ pub fn render_command(a: RenderArgs) -> Result<()> {
         wpbgi::compare::check_size(r, camera.width, camera.height)
             .map_err(|m| anyhow::anyhow!("{}: {m} (set --size)", path.display()))?;
     }
+    // A crop is compared with the same part of the reference.
+    let reference = match (reference, a.crop) {
+        (Some(r), Some([x0, y0, x1, y1])) => {
+            r.crop(x0, y0, x1.saturating_sub(x0), y1.saturating_sub(y0))
+        }
+        (r, _) => r,
+    };
     crate::interrupt::guard_outputs([a.output.clone()].into_iter().chain(a.png.clone()));
     let out = run_final(&scene, &cache, &camera, &settings)?;
     let all = a.aov.contains(&Aov::All);
@@ -187,14 +292,45 @@ pub fn render_command(a: RenderArgs) -> Result<()> {
         (Aov::Direct, "direct", &out.direct),
         (Aov::Indirect, "indirect", &out.indirect),
         (Aov::Albedo, "albedo", &out.albedo),
-        (Aov::Normal, "normal", &out.normal),
-        (Aov::Depth, "depth", &out.depth),
     ] {
         if wanted(aov) {
             layers.push((name, img));
         }
     }
-    write_exr_layers(&a.output, &out.beauty, &layers)?;
+    let z: Vec<f32> = out.depth.pixels.iter().map(|d| d.x).collect();
+    let channels = ExrChannels {
+        alpha: Some(&out.alpha),
+        z: wanted(Aov::Depth).then_some(&z[..]),
+        normal: wanted(Aov::Normal).then_some(&out.normal),
+        layers,
+        ..ExrChannels::of(&out.beauty)
+    };
+    let record = serde_json::json!({
+        "cache_hash": wpbgi::cache::hash_hex(cache.cache.hash),
+        "cache": a.cache.display().to_string(),
+        "camera": camera.name,
+        "settings": {
+            "gather": format!("{:?}", a.gather).to_lowercase(),
+            "mb_size": a.mb_size,
+            "uniform": a.uniform,
+            "dense": a.dense,
+            "light_samples": a.light_samples,
+            "max_depth": a.max_depth,
+            "clusters": a.clusters,
+            "far": a.far,
+            "spp": a.spp,
+            "seed": a.seed,
+        },
+    });
+    let mut options = exr_options(
+        &camera,
+        record,
+        start.elapsed().as_secs_f64(),
+        a.exr_precision,
+        a.exr_compression,
+    );
+    options.origin = out.origin;
+    write_exr_channels(&a.output, &channels, &options)?;
     if let Some(p) = &a.png {
         write_png(p, &out.beauty)?;
     }
