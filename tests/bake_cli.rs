@@ -533,3 +533,96 @@ fn crops_assemble_into_the_whole_image() {
     let msg = String::from_utf8_lossy(&out.stderr);
     assert!(msg.contains("crop") && msg.lines().count() == 1, "{msg}");
 }
+
+/// `render --frames` of a USD stage whose camera moves: one bake, one file per frame named by
+/// `$F4` / `####`, the scene read at each frame's time code (frame 2 is the render at
+/// `--time-code 2`, byte for byte), a step, and names without a frame token refused.
+#[test]
+fn render_frames_write_one_file_per_frame() {
+    let d = dir("frames");
+    let stage = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/usd/cbox-dolly.usda");
+    let cache = d.join("dolly.wpc");
+    let out = wpbgi(&[
+        "bake",
+        stage.to_str().expect("utf-8"),
+        "-o",
+        cache.to_str().expect("utf-8"),
+        "--points",
+        "2000",
+        "--light-samples",
+        "16",
+        "--bounces",
+        "0",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let render = |output: &Path, extra: &[&str]| {
+        Command::new(WPBGI)
+            .args([
+                "render",
+                stage.to_str().expect("utf-8"),
+                "--cache",
+                cache.to_str().expect("utf-8"),
+                "-o",
+                output.to_str().expect("utf-8"),
+                "--size",
+                "32x32",
+            ])
+            .args(extra)
+            .env("SOURCE_DATE_EPOCH", "1764000000")
+            .output()
+            .expect("runs")
+    };
+    let out = render(&d.join("beauty.$F4.exr"), &["--frames", "1-3"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let frame = |n: u32| std::fs::read(d.join(format!("beauty.{n:04}.exr"))).expect("a frame");
+    let (one, two, three) = (frame(1), frame(2), frame(3));
+    assert!(
+        one != three,
+        "the camera moved: frames 1 and 3 cannot be the same"
+    );
+    let at_two = d.join("at-two.exr");
+    let out = Command::new(WPBGI)
+        .args([
+            "--time-code",
+            "2",
+            "render",
+            stage.to_str().expect("utf-8"),
+            "--cache",
+            cache.to_str().expect("utf-8"),
+            "-o",
+            at_two.to_str().expect("utf-8"),
+            "--size",
+            "32x32",
+        ])
+        .env("SOURCE_DATE_EPOCH", "1764000000")
+        .output()
+        .expect("runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(std::fs::read(&at_two).expect("time code 2") == two);
+    // A step, and the '#' convention.
+    let out = render(&d.join("step.####.exr"), &["--frames", "1-3:2"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(d.join("step.0001.exr").exists() && d.join("step.0003.exr").exists());
+    assert!(!d.join("step.0002.exr").exists());
+    assert!(std::fs::read(d.join("step.0001.exr")).expect("step 1") == one);
+    let out = render(&d.join("still.exr"), &["--frames", "1-3"]);
+    assert!(!out.status.success());
+    let msg = String::from_utf8_lossy(&out.stderr);
+    assert!(msg.contains("$F4") && msg.lines().count() == 1, "{msg}");
+}

@@ -3,6 +3,7 @@
 
 mod bake_cmd;
 mod compare_cmd;
+mod frames;
 mod interrupt;
 mod preview_cmd;
 mod render_cmd;
@@ -114,6 +115,11 @@ struct ReferenceArgs {
     /// Also write an sRGB PNG preview.
     #[arg(long)]
     png: Option<PathBuf>,
+    /// Render frames FIRST-LAST[:STEP] (or one FRAME): the scene at each frame's USD time
+    /// code, one image each, named by `$F4` (zero-padded), `$F` or `####` in --output, --png
+    /// and --variance.
+    #[arg(long, value_parser = frames::parse_frames)]
+    frames: Option<frames::Frames>,
     #[command(flatten)]
     camera: CameraArgs,
 }
@@ -234,7 +240,20 @@ static TIME_CODE: std::sync::OnceLock<Option<f64>> = std::sync::OnceLock::new();
 
 /// Load a scene at the run's `--time-code`.
 pub(crate) fn load_scene(path: &Path) -> Result<Scene> {
-    Ok(Scene::load_at(path, TIME_CODE.get().copied().flatten())?)
+    load_scene_at(path, None)
+}
+
+/// Load a scene at time code `time` (a frame's), or without one at the run's `--time-code`.
+pub(crate) fn load_scene_at(path: &Path, time: Option<f64>) -> Result<Scene> {
+    Ok(Scene::load_at(
+        path,
+        time.or(TIME_CODE.get().copied().flatten()),
+    )?)
+}
+
+/// Whether the run named a `--time-code`.
+pub(crate) fn time_code_given() -> bool {
+    TIME_CODE.get().copied().flatten().is_some()
 }
 
 pub(crate) fn warn(scene: &Scene) {
@@ -244,45 +263,61 @@ pub(crate) fn warn(scene: &Scene) {
 }
 
 fn reference(a: ReferenceArgs) -> Result<()> {
-    let scene = load_scene(&a.scene)?;
-    warn(&scene);
-    let camera = pick_camera(&scene, &a.camera)?;
-    let settings = RenderSettings {
-        spp: a.spp.unwrap_or(4),
-        max_depth: a.max_depth,
-        rr_depth: a.rr_depth,
-        seed: a.seed,
-        time_limit: match a.time {
-            Some(t) if t > 0.0 && t.is_finite() => Some(Duration::from_secs_f64(t)),
-            Some(_) => bail!("--time must be a positive number of seconds"),
-            None => None,
-        },
-        ..Default::default()
+    let frames = frames::outputs(a.frames, &a.output, a.png.as_deref())?;
+    let variance = |time: Option<f64>| -> Result<Option<PathBuf>> {
+        match (&a.variance, time) {
+            (Some(p), Some(f)) => frames::frame_path(p, f as i64).map(Some).ok_or_else(|| {
+                anyhow::anyhow!(
+                    "{}: with --frames the name needs $F4, $F or #### where the frame number goes",
+                    p.display()
+                )
+            }),
+            (v, _) => Ok(v.clone()),
+        }
     };
-    interrupt::guard_outputs(
-        [a.output.clone()]
-            .into_iter()
-            .chain(a.variance.clone())
-            .chain(a.png.clone()),
-    );
-    let out = run_render(&scene, &camera, &settings)?;
-    write_exr(&a.output, &out.mean)?;
-    if let Some(p) = &a.variance {
-        write_exr(p, &out.variance)?;
+    let mut guarded = Vec::new();
+    for f in &frames {
+        guarded.extend([f.output.clone()].into_iter().chain(f.png.clone()));
+        guarded.extend(variance(f.time)?);
     }
-    if let Some(p) = &a.png {
-        write_png(p, &out.mean)?;
+    interrupt::guard_outputs(guarded);
+    let time_limit = match a.time {
+        Some(t) if t > 0.0 && t.is_finite() => Some(Duration::from_secs_f64(t)),
+        Some(_) => bail!("--time must be a positive number of seconds"),
+        None => None,
+    };
+    for f in &frames {
+        let (time, output, png) = (f.time, &f.output, &f.png);
+        let scene = load_scene_at(&a.scene, time)?;
+        warn(&scene);
+        let camera = pick_camera(&scene, &a.camera)?;
+        let settings = RenderSettings {
+            spp: a.spp.unwrap_or(4),
+            max_depth: a.max_depth,
+            rr_depth: a.rr_depth,
+            seed: a.seed,
+            time_limit,
+            ..Default::default()
+        };
+        let out = run_render(&scene, &camera, &settings)?;
+        write_exr(output, &out.mean)?;
+        if let Some(p) = variance(time)? {
+            write_exr(&p, &out.variance)?;
+        }
+        if let Some(p) = png {
+            write_png(p, &out.mean)?;
+        }
+        let mp = (camera.width as f64 * camera.height as f64) / 1e6;
+        eprintln!(
+            "wrote {} ({}x{}, {} spp, {:.2} s, {:.3} s/spp/MP)",
+            output.display(),
+            camera.width,
+            camera.height,
+            out.spp,
+            out.seconds,
+            out.seconds / (out.spp as f64 * mp)
+        );
     }
-    let mp = (camera.width as f64 * camera.height as f64) / 1e6;
-    eprintln!(
-        "wrote {} ({}x{}, {} spp, {:.2} s, {:.3} s/spp/MP)",
-        a.output.display(),
-        camera.width,
-        camera.height,
-        out.spp,
-        out.seconds,
-        out.seconds / (out.spp as f64 * mp)
-    );
     Ok(())
 }
 

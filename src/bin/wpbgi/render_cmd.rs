@@ -3,9 +3,9 @@
 use crate::CameraArgs;
 use anyhow::{bail, Result};
 use clap::{Args, ValueEnum};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
-use wpbgi::cache::store::BakedCache;
+use wpbgi::cache::store::{bake_hash, BakedCache};
 use wpbgi::image::{
     exr_capture_date, read_exr, write_exr_channels, write_png, ExrChannels, ExrCompression,
     ExrHeader, ExrOptions, ExrPrecision, Image,
@@ -126,6 +126,12 @@ pub struct RenderArgs {
     /// Also write an sRGB PNG preview.
     #[arg(long)]
     pub png: Option<PathBuf>,
+    /// Render frames FIRST-LAST[:STEP] (or one FRAME): the scene at each frame's USD time code,
+    /// one image each, named by `$F4` (zero-padded), `$F` or `####` in --output and --png
+    /// (e.g. `-o beauty.$F4.exr`). The cache must be fresh for every frame (a camera may move;
+    /// geometry that moves needs a bake per frame).
+    #[arg(long, value_parser = crate::frames::parse_frames)]
+    pub frames: Option<crate::frames::Frames>,
     /// Print the error (MSE, relative MSE, MSSIM) against this reference image, and store it
     /// next to the output as OUTPUT.error.json.
     #[arg(long)]
@@ -235,11 +241,35 @@ pub fn print_summary(out: &FinalOutput) {
 }
 
 pub fn render_command(a: RenderArgs) -> Result<()> {
+    let frames = crate::frames::outputs(a.frames, &a.output, a.png.as_deref())?;
+    let cache = BakedCache::read(&a.cache, None)?;
+    crate::interrupt::guard_outputs(
+        frames
+            .iter()
+            .flat_map(|f| std::iter::once(f.output.clone()).chain(f.png.clone())),
+    );
+    for f in &frames {
+        render_frame(&a, &cache, f.time, &f.output, f.png.as_deref())?;
+    }
+    Ok(())
+}
+
+/// Render one frame: the scene at `time` (a frame's time code; `None`: `--time-code`'s) from
+/// `cache`, refused if stale for the scene at that time, to `output` (and `png`).
+fn render_frame(
+    a: &RenderArgs,
+    cache: &BakedCache,
+    time: Option<f64>,
+    output: &Path,
+    png: Option<&Path>,
+) -> Result<()> {
     let start = Instant::now();
-    let scene = crate::load_scene(&a.scene)?;
+    let scene = crate::load_scene_at(&a.scene, time)?;
     crate::warn(&scene);
     let camera = crate::pick_camera(&scene, &a.camera)?;
-    let cache = BakedCache::open_fresh(&scene, &a.cache)?;
+    cache
+        .cache
+        .check_fresh(bake_hash(&scene, &cache.plan["settings"]))?;
     let bounces = cache.plan["plan"]["bounces"]["bounces"]
         .as_u64()
         .unwrap_or(0);
@@ -283,8 +313,7 @@ pub fn render_command(a: RenderArgs) -> Result<()> {
         }
         (r, _) => r,
     };
-    crate::interrupt::guard_outputs([a.output.clone()].into_iter().chain(a.png.clone()));
-    let out = run_final(&scene, &cache, &camera, &settings)?;
+    let out = run_final(&scene, cache, &camera, &settings)?;
     let all = a.aov.contains(&Aov::All);
     let wanted = |x: Aov| all || a.aov.contains(&x);
     let mut layers: Vec<(&str, &Image)> = Vec::new();
@@ -330,13 +359,13 @@ pub fn render_command(a: RenderArgs) -> Result<()> {
         a.exr_compression,
     );
     options.origin = out.origin;
-    write_exr_channels(&a.output, &channels, &options)?;
-    if let Some(p) = &a.png {
+    write_exr_channels(output, &channels, &options)?;
+    if let Some(p) = png {
         write_png(p, &out.beauty)?;
     }
     eprintln!(
         "wrote {} ({}x{}, {} gather, {:.2} s)",
-        a.output.display(),
+        output.display(),
         camera.width,
         camera.height,
         match a.gather {
@@ -353,14 +382,14 @@ pub fn render_command(a: RenderArgs) -> Result<()> {
             "  error against the reference: MSE {mse:.3e}, relMSE {rel_mse:.3e}, MSSIM {mssim:.4}"
         );
         let record = serde_json::json!({
-            "image": a.output.display().to_string(),
+            "image": output.display().to_string(),
             "reference": path.display().to_string(),
             "mse": mse,
             "rel_mse": rel_mse,
             "mssim": mssim,
             "render_s": out.timings.iter().map(|t| t.1).sum::<f64>(),
         });
-        let sidecar = a.output.with_extension("error.json");
+        let sidecar = output.with_extension("error.json");
         wpbgi::atomic::write_atomically(&sidecar, |tmp| {
             std::fs::write(tmp, format!("{record:#}\n")).map_err(|e| e.to_string())
         })?;
