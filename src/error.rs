@@ -59,7 +59,7 @@ pub enum Error {
     )]
     UnsupportedFormat { path: PathBuf },
 
-    #[error("{path}: the scene has no emitter (no emissive material and no light), so it would render black")]
+    #[error("{path}: the scene has no emitter (no emissive material, light or environment), so it would render black; light it with an environment: --env FILE.exr, FILE.hdr or R,G,B on the command line")]
     NoEmitter { path: PathBuf },
 
     #[error("{path}: the scene has no geometry to render")]

@@ -13,10 +13,12 @@
 //! it) times sin θ, the cell's share of the sphere, so every direction with radiance can be
 //! drawn. The density in solid angle is p(u, v) / (2π² sin θ).
 
-use super::texture::{TexRef, Texture, Wrap};
+use super::texture::{srgb_to_linear, TexRef, Texture, Wrap};
+use crate::error::{Error, Result};
 use crate::spectrum::{luminance, Rgb};
 use glam::{Mat3, Vec2, Vec3, Vec4};
 use std::f32::consts::PI;
+use std::path::Path;
 
 /// Radiance from every direction not blocked by the scene.
 #[derive(Clone, Debug)]
@@ -35,6 +37,55 @@ pub struct Environment {
 const MIN_GRID: (u32, u32) = (64, 32);
 
 impl Environment {
+    /// The same radiance `radiance` from every direction (a white furnace's sky).
+    pub fn constant(radiance: Rgb) -> Environment {
+        Environment {
+            name: format!("constant {} {} {}", radiance.x, radiance.y, radiance.z),
+            map: None,
+            scale: radiance,
+            to_local: Mat3::IDENTITY,
+        }
+    }
+
+    /// The latitude-longitude image in `path` (OpenEXR, Radiance HDR, or an 8-bit image read
+    /// as sRGB) times `intensity`, turned by `rotate_degrees` about the world's +Y axis (the
+    /// map's centre, towards +Z unturned, turns towards +X).
+    pub fn latlong_file(path: &Path, intensity: f32, rotate_degrees: f32) -> Result<Environment> {
+        let bytes = std::fs::read(path).map_err(|source| Error::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let name = path.display().to_string();
+        let (mut map, srgb) = Texture::decode(&name, &bytes).map_err(|reason| {
+            Error::InvalidSetting(format!(
+                "{name}: not an environment image (latitude-longitude .exr or .hdr): {reason}"
+            ))
+        })?;
+        if srgb {
+            for t in &mut map.texels {
+                *t = Vec4::new(
+                    srgb_to_linear(t.x),
+                    srgb_to_linear(t.y),
+                    srgb_to_linear(t.z),
+                    t.w,
+                );
+            }
+        }
+        if !(intensity >= 0.0 && intensity.is_finite() && rotate_degrees.is_finite()) {
+            return Err(Error::InvalidSetting(format!(
+                "the environment's intensity must be a non-negative number and its rotation a \
+                 number of degrees, got {intensity} and {rotate_degrees}"
+            )));
+        }
+        Ok(Environment {
+            name,
+            map: Some(map),
+            scale: Rgb::splat(intensity),
+            // World to the map's frame: the inverse of the turn.
+            to_local: Mat3::from_rotation_y(-rotate_degrees.to_radians()),
+        })
+    }
+
     /// Radiance arriving from world direction `w` (towards the environment).
     pub fn radiance(&self, w: Vec3) -> Rgb {
         let Some(map) = &self.map else {

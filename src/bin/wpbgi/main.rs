@@ -34,6 +34,19 @@ struct Cli {
     /// no time). Named so as not to clash with `reference --time SECONDS`.
     #[arg(long, global = true, allow_hyphen_values = true)]
     time_code: Option<f64>,
+    /// Light the scene with an environment: a latitude-longitude image (.exr or .hdr; OpenEXR's
+    /// orientation, +Y up and the image's centre towards +Z) or one radiance R,G,B (or V) from
+    /// every direction. It replaces the scene's own dome light, and a cache baked under it is
+    /// stale without it (the environment is part of the cache's hash).
+    #[arg(long, global = true, value_name = "FILE|R,G,B")]
+    env: Option<String>,
+    /// Multiplies --env's image.
+    #[arg(long, global = true, default_value_t = 1.0)]
+    env_intensity: f32,
+    /// Turns --env's image about the world's +Y axis by this many degrees (its centre towards
+    /// +X for 90).
+    #[arg(long, global = true, default_value_t = 0.0, allow_hyphen_values = true)]
+    env_rotate: f32,
     #[command(subcommand)]
     command: Command,
 }
@@ -238,6 +251,45 @@ pub(crate) fn pick_camera(scene: &Scene, args: &CameraArgs) -> Result<Camera> {
 /// The `--time-code` of this run.
 static TIME_CODE: std::sync::OnceLock<Option<f64>> = std::sync::OnceLock::new();
 
+/// The run's `--env`, read once.
+static ENVIRONMENT: std::sync::OnceLock<Option<wpbgi::scene::Environment>> =
+    std::sync::OnceLock::new();
+
+/// The environment `--env` names: a radiance `R,G,B` or `V`, or an image file.
+fn environment_of(cli: &Cli) -> Result<Option<wpbgi::scene::Environment>> {
+    let Some(spec) = &cli.env else {
+        return Ok(None);
+    };
+    if !(cli.env_intensity >= 0.0 && cli.env_intensity.is_finite()) {
+        bail!("--env-intensity must be a non-negative number");
+    }
+    let numbers: Option<Vec<f32>> = spec
+        .split(',')
+        .map(|t| t.trim().parse::<f32>().ok())
+        .collect();
+    let radiance = match numbers.as_deref() {
+        Some(&[v]) => Some(Vec3::splat(v)),
+        Some(&[r, g, b]) => Some(Vec3::new(r, g, b)),
+        _ => None,
+    };
+    if let Some(l) = radiance {
+        if !(l.is_finite() && l.min_element() >= 0.0) {
+            bail!("--env {spec}: the radiance must be non-negative numbers");
+        }
+        if cli.env_rotate != 0.0 {
+            eprintln!("warning: --env-rotate turns nothing: the environment {spec} is one colour");
+        }
+        return Ok(Some(wpbgi::scene::Environment::constant(
+            l * cli.env_intensity,
+        )));
+    }
+    Ok(Some(wpbgi::scene::Environment::latlong_file(
+        Path::new(spec),
+        cli.env_intensity,
+        cli.env_rotate,
+    )?))
+}
+
 /// Load a scene at the run's `--time-code`.
 pub(crate) fn load_scene(path: &Path) -> Result<Scene> {
     load_scene_at(path, None)
@@ -245,10 +297,17 @@ pub(crate) fn load_scene(path: &Path) -> Result<Scene> {
 
 /// Load a scene at time code `time` (a frame's), or without one at the run's `--time-code`.
 pub(crate) fn load_scene_at(path: &Path, time: Option<f64>) -> Result<Scene> {
-    Ok(Scene::load_at(
-        path,
-        time.or(TIME_CODE.get().copied().flatten()),
-    )?)
+    let mut scene = Scene::load_at(path, time.or(TIME_CODE.get().copied().flatten()))?;
+    if let Some(env) = ENVIRONMENT.get().cloned().flatten() {
+        if let Some(own) = &scene.environment {
+            scene.warnings.push(wpbgi::scene::Warning(format!(
+                "--env replaces the scene's environment {}",
+                own.name
+            )));
+        }
+        scene.environment = Some(env);
+    }
+    Ok(scene)
 }
 
 /// Whether the run named a `--time-code`.
@@ -376,6 +435,15 @@ fn main() {
         std::process::exit(2);
     }
     let _ = TIME_CODE.set(cli.time_code);
+    match environment_of(&cli) {
+        Ok(env) => {
+            let _ = ENVIRONMENT.set(env);
+        }
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            std::process::exit(2);
+        }
+    }
     if let Some(n) = cli.threads {
         if n == 0
             || rayon::ThreadPoolBuilder::new()
