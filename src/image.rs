@@ -350,16 +350,71 @@ pub fn srgb8(c: f32) -> u8 {
 
 /// Write an 8-bit sRGB PNG (values clamped to [0, 1], no tone mapping).
 pub fn write_png(path: &Path, img: &Image) -> Result<()> {
-    let to8 = srgb8;
+    write_display(path, img, 0.0, ViewTransform::Srgb)
+}
+
+/// How linear radiance becomes an 8-bit display image.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ViewTransform {
+    /// sRGB's curve on the value clamped to [0, 1]: what is above 1 clips.
+    #[default]
+    Srgb,
+    /// A filmic curve: ACES's reference and sRGB output transforms as fitted by K. Narkowicz
+    /// (2015), x(2.51x + 0.03) / (x(2.43x + 0.59) + 0.14) of 0.6 times the value, then sRGB's
+    /// curve. Highlights roll off towards white instead of clipping; mid-grey 0.18 shows at
+    /// about 0.15 (the fit's 0.6, which matches ACES's exposure).
+    Aces,
+}
+
+impl ViewTransform {
+    /// The display value (0 to 1, before sRGB's curve) of the linear value `c`.
+    pub fn apply(self, c: f32) -> f32 {
+        match self {
+            ViewTransform::Srgb => c.clamp(0.0, 1.0),
+            ViewTransform::Aces => {
+                let x = 0.6 * c.max(0.0);
+                (x * (2.51 * x + 0.03) / (x * (2.43 * x + 0.59) + 0.14)).clamp(0.0, 1.0)
+            }
+        }
+    }
+}
+
+/// Write `img` as an 8-bit sRGB PNG, or JPEG where `path` ends in .jpg or .jpeg, after
+/// scaling it by 2^`exposure` (stops) and through `view`.
+pub fn write_display(path: &Path, img: &Image, exposure: f32, view: ViewTransform) -> Result<()> {
+    if !exposure.is_finite() {
+        return Err(output_error(path, "the exposure must be a number of stops"));
+    }
+    let scale = exposure.exp2();
+    let to8 = |c: f32| srgb8(view.apply(c * scale));
     let mut buf = Vec::with_capacity(img.pixels.len() * 3);
     for p in &img.pixels {
         buf.extend_from_slice(&[to8(p.x), to8(p.y), to8(p.z)]);
     }
-    write_png_rgb8(path, img.width, img.height, &buf)
+    let jpeg = path
+        .extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("jpg") || e.eq_ignore_ascii_case("jpeg"));
+    let format = if jpeg {
+        image::ImageFormat::Jpeg
+    } else {
+        image::ImageFormat::Png
+    };
+    write_rgb8(path, img.width, img.height, &buf, format)
 }
 
 /// Write 8-bit sRGB pixels (R, G, B per pixel, rows from the top) as a PNG.
 pub fn write_png_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<()> {
+    write_rgb8(path, width, height, rgb, image::ImageFormat::Png)
+}
+
+fn write_rgb8(
+    path: &Path,
+    width: u32,
+    height: u32,
+    rgb: &[u8],
+    format: image::ImageFormat,
+) -> Result<()> {
     write_atomically(path, |tmp| {
         image::save_buffer_with_format(
             tmp,
@@ -367,7 +422,7 @@ pub fn write_png_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Resul
             width,
             height,
             image::ExtendedColorType::Rgb8,
-            image::ImageFormat::Png,
+            format,
         )
         .map_err(|e| e.to_string())
     })
@@ -388,4 +443,49 @@ pub fn read_exr(path: &Path) -> Result<Image> {
         reason: e.to_string(),
     })?;
     Ok(img.layer_data.channel_data.pixels)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The filmic curve: black stays black, it rises monotonically, rolls off below white
+    /// (no clip for values a sRGB view would clip), and matches Narkowicz's fit at points
+    /// worked out by hand.
+    #[test]
+    fn aces_view_rolls_off() {
+        let v = ViewTransform::Aces;
+        assert_eq!(v.apply(0.0), 0.0);
+        assert_eq!(v.apply(-1.0), 0.0);
+        let xs: Vec<f32> = (0..200).map(|i| i as f32 * 0.05).collect();
+        assert!(xs.windows(2).all(|w| v.apply(w[1]) > v.apply(w[0])));
+        assert!(v.apply(2.0) < v.apply(4.0) && v.apply(4.0) < 1.0);
+        // x = 0.6: 0.6 (1.506 + 0.03) / (0.6 (1.458 + 0.59) + 0.14) = 0.9216 / 1.3688.
+        assert!((v.apply(1.0) - 0.9216 / 1.3688).abs() < 1e-6);
+        assert_eq!(ViewTransform::Srgb.apply(2.0), 1.0);
+    }
+
+    /// An exposure of +1 stop shows what twice the radiance shows at 0; PNG and JPEG by name.
+    #[test]
+    fn exposure_doubles_the_radiance() {
+        let dir = std::env::temp_dir().join(format!("wpbgi-display-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("dir");
+        let mut img = Image::new(4, 1);
+        img.pixels = vec![
+            Rgb::splat(0.05),
+            Rgb::splat(0.1),
+            Rgb::splat(0.2),
+            Rgb::splat(0.4),
+        ];
+        let mut doubled = img.clone();
+        doubled.pixels.iter_mut().for_each(|p| *p *= 2.0);
+        let (a, b, c) = (dir.join("a.png"), dir.join("b.png"), dir.join("c.jpg"));
+        write_display(&a, &img, 1.0, ViewTransform::Aces).expect("a");
+        write_display(&b, &doubled, 0.0, ViewTransform::Aces).expect("b");
+        write_display(&c, &img, 0.0, ViewTransform::Srgb).expect("c");
+        assert_eq!(std::fs::read(&a).expect("a"), std::fs::read(&b).expect("b"));
+        let jpeg = std::fs::read(&c).expect("c");
+        assert_eq!(&jpeg[..2], &[0xff, 0xd8], "not a JPEG");
+        assert!(write_display(&a, &img, f32::NAN, ViewTransform::Srgb).is_err());
+    }
 }

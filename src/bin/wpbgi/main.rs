@@ -125,7 +125,8 @@ struct ReferenceArgs {
     /// Also write the per-pixel variance of a one-sample estimate (OpenEXR).
     #[arg(long)]
     variance: Option<PathBuf>,
-    /// Also write an sRGB PNG preview.
+    /// Also write an 8-bit sRGB preview: PNG, or JPEG for a name ending in .jpg (see
+    /// --exposure and --view).
     #[arg(long)]
     png: Option<PathBuf>,
     /// Render frames FIRST-LAST[:STEP] (or one FRAME): the scene at each frame's USD time
@@ -134,7 +135,40 @@ struct ReferenceArgs {
     #[arg(long, value_parser = frames::parse_frames)]
     frames: Option<frames::Frames>,
     #[command(flatten)]
+    display: DisplayArgs,
+    #[command(flatten)]
     camera: CameraArgs,
+}
+
+/// How the 8-bit preview image (`--png`) shows the render's linear radiance.
+#[derive(Args, Clone, Copy, Debug)]
+pub(crate) struct DisplayArgs {
+    /// Exposure of the --png image in stops: its values are scaled by 2^EV (the EXR is not).
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    pub exposure: f32,
+    /// View transform of the --png image.
+    #[arg(long, value_enum, default_value = "srgb")]
+    pub view: ViewArg,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub(crate) enum ViewArg {
+    /// sRGB's curve on values clamped to [0, 1]: above 1 clips.
+    Srgb,
+    /// Filmic: ACES's output transform as fitted by Narkowicz, then sRGB's curve; highlights
+    /// roll off to white.
+    Aces,
+}
+
+impl DisplayArgs {
+    /// Write `img` as the PNG (or JPEG, by its extension) preview.
+    pub fn write(&self, path: &Path, img: &wpbgi::image::Image) -> Result<()> {
+        let view = match self.view {
+            ViewArg::Srgb => wpbgi::image::ViewTransform::Srgb,
+            ViewArg::Aces => wpbgi::image::ViewTransform::Aces,
+        };
+        Ok(wpbgi::image::write_display(path, img, self.exposure, view)?)
+    }
 }
 
 #[derive(Args)]
@@ -364,7 +398,7 @@ fn reference(a: ReferenceArgs) -> Result<()> {
             write_exr(&p, &out.variance)?;
         }
         if let Some(p) = png {
-            write_png(p, &out.mean)?;
+            a.display.write(p, &out.mean)?;
         }
         let mp = (camera.width as f64 * camera.height as f64) / 1e6;
         eprintln!(

@@ -7,8 +7,8 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 use wpbgi::cache::store::{bake_hash, BakedCache};
 use wpbgi::image::{
-    exr_capture_date, read_exr, write_exr_channels, write_png, ExrChannels, ExrCompression,
-    ExrHeader, ExrOptions, ExrPrecision, Image,
+    exr_capture_date, read_exr, write_exr_channels, ExrChannels, ExrCompression, ExrHeader,
+    ExrOptions, ExrPrecision, Image,
 };
 use wpbgi::render::{render_final_cancellable, FinalOutput, FinalSettings, GatherMode};
 use wpbgi::scene::{Camera, Scene};
@@ -123,9 +123,12 @@ pub struct RenderArgs {
     /// image, so crops assemble into the whole image byte for byte (tiles for a farm).
     #[arg(long, value_parser = parse_crop)]
     pub crop: Option<[u32; 4]>,
-    /// Also write an sRGB PNG preview.
+    /// Also write an 8-bit sRGB preview: PNG, or JPEG for a name ending in .jpg (see
+    /// --exposure and --view).
     #[arg(long)]
     pub png: Option<PathBuf>,
+    #[command(flatten)]
+    pub display: crate::DisplayArgs,
     /// Render frames FIRST-LAST[:STEP] (or one FRAME): the scene at each frame's USD time code,
     /// one image each, named by `$F4` (zero-padded), `$F` or `####` in --output and --png
     /// (e.g. `-o beauty.$F4.exr`). The cache must be fresh for every frame (a camera may move;
@@ -361,7 +364,7 @@ fn render_frame(
     options.origin = out.origin;
     write_exr_channels(output, &channels, &options)?;
     if let Some(p) = png {
-        write_png(p, &out.beauty)?;
+        a.display.write(p, &out.beauty)?;
     }
     eprintln!(
         "wrote {} ({}x{}, {} gather, {:.2} s)",
