@@ -11,10 +11,14 @@
 //! the dilation always covers the drift. Negative-zero direction components are made positive
 //! (see [`unit`]), and the traversal ray starts slightly behind the true origin because obvhs
 //! culls nodes that end before an absolute t of 1e-4 (see `ORIGIN_SHIFT`).
+//!
+//! Alpha cut-outs (glTF `MASK`) are tested at each candidate hit: a hit where the material's
+//! alpha is below its cutoff is no hit, so every ray (camera, shadow, bounce) passes through
+//! the holes.
 
 use crate::geometry::triangle::{TriangleHit, WatertightRay};
-use crate::scene::Scene;
-use glam::{Vec3, Vec3A};
+use crate::scene::{Cutout, Scene, Texture};
+use glam::{Vec2, Vec3, Vec3A};
 use obvhs::aabb::Aabb;
 use obvhs::cwbvh::builder::build_cwbvh;
 use obvhs::cwbvh::CwBvh;
@@ -57,6 +61,50 @@ pub struct Accel {
     tris: Vec<Triangle>,
     /// `(mesh, triangle within mesh)` of each entry of `tris`.
     ids: Vec<(u32, u32)>,
+    /// Per mesh, its alpha cut-out where its material has one that varies (empty where no
+    /// mesh has one): a hit in a hole is no hit.
+    masks: Vec<Option<Mask>>,
+}
+
+/// A mesh's alpha cut-out, with what its test reads: the texture (alone, as texture 0), the
+/// vertices' texture coordinates and the triangles.
+struct Mask {
+    cutout: Cutout,
+    textures: Vec<Texture>,
+    uvs: Vec<Vec2>,
+    triangles: Vec<[u32; 3]>,
+}
+
+impl Mask {
+    fn of(scene: &Scene, mesh: &crate::scene::Mesh) -> Option<Mask> {
+        let mut cutout = scene.materials.get(mesh.material)?.cutout?;
+        if cutout.constant().is_some() {
+            // Constant: kept whole (or left out of the scene whole).
+            return None;
+        }
+        let textures = match &mut cutout.texture {
+            Some(c) => {
+                let t = scene.textures.get(c.texture.texture)?.clone();
+                c.texture.texture = 0;
+                vec![t]
+            }
+            None => Vec::new(),
+        };
+        Some(Mask {
+            cutout,
+            textures,
+            uvs: mesh.uvs.clone().unwrap_or_default(),
+            triangles: mesh.triangles.clone(),
+        })
+    }
+
+    /// Whether the surface is there at barycentrics `b` of triangle `triangle`.
+    fn keeps(&self, triangle: u32, b: [f32; 3]) -> bool {
+        let t = self.triangles[triangle as usize];
+        let uv = |k: usize| self.uvs.get(t[k] as usize).copied().unwrap_or(Vec2::ZERO);
+        let at = uv(0) * b[0] + uv(1) * b[1] + uv(2) * b[2];
+        self.cutout.keeps(&self.textures, at)
+    }
 }
 
 impl Accel {
@@ -75,7 +123,24 @@ impl Accel {
                 ids.push((mi as u32, ti as u32));
             }
         }
-        Self::from_triangles(tris, ids)
+        let mut accel = Self::from_triangles(tris, ids);
+        let masks: Vec<Option<Mask>> = scene.meshes.iter().map(|m| Mask::of(scene, m)).collect();
+        if masks.iter().any(Option::is_some) {
+            accel.masks = masks;
+        }
+        accel
+    }
+
+    /// Whether the hit `h` on entry `id` is on the surface (not in a cut-out's hole).
+    #[inline]
+    fn solid(&self, id: usize, h: &TriangleHit) -> bool {
+        if self.masks.is_empty() {
+            return true;
+        }
+        let (mesh, triangle) = self.ids[id];
+        self.masks[mesh as usize]
+            .as_ref()
+            .is_none_or(|m| m.keeps(triangle, h.b))
     }
 
     fn from_triangles(tris: Vec<Triangle>, ids: Vec<(u32, u32)>) -> Accel {
@@ -103,7 +168,12 @@ impl Accel {
                 &mut Duration::default(),
             )
         };
-        Accel { bvh, tris, ids }
+        Accel {
+            bvh,
+            tris,
+            ids,
+            masks: Vec::new(),
+        }
     }
 
     /// Number of triangles.
@@ -148,12 +218,12 @@ impl Accel {
             let id = self.bvh.primitive_indices[i] as usize;
             let tri = &self.tris[id];
             match q.wt.intersect(tri.v0, tri.v1, tri.v2, q.tmin, closest) {
-                Some(h) => {
+                Some(h) if self.solid(id, &h) => {
                     best = Some((id, h));
                     closest = h.t;
                     to_traversal_t(h.t)
                 }
-                None => f32::INFINITY,
+                _ => f32::INFINITY,
             }
         });
         best.map(|(id, h)| {
@@ -173,10 +243,11 @@ impl Accel {
             return false;
         };
         !self.bvh.ray_traverse_miss(q.ray, |_, i| {
-            let tri = &self.tris[self.bvh.primitive_indices[i] as usize];
+            let id = self.bvh.primitive_indices[i] as usize;
+            let tri = &self.tris[id];
             match q.wt.intersect(tri.v0, tri.v1, tri.v2, q.tmin, q.tmax) {
-                Some(_) => f32::NEG_INFINITY,
-                None => f32::INFINITY,
+                Some(h) if self.solid(id, &h) => f32::NEG_INFINITY,
+                _ => f32::INFINITY,
             }
         })
     }
@@ -190,7 +261,10 @@ impl Accel {
         self.bvh.ray_traverse_anyhit(q.ray, |_, i| {
             let id = self.bvh.primitive_indices[i] as usize;
             let tri = &self.tris[id];
-            if let Some(h) = q.wt.intersect(tri.v0, tri.v1, tri.v2, q.tmin, q.tmax) {
+            if let Some(h) =
+                q.wt.intersect(tri.v0, tri.v1, tri.v2, q.tmin, q.tmax)
+                    .filter(|h| self.solid(id, h))
+            {
                 let (mesh, triangle) = self.ids[id];
                 out.push(Hit {
                     t: h.t / q.len,

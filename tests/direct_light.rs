@@ -46,6 +46,7 @@ fn scene(polygon: &[Vec3], receiver: Bsdf) -> Scene {
             Material {
                 name: "receiver".into(),
                 scattering: Scattering::Explicit(receiver),
+                cutout: None,
                 emission: None,
             },
             Material {
@@ -53,6 +54,7 @@ fn scene(polygon: &[Vec3], receiver: Bsdf) -> Scene {
                 scattering: Scattering::Explicit(Bsdf::Diffuse(Diffuse {
                     reflectance: Rgb::ZERO,
                 })),
+                cutout: None,
                 emission: Some(Emission {
                     radiance: Rgb::splat(LE),
                     texture: None,

@@ -56,6 +56,7 @@ fn furnace(rho: f32, le: f32) -> Scene {
             scattering: Scattering::Explicit(Bsdf::Diffuse(Diffuse {
                 reflectance: Rgb::splat(rho),
             })),
+            cutout: None,
             emission: Some(Emission {
                 radiance: Rgb::splat(le),
                 texture: None,

@@ -19,6 +19,7 @@ fn material(emission: Option<Rgb>, albedo: f32) -> Material {
         scattering: Scattering::Explicit(Bsdf::Diffuse(Diffuse {
             reflectance: Rgb::splat(albedo),
         })),
+        cutout: None,
         emission: emission.map(|radiance| Emission {
             radiance,
             texture: None,

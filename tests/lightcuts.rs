@@ -54,6 +54,7 @@ fn scene_with(lights: Vec<PunctualLight>) -> Scene {
             scattering: Scattering::Explicit(Bsdf::Diffuse(Diffuse {
                 reflectance: Rgb::splat(0.5),
             })),
+            cutout: None,
             emission: None,
         }],
         lights,

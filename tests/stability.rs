@@ -497,6 +497,7 @@ fn albedo_0_99_closed_box() {
             scattering: Scattering::Explicit(Bsdf::Diffuse(Diffuse {
                 reflectance: Rgb::splat(0.99),
             })),
+            cutout: None,
             emission: Some(Emission {
                 radiance: Rgb::ONE,
                 texture: None,

@@ -83,9 +83,12 @@ pub fn sample_surfels_with_density(
         return Vec::new();
     }
     let count = n * CANDIDATES_PER_SURFEL;
+    // Candidates in an alpha cut-out's holes are dropped: the others still stand for the area
+    // over which they were drawn, so the areas sum to the surface that is there.
     let mut candidates: Vec<Surfel> = (0..count as u64)
         .into_par_iter()
         .map(|i| candidate(scene, &cdf, &tris, total, seed, i))
+        .filter(|c| !in_hole(scene, c))
         .collect();
     // Density 1's disc radius; a mesh of density w has r_max / √w.
     let r_max = (total / (2.0 * 3f64.sqrt() * n as f64)).sqrt();
@@ -102,6 +105,23 @@ pub fn sample_surfels_with_density(
     // Every candidate stands for the area over which one was drawn: W / (count · w).
     let area_each = |mesh: u32| (total / (count as f64 * density_of(mesh))) as f32;
     assign_areas(&candidates, &grid, &alive, &area_each)
+}
+
+/// Whether candidate `c` lies in a hole of its material's alpha cut-out.
+fn in_hole(scene: &Scene, c: &Surfel) -> bool {
+    let m = &scene.meshes[c.mesh as usize];
+    let Some(cutout) = scene.materials.get(m.material).and_then(|x| x.cutout) else {
+        return false;
+    };
+    let t = m.triangles[c.triangle as usize];
+    let uv = |k: usize| {
+        m.uvs
+            .as_ref()
+            .and_then(|u| u.get(t[k] as usize).copied())
+            .unwrap_or(glam::Vec2::ZERO)
+    };
+    let at = uv(0) * (1.0 - c.b.x - c.b.y) + uv(1) * c.b.x + uv(2) * c.b.y;
+    !cutout.keeps(&scene.textures, at)
 }
 
 /// Cumulative triangle areas weighted by their mesh's density (f64) and the

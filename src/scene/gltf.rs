@@ -7,7 +7,7 @@
 
 use super::camera::{Camera, Projection};
 use super::light::{LightKind, PunctualLight};
-use super::material::{Emission, Material, PbrParams, Scattering};
+use super::material::{Cutout, Emission, Material, PbrParams, Scattering};
 use super::texture::{ChannelRef, TexRef, Texture, Wrap};
 use super::{Mesh, Scene, Warning};
 use crate::bsdf::mitsuba::parse_bsdf;
@@ -69,6 +69,7 @@ pub(super) fn import(path: &Path, bytes: &[u8]) -> Result<Scene> {
     scene.materials.push(Material {
         name: "(default)".into(),
         scattering: Scattering::Pbr(PbrParams::constant(Rgb::ONE, 1.0, 1.0)),
+        cutout: None,
         emission: None,
     });
 
@@ -407,10 +408,31 @@ fn convert_material(
         texture,
         two_sided: m.double_sided(),
     });
+    // glTF's alpha: the base colour's, MASK cutting at alphaCutoff (0.5 by default). BLEND
+    // is drawn opaque (docs/scene.md): wpbgi has no partial coverage.
+    let cutout = match m.alpha_mode() {
+        g::material::AlphaMode::Mask => {
+            let pbr = m.pbr_metallic_roughness();
+            Some(Cutout {
+                alpha: pbr.base_color_factor()[3].clamp(0.0, 1.0),
+                texture: pbr
+                    .base_color_texture()
+                    .and_then(|t| tex_ref(&t, image_of_texture, false, warnings, &what))
+                    .map(|texture| ChannelRef {
+                        texture,
+                        channel: 3,
+                    }),
+                cutoff: m.alpha_cutoff().unwrap_or(0.5),
+            })
+            .filter(|c| c.constant() != Some(true))
+        }
+        _ => None,
+    };
     Ok(Material {
         name,
         scattering,
         emission,
+        cutout,
     })
 }
 

@@ -84,6 +84,31 @@ pub struct Material {
     pub name: String,
     pub scattering: Scattering,
     pub emission: Option<Emission>,
+    /// Holes cut by the alpha channel (glTF `alphaMode: MASK`, USD `opacityThreshold`).
+    pub cutout: Option<Cutout>,
+}
+
+/// An alpha cut-out: the surface is there where `alpha` (times the texture's channel) is at
+/// least `cutoff` and a hole elsewhere, for every ray (camera, shadow, bounce) and for the
+/// bake's surfels.
+#[derive(Clone, Copy, Debug)]
+pub struct Cutout {
+    pub alpha: f32,
+    pub texture: Option<ChannelRef>,
+    pub cutoff: f32,
+}
+
+impl Cutout {
+    /// Whether the surface is there at texture coordinate `uv`.
+    pub fn keeps(&self, textures: &[Texture], uv: Vec2) -> bool {
+        let a = self.alpha * self.texture.map_or(1.0, |t| t.sample(textures, uv));
+        a >= self.cutoff
+    }
+
+    /// `Some(kept)` where no texture varies the answer.
+    pub fn constant(&self) -> Option<bool> {
+        self.texture.is_none().then_some(self.alpha >= self.cutoff)
+    }
 }
 
 impl Material {
@@ -185,6 +210,7 @@ mod tests {
                     transmission,
                     ..PbrParams::constant(Rgb::splat(0.8), metallic, 0.3)
                 }),
+                cutout: None,
                 emission: None,
             }
             .bsdf_at(&[], Vec2::ZERO)

@@ -13,7 +13,7 @@ mod usd;
 pub use camera::{Camera, Projection};
 pub use environment::Environment;
 pub use light::{LightKind, PunctualLight};
-pub use material::{Emission, Material, PbrParams, Scattering};
+pub use material::{Cutout, Emission, Material, PbrParams, Scattering};
 pub use texture::{ChannelRef, TexRef, Texture, Wrap};
 
 use crate::error::{Error, Result};
@@ -164,23 +164,28 @@ impl Scene {
     /// Leave out meshes that do not interact with light: clear glass of index 1 (index-matched
     /// with the air around it: no reflection, no bending), which DESIGN.md §10 requires to
     /// vanish. Kept, they would still stop shadow rays and hold surfels. A warning each.
+    /// Meshes whose material's alpha cut-out removes them whole (a constant alpha below the
+    /// cutoff) are left out too.
     pub fn drop_invisible_meshes(&mut self) {
         let materials = &self.materials;
         let mut dropped = Vec::new();
         self.meshes.retain(|m| {
-            let invisible = materials
-                .get(m.material)
-                .is_some_and(Material::is_index_matched);
-            if invisible {
-                dropped.push(m.name.clone());
+            let material = materials.get(m.material);
+            let why = if material.is_some_and(Material::is_index_matched) {
+                Some("its material is clear glass of index 1, which does not interact with light")
+            } else if material.and_then(|x| x.cutout).and_then(|c| c.constant()) == Some(false) {
+                Some("its material's alpha is below its cutoff everywhere (a hole)")
+            } else {
+                None
+            };
+            if let Some(why) = why {
+                dropped.push((m.name.clone(), why));
             }
-            !invisible
+            why.is_none()
         });
-        for name in dropped {
-            self.warnings.push(Warning(format!(
-                "mesh {name}: its material is clear glass of index 1, which does not interact \
-                 with light; left out"
-            )));
+        for (name, why) in dropped {
+            self.warnings
+                .push(Warning(format!("mesh {name}: {why}; left out")));
         }
     }
 

@@ -118,6 +118,7 @@ pub fn grey_scene(meshes: Vec<Mesh>) -> wpbgi::scene::Scene {
             scattering: Scattering::Explicit(Bsdf::Diffuse(Diffuse {
                 reflectance: wpbgi::spectrum::Rgb::splat(0.5),
             })),
+            cutout: None,
             emission: None,
         }],
         ..Default::default()

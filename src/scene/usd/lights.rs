@@ -230,6 +230,7 @@ impl Importer<'_> {
             scattering: Scattering::Explicit(crate::bsdf::Bsdf::Diffuse(crate::bsdf::Diffuse {
                 reflectance: Rgb::ZERO,
             })),
+            cutout: None,
             emission: Some(Emission {
                 radiance,
                 texture: None,

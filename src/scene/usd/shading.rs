@@ -10,11 +10,12 @@
 //!   and `bias`. Its `st` comes from a `UsdPrimvarReader_float2`, optionally through a
 //!   `UsdTransform2d`; the primvar it names is the mesh's texture coordinate set.
 //! - `opacity` < 1 is transmission with `ior` (DESIGN.md §4); with `opacityThreshold` > 0 the
-//!   material is a cut-out, which is not supported: the surface stays opaque (a warning).
+//!   material is an alpha cut-out: opaque where `opacity` reaches the threshold, a hole
+//!   elsewhere ([`Cutout`]).
 
 use super::{sample, Importer};
 use crate::error::Result;
-use crate::scene::material::{Emission, Material, PbrParams, Scattering};
+use crate::scene::material::{Cutout, Emission, Material, PbrParams, Scattering};
 use crate::scene::texture::{ChannelRef, TexRef, Texture, Wrap};
 use crate::scene::Warning;
 use crate::spectrum::Rgb;
@@ -194,6 +195,7 @@ impl Importer<'_> {
             return Ok(Material {
                 name: m.as_str().to_string(),
                 scattering: explicit.map_or(default_material().scattering, Scattering::Explicit),
+                cutout: None,
                 emission: None,
             });
         };
@@ -208,6 +210,7 @@ impl Importer<'_> {
                 ),
             ));
         }
+        let mut cutout = None;
         let scattering = match explicit {
             Some(b) => Scattering::Explicit(b),
             // UsdPreviewSurface's defaults: diffuse 0.18, metallic 0, roughness 0.5,
@@ -222,13 +225,18 @@ impl Importer<'_> {
                 let (threshold, _) = self.scalar_input(&surface, "opacityThreshold", 0.0)?;
                 let (ior, _) = self.scalar_input(&surface, "ior", 1.5)?;
                 let cut_out = threshold > 0.0;
-                if cut_out && (opacity < 1.0 || opacity_texture.is_some()) {
-                    self.scene.warnings.push(Warning(format!(
-                        "material {}: cut-out opacity (opacityThreshold > 0) is not supported; \
-                         the surface is opaque",
-                        m.as_str()
-                    )));
-                }
+                // opacityThreshold > 0: the surface is there where opacity reaches it (an
+                // alpha cut-out), and opaque.
+                cutout = Some(Cutout {
+                    alpha: if opacity_texture.is_some() {
+                        1.0
+                    } else {
+                        opacity
+                    },
+                    texture: opacity_texture,
+                    cutoff: threshold,
+                })
+                .filter(|c| cut_out && c.constant() != Some(true));
                 // Transmission is 1 − opacity; through a texture, its scale and bias turn
                 // v·s + b into 1 − (v·s + b).
                 let transmission_texture = opacity_texture.filter(|_| !cut_out).map(|mut t| {
@@ -263,6 +271,7 @@ impl Importer<'_> {
         Ok(Material {
             name: m.as_str().to_string(),
             scattering,
+            cutout,
             emission: (radiance.max_element() > 0.0).then_some(Emission {
                 radiance,
                 texture,
@@ -588,6 +597,7 @@ fn default_material() -> Material {
     Material {
         name: "default".into(),
         scattering: Scattering::Pbr(PbrParams::constant(Rgb::splat(0.18), 0.0, 1.0)),
+        cutout: None,
         emission: None,
     }
 }
