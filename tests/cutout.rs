@@ -5,6 +5,8 @@
 //! floor's light lies between the two, and the bake's surfels keep out of the hole while
 //! their areas sum to the half that is there.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use wpbgi::reference::{render, RenderSettings};
 use wpbgi::scene::Scene;
@@ -62,7 +64,7 @@ fn scene_text(occluder: Option<&str>) -> String {
         buffers.push(format!(
             r#"{{"byteLength": {}, "uri": "data:application/octet-stream;base64,{}"}}"#,
             bytes.len(),
-            base64(&bytes)
+            common::b64(&bytes)
         ));
         let a = 3 * q;
         views.push(format!(
@@ -116,24 +118,6 @@ fn scene_text(occluder: Option<&str>) -> String {
         views.join(", "),
         accessors.join(", ")
     )
-}
-
-fn base64(bytes: &[u8]) -> String {
-    const A: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::new();
-    for c in bytes.chunks(3) {
-        let n = (u32::from(c[0]) << 16)
-            | (u32::from(*c.get(1).unwrap_or(&0)) << 8)
-            | u32::from(*c.get(2).unwrap_or(&0));
-        for k in 0..4 {
-            if k <= c.len() {
-                out.push(A[(n >> (18 - 6 * k) & 63) as usize] as char);
-            } else {
-                out.push('=');
-            }
-        }
-    }
-    out
 }
 
 /// Write the scene (and its 8 × 1 alpha texture: opaque left half, clear right half).

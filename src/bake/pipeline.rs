@@ -268,13 +268,7 @@ pub fn bake_cancellable(
     progress: Progress,
     cancel: &AtomicBool,
 ) -> Result<Baked> {
-    let stop = || {
-        if cancel.load(Ordering::Relaxed) {
-            Err(Error::Cancelled)
-        } else {
-            Ok(())
-        }
-    };
+    let stop = || crate::error::check_cancel(cancel);
     if settings.points == 0 || settings.light_samples == 0 {
         return Err(Error::InvalidSetting(
             "points and light samples must be at least 1".into(),

@@ -199,13 +199,7 @@ pub fn render_final_cancellable(
     progress: &(dyn Fn(&str, f32) + Sync),
     cancel: &AtomicBool,
 ) -> Result<FinalOutput> {
-    let stop = || {
-        if cancel.load(Ordering::Relaxed) {
-            Err(Error::Cancelled)
-        } else {
-            Ok(())
-        }
-    };
+    let stop = || crate::error::check_cancel(cancel);
     if camera.width == 0 || camera.height == 0 || camera.width > 16384 || camera.height > 16384 {
         return Err(Error::InvalidSetting(format!(
             "image size {}x{} must be between 1 and 16384 on each side",

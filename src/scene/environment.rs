@@ -13,7 +13,7 @@
 //! it) times sin θ, the cell's share of the sphere, so every direction with radiance can be
 //! drawn. The density in solid angle is p(u, v) / (2π² sin θ).
 
-use super::texture::{srgb_to_linear, TexRef, Texture, Wrap};
+use super::texture::{TexRef, Texture, Wrap};
 use crate::error::{Error, Result};
 use crate::spectrum::{luminance, Rgb};
 use glam::{Mat3, Vec2, Vec3, Vec4};
@@ -62,14 +62,7 @@ impl Environment {
             ))
         })?;
         if srgb {
-            for t in &mut map.texels {
-                *t = Vec4::new(
-                    srgb_to_linear(t.x),
-                    srgb_to_linear(t.y),
-                    srgb_to_linear(t.z),
-                    t.w,
-                );
-            }
+            map.linearise_srgb();
         }
         if !(intensity >= 0.0 && intensity.is_finite() && rotate_degrees.is_finite()) {
             return Err(Error::InvalidSetting(format!(

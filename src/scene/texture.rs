@@ -55,6 +55,18 @@ impl ChannelRef {
 }
 
 impl Texture {
+    /// Turn sRGB-encoded colour channels into linear ones (alpha stays as it is).
+    pub fn linearise_srgb(&mut self) {
+        for t in &mut self.texels {
+            *t = Vec4::new(
+                srgb_to_linear(t.x),
+                srgb_to_linear(t.y),
+                srgb_to_linear(t.z),
+                t.w,
+            );
+        }
+    }
+
     /// Decode a PNG, JPEG, TGA, Radiance HDR or OpenEXR image from `bytes`; the format is
     /// the one `name`'s extension says, or else the one its first bytes say. Also says whether
     /// the image is what UsdUVTexture's `auto` colour space reads as sRGB: 8 bits per channel

@@ -4,11 +4,10 @@
 use super::{sample, Importer};
 use crate::error::Result;
 use crate::scene::material::{Emission, Material, Scattering};
-use crate::scene::texture::srgb_to_linear;
 use crate::scene::Environment;
 use crate::scene::{Mesh, Warning};
 use crate::spectrum::Rgb;
-use glam::{DMat3, DMat4, DVec3, Vec3, Vec4};
+use glam::{DMat3, DMat4, DVec3, Vec3};
 use openusd::gf;
 use openusd::sdf;
 
@@ -66,14 +65,7 @@ impl Importer<'_> {
                 })?;
                 let (mut map, srgb) = self.read_image(p, &resolved)?;
                 if srgb {
-                    for t in &mut map.texels {
-                        *t = Vec4::new(
-                            srgb_to_linear(t.x),
-                            srgb_to_linear(t.y),
-                            srgb_to_linear(t.z),
-                            t.w,
-                        );
-                    }
+                    map.linearise_srgb();
                 }
                 Some(map)
             }
