@@ -244,6 +244,22 @@ fn render_writes_layers_and_refuses_stale_caches() {
     for name in ["direct.R", "indirect.G", "albedo.B", "N.X", "N.Y"] {
         channel(name);
     }
+    // Indirect light split by the first hit: the diffuse walls and the glossy gold box each
+    // hold some, and the two layers sum to the indirect light.
+    for c in ["R", "G", "B"] {
+        let (all, diffuse, glossy) = (
+            channel(&format!("indirect.{c}")),
+            channel(&format!("indirect_diffuse.{c}")),
+            channel(&format!("indirect_glossy.{c}")),
+        );
+        for ((a, d), g) in all.iter().zip(&diffuse).zip(&glossy) {
+            assert!(
+                (d + g - a).abs() <= 1e-5 * a.max(1.0),
+                "{d} + {g} against {a}"
+            );
+        }
+        assert!(diffuse.iter().any(|&x| x > 0.0) && glossy.iter().any(|&x| x > 0.0));
+    }
     // Coverage is positive exactly where some camera sample hits the scene (a depth), and
     // the box covers most of the frame whole.
     let (a, z, nz) = (channel("A"), channel("Z"), channel("N.Z"));

@@ -153,6 +153,11 @@ pub struct FinalOutput {
     pub direct: Image,
     /// Light from the cache.
     pub indirect: Image,
+    /// `indirect`, split by the first hit: on a diffuse surface seen directly, or on a glossy
+    /// or specular one (and everything seen through mirrors and glass). The two sum to
+    /// `indirect` up to rounding.
+    pub indirect_diffuse: Image,
+    pub indirect_glossy: Image,
     pub albedo: Image,
     /// World-space shading normal of the first hit (as RGB = xyz).
     pub normal: Image,
@@ -276,7 +281,7 @@ pub fn render_final_cancellable(
 
     let t = Instant::now();
     done.store(0, Ordering::Relaxed);
-    let gathered: Vec<(Vec<(u32, Rgb)>, GatherStats)> = primary
+    let gathered: Vec<(Vec<(u32, Rgb, bool)>, GatherStats)> = primary
         .par_iter()
         .map(|tile| {
             stop()?;
@@ -296,6 +301,8 @@ pub fn render_final_cancellable(
         beauty: Image::new(cw, ch),
         direct: Image::new(cw, ch),
         indirect: Image::new(cw, ch),
+        indirect_diffuse: Image::new(cw, ch),
+        indirect_glossy: Image::new(cw, ch),
         albedo: Image::new(cw, ch),
         normal: Image::new(cw, ch),
         depth: Image::new(cw, ch),
@@ -329,14 +336,25 @@ pub fn render_final_cancellable(
     }
     for (values, stats) in &gathered {
         out.stats.add(stats);
-        for (pixel, l) in values {
+        for (pixel, l, glossy) in values {
             if let Some(i) = in_crop(*pixel) {
                 out.indirect.pixels[i] += *l;
+                let part = if *glossy {
+                    &mut out.indirect_glossy
+                } else {
+                    &mut out.indirect_diffuse
+                };
+                part.pixels[i] += *l;
             }
         }
     }
     for i in 0..out.beauty.pixels.len() {
-        for img in [&mut out.direct, &mut out.indirect] {
+        for img in [
+            &mut out.direct,
+            &mut out.indirect,
+            &mut out.indirect_diffuse,
+            &mut out.indirect_glossy,
+        ] {
             if !img.pixels[i].is_finite() {
                 img.pixels[i] = Rgb::ZERO;
             }
@@ -509,14 +527,14 @@ fn is_glossy(r: &Receiver, settings: &FinalSettings) -> bool {
 }
 
 /// Gather every receiver of a tile (at `origin`, `size` pixels, in an image `width` wide);
-/// returns (pixel, weighted indirect radiance) pairs.
+/// returns (pixel, weighted indirect radiance, whether it came by a glossy first hit).
 fn gather_tile(
     ctx: &RenderContext,
     senders: &Senders,
     receivers: &[Receiver],
     (origin, size, width): ((u32, u32), (u32, u32), u32),
     settings: &FinalSettings,
-) -> (Vec<(u32, Rgb)>, GatherStats) {
+) -> (Vec<(u32, Rgb, bool)>, GatherStats) {
     let mut stats = GatherStats {
         receivers: receivers.len() as u64,
         ..Default::default()
@@ -530,6 +548,7 @@ fn gather_tile(
                 (
                     r.pixel,
                     paths::path_gather(ctx, senders, r, settings.spp, key),
+                    by_glossy_hit(r),
                 )
             })
             .collect();
@@ -553,10 +572,16 @@ fn gather_tile(
                 Bsdf::Diffuse(d) if plan.eligible(k) => d.reflectance * value[k],
                 _ => value[k],
             };
-            (r.pixel, r.weight * l)
+            (r.pixel, r.weight * l, by_glossy_hit(r))
         })
         .collect();
     (out, stats)
+}
+
+/// Whether receiver `r`'s light reaches the camera by a glossy or specular first hit (the
+/// `indirect_glossy` layer), rather than straight from a diffuse surface.
+fn by_glossy_hit(r: &Receiver) -> bool {
+    r.chain != 0 || !matches!(r.bsdf, Bsdf::Diffuse(_))
 }
 
 /// Gather receivers `which` into `value`: the irradiance of the eligible ones (see

@@ -51,6 +51,11 @@ pub enum Aov {
     Direct,
     /// Light from the cache.
     Indirect,
+    /// Light from the cache on diffuse surfaces seen directly (indirect_diffuse).
+    IndirectDiffuse,
+    /// Light from the cache on glossy and specular first hits, and on everything seen through
+    /// mirrors and glass (indirect_glossy).
+    IndirectGlossy,
     /// Surface colour of the first hit.
     Albedo,
     /// World-space shading normal of the first hit (N.X, N.Y, N.Z).
@@ -323,6 +328,12 @@ fn render_frame(
     for (aov, name, img) in [
         (Aov::Direct, "direct", &out.direct),
         (Aov::Indirect, "indirect", &out.indirect),
+        (
+            Aov::IndirectDiffuse,
+            "indirect_diffuse",
+            &out.indirect_diffuse,
+        ),
+        (Aov::IndirectGlossy, "indirect_glossy", &out.indirect_glossy),
         (Aov::Albedo, "albedo", &out.albedo),
     ] {
         if wanted(aov) {
