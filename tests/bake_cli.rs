@@ -797,3 +797,67 @@ fn a_constant_environment_gives_the_furnace_answer() {
     let msg = String::from_utf8_lossy(&stale.stderr);
     assert!(msg.contains("stale") || msg.contains("--env"), "{msg}");
 }
+
+/// `render --json` and `reference --json`: one JSON document on standard output with each
+/// frame's files and figures, and a failure as {"error": ...} with a non-zero exit.
+#[test]
+fn json_reports_on_standard_output() {
+    let d = dir("json");
+    let cache = d.join("scene.wpc");
+    bake_ok(&cache);
+    let image = d.join("out.exr");
+    let render = |scene: &Path| {
+        wpbgi(&[
+            "render",
+            scene.to_str().expect("utf-8"),
+            "--cache",
+            cache.to_str().expect("utf-8"),
+            "-o",
+            image.to_str().expect("utf-8"),
+            "--size",
+            "32x32",
+            "--json",
+        ])
+    };
+    let out = render(&scene());
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON document");
+    let frame = &doc["frames"][0];
+    assert_eq!(doc["command"], "render");
+    assert_eq!(frame["output"], image.display().to_string());
+    assert_eq!(frame["size"], serde_json::json!([32, 32]));
+    assert!(frame["timings"]["gather"]
+        .as_f64()
+        .is_some_and(|s| s >= 0.0));
+    assert!(frame["receivers"].as_u64().is_some_and(|n| n > 0));
+    let stale = render(&brighter_scene(&d));
+    assert!(!stale.status.success());
+    let doc: serde_json::Value = serde_json::from_slice(&stale.stdout).expect("JSON error");
+    assert!(
+        doc["error"].as_str().is_some_and(|e| e.contains("stale")),
+        "{doc}"
+    );
+    let reference = d.join("ref.exr");
+    let out = wpbgi(&[
+        "reference",
+        scene().to_str().expect("utf-8"),
+        "-o",
+        reference.to_str().expect("utf-8"),
+        "--size",
+        "16x16",
+        "--spp",
+        "2",
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let doc: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON document");
+    assert_eq!(doc["frames"][0]["spp"], 2);
+}

@@ -281,7 +281,7 @@ pub fn render_final_cancellable(
 
     let t = Instant::now();
     done.store(0, Ordering::Relaxed);
-    let gathered: Vec<(Vec<(u32, Rgb, bool)>, GatherStats)> = primary
+    let gathered: Vec<(Vec<Gathered>, GatherStats)> = primary
         .par_iter()
         .map(|tile| {
             stop()?;
@@ -534,7 +534,7 @@ fn gather_tile(
     receivers: &[Receiver],
     (origin, size, width): ((u32, u32), (u32, u32), u32),
     settings: &FinalSettings,
-) -> (Vec<(u32, Rgb, bool)>, GatherStats) {
+) -> (Vec<Gathered>, GatherStats) {
     let mut stats = GatherStats {
         receivers: receivers.len() as u64,
         ..Default::default()
@@ -577,6 +577,10 @@ fn gather_tile(
         .collect();
     (out, stats)
 }
+
+/// A receiver's gathered light: its pixel, its weighted indirect radiance, and whether it
+/// came by a glossy first hit ([`by_glossy_hit`]).
+type Gathered = (u32, Rgb, bool);
 
 /// Whether receiver `r`'s light reaches the camera by a glossy or specular first hit (the
 /// `indirect_glossy` layer), rather than straight from a diffuse surface.

@@ -134,6 +134,10 @@ struct ReferenceArgs {
     /// and --variance.
     #[arg(long, value_parser = frames::parse_frames)]
     frames: Option<frames::Frames>,
+    /// Write one JSON document to standard output: per frame its files, size, samples per
+    /// pixel and seconds; a failure as {"error": ...}.
+    #[arg(long)]
+    json: bool,
     #[command(flatten)]
     display: DisplayArgs,
     #[command(flatten)]
@@ -379,6 +383,7 @@ fn reference(a: ReferenceArgs) -> Result<()> {
         Some(_) => bail!("--time must be a positive number of seconds"),
         None => None,
     };
+    let mut records = Vec::new();
     for f in &frames {
         let (time, output, png) = (f.time, &f.output, &f.png);
         let scene = load_scene_at(&a.scene, time)?;
@@ -409,6 +414,20 @@ fn reference(a: ReferenceArgs) -> Result<()> {
             out.spp,
             out.seconds,
             out.seconds / (out.spp as f64 * mp)
+        );
+        records.push(serde_json::json!({
+            "time_code": time,
+            "output": output.display().to_string(),
+            "png": png.as_ref().map(|p| p.display().to_string()),
+            "size": [camera.width, camera.height],
+            "spp": out.spp,
+            "seconds": out.seconds,
+        }));
+    }
+    if a.json {
+        println!(
+            "{}",
+            serde_json::json!({"command": "reference", "frames": records})
         );
     }
     Ok(())
@@ -489,6 +508,12 @@ fn main() {
             std::process::exit(2);
         }
     }
+    // Commands whose --json puts their result, or their error, on standard output.
+    let json_errors = match &cli.command {
+        Command::Render(a) => a.json,
+        Command::Reference(a) => a.json,
+        _ => false,
+    };
     let result = match cli.command {
         Command::Reference(a) => reference(a),
         Command::Demo(a) => demo(a),
@@ -501,7 +526,19 @@ fn main() {
     if let Err(e) = result {
         let cancelled = matches!(e.downcast_ref(), Some(wpbgi::Error::Cancelled));
         if cancelled || interrupt::interrupted() {
+            if json_errors {
+                println!(
+                    "{}",
+                    serde_json::json!({"error": "interrupted", "exit": 130})
+                );
+            }
             interrupt::exit_interrupted();
+        }
+        if json_errors {
+            println!(
+                "{}",
+                serde_json::json!({"error": format!("{e:#}"), "exit": 1})
+            );
         }
         eprintln!("error: {e:#}");
         std::process::exit(1);

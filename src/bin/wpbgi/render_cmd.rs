@@ -134,6 +134,11 @@ pub struct RenderArgs {
     pub png: Option<PathBuf>,
     #[command(flatten)]
     pub display: crate::DisplayArgs,
+    /// Write one JSON document to standard output: per frame its files, size, seconds per
+    /// stage, gather statistics, peak memory and error against --reference; a failure as
+    /// {"error": ...}. The human report stays on standard error.
+    #[arg(long)]
+    pub json: bool,
     /// Render frames FIRST-LAST[:STEP] (or one FRAME): the scene at each frame's USD time code,
     /// one image each, named by `$F4` (zero-padded), `$F` or `####` in --output and --png
     /// (e.g. `-o beauty.$F4.exr`). The cache must be fresh for every frame (a camera may move;
@@ -256,21 +261,35 @@ pub fn render_command(a: RenderArgs) -> Result<()> {
             .iter()
             .flat_map(|f| std::iter::once(f.output.clone()).chain(f.png.clone())),
     );
+    let mut records = Vec::new();
     for f in &frames {
-        render_frame(&a, &cache, f.time, &f.output, f.png.as_deref())?;
+        records.push(render_frame(
+            &a,
+            &cache,
+            f.time,
+            &f.output,
+            f.png.as_deref(),
+        )?);
+    }
+    if a.json {
+        println!(
+            "{}",
+            serde_json::json!({"command": "render", "frames": records})
+        );
     }
     Ok(())
 }
 
 /// Render one frame: the scene at `time` (a frame's time code; `None`: `--time-code`'s) from
-/// `cache`, refused if stale for the scene at that time, to `output` (and `png`).
+/// `cache`, refused if stale for the scene at that time, to `output` (and `png`). Returns the
+/// frame's record for `--json`.
 fn render_frame(
     a: &RenderArgs,
     cache: &BakedCache,
     time: Option<f64>,
     output: &Path,
     png: Option<&Path>,
-) -> Result<()> {
+) -> Result<serde_json::Value> {
     let start = Instant::now();
     let scene = crate::load_scene_at(&a.scene, time)?;
     crate::warn(&scene);
@@ -390,8 +409,32 @@ fn render_frame(
         start.elapsed().as_secs_f64()
     );
     print_summary(&out);
+    let s = &out.stats;
+    let mut frame = serde_json::json!({
+        "time_code": time,
+        "output": output.display().to_string(),
+        "png": png.map(|p| p.display().to_string()),
+        "size": [camera.width, camera.height],
+        "origin": [out.origin.0, out.origin.1],
+        "seconds": start.elapsed().as_secs_f64(),
+        "timings": out
+            .timings
+            .iter()
+            .map(|(k, v)| (k.to_string(), serde_json::json!(v)))
+            .collect::<serde_json::Map<_, _>>(),
+        "camera_samples": out.samples,
+        "receivers": s.receivers,
+        "interpolated": s.interpolated,
+        "peak_memory_bytes": wpbgi::compare::memory::peak(),
+    });
     if let (Some(r), Some(path)) = (&reference, &a.reference) {
         let (mse, rel_mse, mssim) = wpbgi::compare::errors(&out.beauty, r)?;
+        frame["error_against_reference"] = serde_json::json!({
+            "reference": path.display().to_string(),
+            "mse": mse,
+            "rel_mse": rel_mse,
+            "mssim": mssim,
+        });
         eprintln!(
             "  error against the reference: MSE {mse:.3e}, relMSE {rel_mse:.3e}, MSSIM {mssim:.4}"
         );
@@ -409,5 +452,5 @@ fn render_frame(
         })?;
         eprintln!("  wrote {}", sidecar.display());
     }
-    Ok(())
+    Ok(frame)
 }
