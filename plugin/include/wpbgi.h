@@ -100,6 +100,14 @@ const char *wpbgi_last_error(void);
 // `path` must be NULL or a NUL-terminated string; `scene_out` NULL or writable.
 int32_t wpbgi_scene_load(const char *path, WpbgiScene **scene_out);
 
+// Load the scene at `path` as [`wpbgi_scene_load`] does, a USD stage at time code
+// `time_code` (a frame of a shot: its animated transforms, cameras and attributes at that
+// time; glTF scenes have no time and ignore it). `time_code` must be finite.
+//
+// # Safety
+// `path` must be NULL or a NUL-terminated string; `scene_out` NULL or writable.
+int32_t wpbgi_scene_load_at(const char *path, double time_code, WpbgiScene **scene_out);
+
 // Free a scene (NULL is allowed and does nothing).
 //
 // # Safety

@@ -113,6 +113,10 @@ def _load():
         "wpbgi_bake_settings_init": ([ctypes.POINTER(_BakeSettings)], ctypes.c_int32),
         "wpbgi_render_settings_init": ([ctypes.POINTER(_RenderSettings)], ctypes.c_int32),
         "wpbgi_scene_load": ([ctypes.c_char_p, ctypes.POINTER(_HANDLE)], ctypes.c_int32),
+        "wpbgi_scene_load_at": (
+            [ctypes.c_char_p, ctypes.c_double, ctypes.POINTER(_HANDLE)],
+            ctypes.c_int32,
+        ),
         "wpbgi_scene_free": ([_HANDLE], None),
         "wpbgi_cache_open": ([_HANDLE, ctypes.c_char_p, ctypes.POINTER(_HANDLE)], ctypes.c_int32),
         "wpbgi_cache_hash": ([_HANDLE, ctypes.c_char_p, ctypes.c_size_t], ctypes.c_int32),
@@ -185,13 +189,20 @@ class _Handle:
 
 
 class Scene(_Handle):
-    """A glTF or USD scene, loaded."""
+    """A glTF or USD scene, loaded (a USD stage at `time_code`, a frame, when given)."""
 
     _free = _lib.wpbgi_scene_free
 
-    def __init__(self, path):
+    def __init__(self, path, time_code=None):
         handle = _HANDLE()
-        _check(_lib.wpbgi_scene_load(_path(path), ctypes.byref(handle)))
+        if time_code is None:
+            _check(_lib.wpbgi_scene_load(_path(path), ctypes.byref(handle)))
+        else:
+            _check(
+                _lib.wpbgi_scene_load_at(
+                    _path(path), float(time_code), ctypes.byref(handle)
+                )
+            )
         self._handle = handle
         self.path = os.fspath(path)
 

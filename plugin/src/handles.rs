@@ -65,6 +65,36 @@ pub unsafe extern "C" fn wpbgi_scene_load(
     })
 }
 
+/// Load the scene at `path` as [`wpbgi_scene_load`] does, a USD stage at time code
+/// `time_code` (a frame of a shot: its animated transforms, cameras and attributes at that
+/// time; glTF scenes have no time and ignore it). `time_code` must be finite.
+///
+/// # Safety
+/// `path` must be NULL or a NUL-terminated string; `scene_out` NULL or writable.
+#[no_mangle]
+pub unsafe extern "C" fn wpbgi_scene_load_at(
+    path: *const c_char,
+    time_code: f64,
+    scene_out: *mut *mut WpbgiScene,
+) -> i32 {
+    call(|| {
+        // SAFETY: the caller's contract; NULL is refused.
+        let out = unsafe { checked_mut(scene_out, "scene_out") }?;
+        *out = std::ptr::null_mut();
+        // SAFETY: the caller's contract.
+        let path = unsafe { checked_path(path, "path") }?;
+        if !time_code.is_finite() {
+            return Err(wpbgi::Error::InvalidSetting(format!(
+                "time_code must be a finite number, got {time_code}"
+            ))
+            .into());
+        }
+        let scene = Scene::load_at(&path, Some(time_code))?;
+        *out = Box::into_raw(Box::new(WpbgiScene { scene }));
+        Ok(())
+    })
+}
+
 /// Free a scene (NULL is allowed and does nothing).
 ///
 /// # Safety

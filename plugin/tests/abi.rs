@@ -611,3 +611,42 @@ fn headless_preview_equals_the_rust_api() {
     assert!(rgb.iter().any(|&v| v > 0.0));
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// `wpbgi_scene_load_at`: a USD stage whose mesh moves between time codes 1 and 10 (the
+/// repository's tests/data/usd/animated.usda) loads at a frame. The bake's hash, which covers
+/// the geometry, is the default load's at the stage's start (1), another at 10, and a time code
+/// that is not a number is refused.
+#[test]
+fn scenes_load_at_a_time_code() {
+    let stage =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/usd/animated.usda");
+    let hash_at = |time: Option<f64>| {
+        let mut s = null_mut();
+        // SAFETY: valid string and out pointer.
+        let status = unsafe {
+            match time {
+                Some(t) => wpbgi_scene_load_at(path_c(&stage).as_ptr(), t, &mut s),
+                None => wpbgi_scene_load(path_c(&stage).as_ptr(), &mut s),
+            }
+        };
+        assert_eq!(status, WPBGI_OK, "{}", last_error());
+        let scene = Scene(s);
+        let settings = bake_settings(1000, 0);
+        let mut text = [0 as c_char; 40];
+        // SAFETY: live scene, initialised settings, 40 writable bytes.
+        let status = unsafe { wpbgi_bake_hash(scene.0, &settings, text.as_mut_ptr(), text.len()) };
+        assert_eq!(status, WPBGI_OK, "{}", last_error());
+        // SAFETY: NUL-terminated by the call.
+        unsafe { CStr::from_ptr(text.as_ptr()) }
+            .to_string_lossy()
+            .into_owned()
+    };
+    assert_eq!(hash_at(None), hash_at(Some(1.0)));
+    assert_ne!(hash_at(Some(1.0)), hash_at(Some(10.0)));
+    let mut s = null_mut();
+    // SAFETY: valid string and out pointer.
+    let status = unsafe { wpbgi_scene_load_at(path_c(&stage).as_ptr(), f64::NAN, &mut s) };
+    assert_eq!(status, WPBGI_INVALID_ARGUMENT);
+    assert!(s.is_null());
+    assert!(last_error().contains("time_code"), "{}", last_error());
+}

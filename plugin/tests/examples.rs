@@ -147,6 +147,11 @@ try:
     raise SystemExit("a closed cache rendered")
 except wpbgi.Error as e:
     assert e.status == wpbgi.INVALID_ARGUMENT and "cache is NULL" in str(e), str(e)
+# A USD stage at a time code: its moving mesh changes the bake's hash between frames.
+stage = os.path.join(os.path.dirname(scene_path), "..", "usd", "animated.usda")
+first, last = wpbgi.Scene(stage, time_code=1), wpbgi.Scene(stage, time_code=10)
+assert wpbgi.bake_hash(wpbgi.Scene(stage)) == wpbgi.bake_hash(first)
+assert wpbgi.bake_hash(first) != wpbgi.bake_hash(last)
 print("python errors ok")
 "#;
     let log = run(Command::new(&python)
