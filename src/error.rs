@@ -59,7 +59,7 @@ pub enum Error {
     )]
     UnsupportedFormat { path: PathBuf },
 
-    #[error("{path}: the scene has no emitter (no emissive material, light or environment), so it would render black; light it with an environment: --env FILE.exr, FILE.hdr or R,G,B on the command line")]
+    #[error("{path}: the scene has no emitter (no emissive material, light or environment), so it would render black; light it with an environment: --env FILE.exr, FILE.hdr or R,G,B on the command line, wpbgi_scene_set_environment in the C library")]
     NoEmitter { path: PathBuf },
 
     #[error("{path}: the scene has no geometry to render")]

@@ -108,6 +108,17 @@ int32_t wpbgi_scene_load(const char *path, WpbgiScene **scene_out);
 // `path` must be NULL or a NUL-terminated string; `scene_out` NULL or writable.
 int32_t wpbgi_scene_load_at(const char *path, double time_code, WpbgiScene **scene_out);
 
+// Light `scene` with an environment, replacing its own (a USD dome light), as the command
+// line's `--env` does: `spec` is `R,G,B` or `V` (one radiance from every direction) or the
+// path of a latitude-longitude .exr or .hdr image (OpenEXR's orientation), times `intensity`,
+// an image turned by `rotate_degrees` about +Y. It is part of the scene, so of the bake's
+// hash. Handles are otherwise read-only: call it before sharing `scene` between threads.
+//
+// # Safety
+// `scene` must be NULL or a live handle that no other thread uses during the call; `spec`
+// NULL or a NUL-terminated string.
+int32_t wpbgi_scene_set_environment(WpbgiScene *scene, const char *spec, float intensity, float rotate_degrees);
+
 // Free a scene (NULL is allowed and does nothing).
 //
 // # Safety

@@ -113,6 +113,10 @@ def _load():
         "wpbgi_bake_settings_init": ([ctypes.POINTER(_BakeSettings)], ctypes.c_int32),
         "wpbgi_render_settings_init": ([ctypes.POINTER(_RenderSettings)], ctypes.c_int32),
         "wpbgi_scene_load": ([ctypes.c_char_p, ctypes.POINTER(_HANDLE)], ctypes.c_int32),
+        "wpbgi_scene_set_environment": (
+            [_HANDLE, ctypes.c_char_p, ctypes.c_float, ctypes.c_float],
+            ctypes.c_int32,
+        ),
         "wpbgi_scene_load_at": (
             [ctypes.c_char_p, ctypes.c_double, ctypes.POINTER(_HANDLE)],
             ctypes.c_int32,
@@ -205,6 +209,18 @@ class Scene(_Handle):
             )
         self._handle = handle
         self.path = os.fspath(path)
+
+    def set_environment(self, spec, intensity=1.0, rotate_degrees=0.0):
+        """Light the scene with an environment, as the command line's --env: "R,G,B", "V", or
+        the path of a latitude-longitude .exr or .hdr image."""
+        _check(
+            _lib.wpbgi_scene_set_environment(
+                self._handle,
+                os.fsencode(spec),
+                float(intensity),
+                float(rotate_degrees),
+            )
+        )
 
 
 class Cache(_Handle):

@@ -1,6 +1,6 @@
 //! The opaque handles: a loaded scene and an opened cache.
 
-use crate::guard::{call, checked_mut, checked_path, checked_ref, Failure};
+use crate::guard::{call, checked_mut, checked_path, checked_ref, checked_str, Failure};
 use std::ffi::c_char;
 use wpbgi::cache::store::BakedCache;
 use wpbgi::scene::Scene;
@@ -91,6 +91,33 @@ pub unsafe extern "C" fn wpbgi_scene_load_at(
         }
         let scene = Scene::load_at(&path, Some(time_code))?;
         *out = Box::into_raw(Box::new(WpbgiScene { scene }));
+        Ok(())
+    })
+}
+
+/// Light `scene` with an environment, replacing its own (a USD dome light), as the command
+/// line's `--env` does: `spec` is `R,G,B` or `V` (one radiance from every direction) or the
+/// path of a latitude-longitude .exr or .hdr image (OpenEXR's orientation), times `intensity`,
+/// an image turned by `rotate_degrees` about +Y. It is part of the scene, so of the bake's
+/// hash. Handles are otherwise read-only: call it before sharing `scene` between threads.
+///
+/// # Safety
+/// `scene` must be NULL or a live handle that no other thread uses during the call; `spec`
+/// NULL or a NUL-terminated string.
+#[no_mangle]
+pub unsafe extern "C" fn wpbgi_scene_set_environment(
+    scene: *mut WpbgiScene,
+    spec: *const c_char,
+    intensity: f32,
+    rotate_degrees: f32,
+) -> i32 {
+    call(|| {
+        // SAFETY: the caller's contract; NULL is refused.
+        let scene = unsafe { checked_mut(scene, "scene") }?;
+        // SAFETY: the caller's contract; NULL is refused.
+        let spec = unsafe { checked_str(spec, "spec") }?;
+        let env = wpbgi::scene::Environment::from_spec(spec, intensity, rotate_degrees)?;
+        scene.scene.environment = Some(env);
         Ok(())
     })
 }

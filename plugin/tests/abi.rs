@@ -650,3 +650,52 @@ fn scenes_load_at_a_time_code() {
     assert!(s.is_null());
     assert!(last_error().contains("time_code"), "{}", last_error());
 }
+
+/// `wpbgi_scene_set_environment`: a scene with no light of its own (the repository's
+/// tests/data/usd/cube-unlit.usda) is refused by the bake with a message naming the call;
+/// lit by a constant environment it bakes, and the environment enters the bake's hash. A file
+/// that is not there and a NULL spec are refused.
+#[test]
+fn an_environment_lights_an_unlit_scene() {
+    let dir = scratch("environment");
+    let cube = Scene::load(
+        &std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/usd/cube-unlit.usda"),
+    );
+    let settings = bake_settings(1000, 0);
+    let status = bake_to(&cube, &settings, &dir.join("dark.wpc"));
+    assert_ne!(status, WPBGI_OK);
+    assert!(
+        last_error().contains("wpbgi_scene_set_environment"),
+        "{}",
+        last_error()
+    );
+    let hash = |scene: &Scene| {
+        let mut text = [0 as c_char; 40];
+        // SAFETY: live scene, initialised settings, 40 writable bytes.
+        let status = unsafe { wpbgi_bake_hash(scene.0, &settings, text.as_mut_ptr(), text.len()) };
+        assert_eq!(status, WPBGI_OK, "{}", last_error());
+        // SAFETY: NUL-terminated by the call.
+        unsafe { CStr::from_ptr(text.as_ptr()) }
+            .to_string_lossy()
+            .into_owned()
+    };
+    let unlit = hash(&cube);
+    // SAFETY: a live handle used by this thread alone, a valid string.
+    let status = unsafe { wpbgi_scene_set_environment(cube.0, c("0.5,1,2").as_ptr(), 1.0, 0.0) };
+    assert_eq!(status, WPBGI_OK, "{}", last_error());
+    assert_ne!(hash(&cube), unlit);
+    assert_eq!(
+        bake_to(&cube, &settings, &dir.join("lit.wpc")),
+        WPBGI_OK,
+        "{}",
+        last_error()
+    );
+    // SAFETY: as above.
+    let status =
+        unsafe { wpbgi_scene_set_environment(cube.0, c("no-such-sky.exr").as_ptr(), 1.0, 0.0) };
+    assert_ne!(status, WPBGI_OK);
+    assert!(last_error().contains("no-such-sky.exr"), "{}", last_error());
+    // SAFETY: NULL is refused.
+    let status = unsafe { wpbgi_scene_set_environment(cube.0, null(), 1.0, 0.0) };
+    assert_eq!(status, WPBGI_INVALID_ARGUMENT);
+}

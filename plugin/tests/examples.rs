@@ -152,6 +152,12 @@ stage = os.path.join(os.path.dirname(scene_path), "..", "usd", "animated.usda")
 first, last = wpbgi.Scene(stage, time_code=1), wpbgi.Scene(stage, time_code=10)
 assert wpbgi.bake_hash(wpbgi.Scene(stage)) == wpbgi.bake_hash(first)
 assert wpbgi.bake_hash(first) != wpbgi.bake_hash(last)
+# An environment lights a scene without a light of its own, and enters the bake's hash.
+cube = wpbgi.Scene(os.path.join(os.path.dirname(scene_path), "..", "usd", "cube-unlit.usda"))
+cube.set_environment("0.5,1,2")
+grey = wpbgi.bake_hash(cube)
+cube.set_environment("1")
+assert wpbgi.bake_hash(cube) != grey
 print("python errors ok")
 "#;
     let log = run(Command::new(&python)

@@ -47,6 +47,34 @@ impl Environment {
         }
     }
 
+    /// The environment a user names (the command line's `--env`, the plugin's
+    /// `wpbgi_scene_set_environment`): `R,G,B` or `V`, one radiance from every direction, or
+    /// else the path of a latitude-longitude image ([`Environment::latlong_file`]); times
+    /// `intensity`, an image turned by `rotate_degrees` about +Y.
+    pub fn from_spec(spec: &str, intensity: f32, rotate_degrees: f32) -> Result<Environment> {
+        if !(intensity >= 0.0 && intensity.is_finite()) {
+            return Err(Error::InvalidSetting(format!(
+                "the environment's intensity must be a non-negative number, got {intensity}"
+            )));
+        }
+        let numbers: Option<Vec<f32>> = spec
+            .split(',')
+            .map(|t| t.trim().parse::<f32>().ok())
+            .collect();
+        let radiance = match numbers.as_deref() {
+            Some(&[v]) => Some(Vec3::splat(v)),
+            Some(&[r, g, b]) => Some(Vec3::new(r, g, b)),
+            _ => None,
+        };
+        match radiance {
+            Some(l) if !(l.is_finite() && l.min_element() >= 0.0) => Err(Error::InvalidSetting(
+                format!("environment {spec}: the radiance must be non-negative numbers"),
+            )),
+            Some(l) => Ok(Environment::constant(l * intensity)),
+            None => Environment::latlong_file(Path::new(spec), intensity, rotate_degrees),
+        }
+    }
+
     /// The latitude-longitude image in `path` (OpenEXR, Radiance HDR, or an 8-bit image read
     /// as sRGB) times `intensity`, turned by `rotate_degrees` about the world's +Y axis (the
     /// map's centre, towards +Z unturned, turns towards +X).

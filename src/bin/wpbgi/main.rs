@@ -298,34 +298,12 @@ fn environment_of(cli: &Cli) -> Result<Option<wpbgi::scene::Environment>> {
     let Some(spec) = &cli.env else {
         return Ok(None);
     };
-    if !(cli.env_intensity >= 0.0 && cli.env_intensity.is_finite()) {
-        bail!("--env-intensity must be a non-negative number");
+    let env = wpbgi::scene::Environment::from_spec(spec, cli.env_intensity, cli.env_rotate)
+        .with_context(|| format!("--env {spec}"))?;
+    if env.map.is_none() && cli.env_rotate != 0.0 {
+        eprintln!("warning: --env-rotate turns nothing: the environment {spec} is one colour");
     }
-    let numbers: Option<Vec<f32>> = spec
-        .split(',')
-        .map(|t| t.trim().parse::<f32>().ok())
-        .collect();
-    let radiance = match numbers.as_deref() {
-        Some(&[v]) => Some(Vec3::splat(v)),
-        Some(&[r, g, b]) => Some(Vec3::new(r, g, b)),
-        _ => None,
-    };
-    if let Some(l) = radiance {
-        if !(l.is_finite() && l.min_element() >= 0.0) {
-            bail!("--env {spec}: the radiance must be non-negative numbers");
-        }
-        if cli.env_rotate != 0.0 {
-            eprintln!("warning: --env-rotate turns nothing: the environment {spec} is one colour");
-        }
-        return Ok(Some(wpbgi::scene::Environment::constant(
-            l * cli.env_intensity,
-        )));
-    }
-    Ok(Some(wpbgi::scene::Environment::latlong_file(
-        Path::new(spec),
-        cli.env_intensity,
-        cli.env_rotate,
-    )?))
+    Ok(Some(env))
 }
 
 /// Load a scene at the run's `--time-code`.
