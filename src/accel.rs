@@ -17,7 +17,7 @@
 //! the holes.
 
 use crate::geometry::triangle::{TriangleHit, WatertightRay};
-use crate::scene::{Cutout, Scene, Texture};
+use crate::scene::{interpolate_uv, Cutout, Scene, Texture};
 use glam::{Vec2, Vec3, Vec3A};
 use obvhs::aabb::Aabb;
 use obvhs::cwbvh::builder::build_cwbvh;
@@ -67,11 +67,11 @@ pub struct Accel {
 }
 
 /// A mesh's alpha cut-out, with what its test reads: the texture (alone, as texture 0), the
-/// vertices' texture coordinates and the triangles.
+/// vertices' texture coordinates and the triangles (the accel owns no scene).
 struct Mask {
     cutout: Cutout,
     textures: Vec<Texture>,
-    uvs: Vec<Vec2>,
+    uvs: Option<Vec<Vec2>>,
     triangles: Vec<[u32; 3]>,
 }
 
@@ -93,7 +93,7 @@ impl Mask {
         Some(Mask {
             cutout,
             textures,
-            uvs: mesh.uvs.clone().unwrap_or_default(),
+            uvs: mesh.uvs.clone(),
             triangles: mesh.triangles.clone(),
         })
     }
@@ -101,9 +101,8 @@ impl Mask {
     /// Whether the surface is there at barycentrics `b` of triangle `triangle`.
     fn keeps(&self, triangle: u32, b: [f32; 3]) -> bool {
         let t = self.triangles[triangle as usize];
-        let uv = |k: usize| self.uvs.get(t[k] as usize).copied().unwrap_or(Vec2::ZERO);
-        let at = uv(0) * b[0] + uv(1) * b[1] + uv(2) * b[2];
-        self.cutout.keeps(&self.textures, at)
+        let uv = interpolate_uv(self.uvs.as_deref(), t, b);
+        self.cutout.keeps(&self.textures, uv)
     }
 }
 

@@ -110,6 +110,18 @@ fn bake_to(scene: &Scene, settings: &WpbgiBakeSettings, path: &std::path::Path) 
     unsafe { wpbgi_bake(scene.0, settings, path_c(path).as_ptr(), None, null_mut()) }
 }
 
+/// The hash a bake of `scene` with `settings` would have (`wpbgi_bake_hash`).
+fn hash_of(scene: &Scene, settings: &WpbgiBakeSettings) -> String {
+    let mut text = [0 as c_char; 40];
+    // SAFETY: live scene, initialised settings, 40 writable bytes.
+    let status = unsafe { wpbgi_bake_hash(scene.0, settings, text.as_mut_ptr(), text.len()) };
+    assert_eq!(status, WPBGI_OK, "{}", last_error());
+    // SAFETY: NUL-terminated by the call.
+    unsafe { CStr::from_ptr(text.as_ptr()) }
+        .to_string_lossy()
+        .into_owned()
+}
+
 #[test]
 fn abi_version_and_library_version() {
     assert_eq!(wpbgi_abi_version(), WPBGI_ABI_VERSION);
@@ -630,16 +642,7 @@ fn scenes_load_at_a_time_code() {
             }
         };
         assert_eq!(status, WPBGI_OK, "{}", last_error());
-        let scene = Scene(s);
-        let settings = bake_settings(1000, 0);
-        let mut text = [0 as c_char; 40];
-        // SAFETY: live scene, initialised settings, 40 writable bytes.
-        let status = unsafe { wpbgi_bake_hash(scene.0, &settings, text.as_mut_ptr(), text.len()) };
-        assert_eq!(status, WPBGI_OK, "{}", last_error());
-        // SAFETY: NUL-terminated by the call.
-        unsafe { CStr::from_ptr(text.as_ptr()) }
-            .to_string_lossy()
-            .into_owned()
+        hash_of(&Scene(s), &bake_settings(1000, 0))
     };
     assert_eq!(hash_at(None), hash_at(Some(1.0)));
     assert_ne!(hash_at(Some(1.0)), hash_at(Some(10.0)));
@@ -669,16 +672,7 @@ fn an_environment_lights_an_unlit_scene() {
         "{}",
         last_error()
     );
-    let hash = |scene: &Scene| {
-        let mut text = [0 as c_char; 40];
-        // SAFETY: live scene, initialised settings, 40 writable bytes.
-        let status = unsafe { wpbgi_bake_hash(scene.0, &settings, text.as_mut_ptr(), text.len()) };
-        assert_eq!(status, WPBGI_OK, "{}", last_error());
-        // SAFETY: NUL-terminated by the call.
-        unsafe { CStr::from_ptr(text.as_ptr()) }
-            .to_string_lossy()
-            .into_owned()
-    };
+    let hash = |scene: &Scene| hash_of(scene, &settings);
     let unlit = hash(&cube);
     // SAFETY: a live handle used by this thread alone, a valid string.
     let status = unsafe { wpbgi_scene_set_environment(cube.0, c("0.5,1,2").as_ptr(), 1.0, 0.0) };

@@ -110,18 +110,14 @@ pub fn sample_surfels_with_density(
 /// Whether candidate `c` lies in a hole of its material's alpha cut-out.
 fn in_hole(scene: &Scene, c: &Surfel) -> bool {
     let m = &scene.meshes[c.mesh as usize];
-    let Some(cutout) = scene.materials.get(m.material).and_then(|x| x.cutout) else {
-        return false;
-    };
-    let t = m.triangles[c.triangle as usize];
-    let uv = |k: usize| {
-        m.uvs
-            .as_ref()
-            .and_then(|u| u.get(t[k] as usize).copied())
-            .unwrap_or(glam::Vec2::ZERO)
-    };
-    let at = uv(0) * (1.0 - c.b.x - c.b.y) + uv(1) * c.b.x + uv(2) * c.b.y;
-    !cutout.keeps(&scene.textures, at)
+    scene
+        .materials
+        .get(m.material)
+        .and_then(|x| x.cutout)
+        .is_some_and(|cutout| {
+            let uv = m.uv_at(c.triangle, [1.0 - c.b.x - c.b.y, c.b.x, c.b.y]);
+            !cutout.keeps(&scene.textures, uv)
+        })
 }
 
 /// Cumulative triangle areas weighted by their mesh's density (f64) and the

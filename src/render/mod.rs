@@ -315,11 +315,8 @@ pub fn render_final_cancellable(
     // A pixel of the whole image → its index in the crop.
     let in_crop = |pixel: u32| {
         let (x, y) = (pixel % w, pixel / w);
-        (x0..x1)
-            .contains(&x)
-            .then_some(())
-            .filter(|_| (y0..y1).contains(&y))
-            .map(|_| ((y - y0) * cw + (x - x0)) as usize)
+        ((x0..x1).contains(&x) && (y0..y1).contains(&y))
+            .then(|| ((y - y0) * cw + (x - x0)) as usize)
     };
     for tile in &primary {
         out.samples += tile.samples;

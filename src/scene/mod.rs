@@ -74,13 +74,16 @@ impl Mesh {
 
     /// The texture coordinate at barycentric weights `b` of triangle `tri` ((0, 0) without UVs).
     pub fn uv_at(&self, tri: u32, b: [f32; 3]) -> Vec2 {
-        match &self.uvs {
-            Some(uv) => {
-                let t = self.triangles[tri as usize];
-                b[0] * uv[t[0] as usize] + b[1] * uv[t[1] as usize] + b[2] * uv[t[2] as usize]
-            }
-            None => Vec2::ZERO,
-        }
+        interpolate_uv(self.uvs.as_deref(), self.triangles[tri as usize], b)
+    }
+}
+
+/// The texture coordinate at barycentric weights `b` of the triangle with vertices `t`, from
+/// per-vertex `uvs` ((0, 0) without them): [`Mesh::uv_at`] for data kept apart from its mesh.
+pub fn interpolate_uv(uvs: Option<&[Vec2]>, t: [u32; 3], b: [f32; 3]) -> Vec2 {
+    match uvs {
+        Some(uv) => b[0] * uv[t[0] as usize] + b[1] * uv[t[1] as usize] + b[2] * uv[t[2] as usize],
+        None => Vec2::ZERO,
     }
 }
 

@@ -83,6 +83,16 @@ pub fn frame_path(pattern: &Path, frame: i64) -> Option<PathBuf> {
     found.then(|| PathBuf::from(out))
 }
 
+/// [`frame_path`], or the error that names the path without a frame token.
+pub fn named(pattern: &Path, frame: i64) -> anyhow::Result<PathBuf> {
+    frame_path(pattern, frame).ok_or_else(|| {
+        anyhow::anyhow!(
+            "{}: with --frames the name needs $F4, $F or #### where the frame number goes",
+            pattern.display()
+        )
+    })
+}
+
 /// `frame` zero-padded to `width` digits (the sign before the zeros).
 fn padded(frame: i64, width: usize) -> String {
     if frame < 0 {
@@ -118,14 +128,6 @@ pub fn outputs(
     if crate::time_code_given() {
         anyhow::bail!("--frames reads the scene at each frame's time code: leave out --time-code");
     }
-    let named = |p: &Path, f: i64| {
-        frame_path(p, f).ok_or_else(|| {
-            anyhow::anyhow!(
-                "{}: with --frames the name needs $F4, $F or #### where the frame number goes",
-                p.display()
-            )
-        })
-    };
     frames
         .iter()
         .map(|f| {

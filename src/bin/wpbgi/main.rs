@@ -341,12 +341,7 @@ fn reference(a: ReferenceArgs) -> Result<()> {
     let frames = frames::outputs(a.frames, &a.output, a.png.as_deref())?;
     let variance = |time: Option<f64>| -> Result<Option<PathBuf>> {
         match (&a.variance, time) {
-            (Some(p), Some(f)) => frames::frame_path(p, f as i64).map(Some).ok_or_else(|| {
-                anyhow::anyhow!(
-                    "{}: with --frames the name needs $F4, $F or #### where the frame number goes",
-                    p.display()
-                )
-            }),
+            (Some(p), Some(f)) => frames::named(p, f as i64).map(Some),
             (v, _) => Ok(v.clone()),
         }
     };

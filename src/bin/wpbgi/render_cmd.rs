@@ -24,6 +24,17 @@ pub enum GatherArg {
     Paths,
 }
 
+impl GatherArg {
+    /// Its name on the command line.
+    fn name(self) -> &'static str {
+        match self {
+            GatherArg::Pbgi => "pbgi",
+            GatherArg::Fpbgi => "fpbgi",
+            GatherArg::Paths => "paths",
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
 pub enum ExrPrecisionArg {
     /// 16-bit floats: half the size, 11 bits of mantissa, values up to 65 504.
@@ -372,7 +383,7 @@ fn render_frame(
         "cache": a.cache.display().to_string(),
         "camera": camera.name,
         "settings": {
-            "gather": format!("{:?}", a.gather).to_lowercase(),
+            "gather": a.gather.name(),
             "mb_size": a.mb_size,
             "uniform": a.uniform,
             "dense": a.dense,
@@ -401,11 +412,7 @@ fn render_frame(
         output.display(),
         camera.width,
         camera.height,
-        match a.gather {
-            GatherArg::Pbgi => "pbgi",
-            GatherArg::Fpbgi => "fpbgi",
-            GatherArg::Paths => "paths",
-        },
+        a.gather.name(),
         start.elapsed().as_secs_f64()
     );
     print_summary(&out);
