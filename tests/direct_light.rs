@@ -47,6 +47,7 @@ fn scene(polygon: &[Vec3], receiver: Bsdf) -> Scene {
                 name: "receiver".into(),
                 scattering: Scattering::Explicit(receiver),
                 cutout: None,
+                normal_map: None,
                 emission: None,
             },
             Material {
@@ -55,6 +56,7 @@ fn scene(polygon: &[Vec3], receiver: Bsdf) -> Scene {
                     reflectance: Rgb::ZERO,
                 })),
                 cutout: None,
+                normal_map: None,
                 emission: Some(Emission {
                     radiance: Rgb::splat(LE),
                     texture: None,

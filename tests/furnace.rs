@@ -57,6 +57,7 @@ fn furnace(rho: f32, le: f32) -> Scene {
                 reflectance: Rgb::splat(rho),
             })),
             cutout: None,
+            normal_map: None,
             emission: Some(Emission {
                 radiance: Rgb::splat(le),
                 texture: None,

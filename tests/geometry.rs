@@ -20,6 +20,7 @@ fn material(emission: Option<Rgb>, albedo: f32) -> Material {
             reflectance: Rgb::splat(albedo),
         })),
         cutout: None,
+        normal_map: None,
         emission: emission.map(|radiance| Emission {
             radiance,
             texture: None,

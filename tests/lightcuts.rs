@@ -55,6 +55,7 @@ fn scene_with(lights: Vec<PunctualLight>) -> Scene {
                 reflectance: Rgb::splat(0.5),
             })),
             cutout: None,
+            normal_map: None,
             emission: None,
         }],
         lights,

@@ -498,6 +498,7 @@ fn albedo_0_99_closed_box() {
                 reflectance: Rgb::splat(0.99),
             })),
             cutout: None,
+            normal_map: None,
             emission: Some(Emission {
                 radiance: Rgb::ONE,
                 texture: None,

@@ -25,7 +25,7 @@
 use super::lightcuts::LightTree;
 use super::surfels::Surfel;
 use crate::accel::Accel;
-use crate::bounce::bsdf_operator::BsdfOperator;
+use crate::bounce::bsdf_operator::SurfelOperator;
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::emitters::{EmitterSample, EmitterSampler};
 use crate::geometry::frame::Frame;
@@ -126,16 +126,16 @@ impl DirectLight<'_> {
         &self,
         s: &Surfel,
         id: u64,
-        op: &BsdfOperator,
+        op: &SurfelOperator,
         levels: u32,
     ) -> Vec<Rgb> {
         let frame = Frame::from_normal(s.n);
-        let incident = op.incident(
+        let incident = op.shared.incident(
             self.arrivals(s, id)
                 .into_iter()
                 .map(|a| (frame.to_local(a.wi), a.value)),
         );
-        op.sphere_map(&incident, &op.map_texels(frame, levels))
+        op.sphere_map(&incident, &op.shared.map_texels(frame, levels))
     }
 
     /// Outgoing radiance of surfel `id` with BSDF `bsdf` at the centre of every texel of the

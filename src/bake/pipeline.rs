@@ -12,7 +12,7 @@ use super::plan::{map_levels, Plan};
 use super::surfels::{sample_surfels_with_density, Surfel};
 use super::tree::SurfelTree;
 use crate::accel::Accel;
-use crate::bounce::bsdf_operator::{BsdfOperator, Operators};
+use crate::bounce::bsdf_operator::{quantised_alpha, Operators, SurfelOperator};
 use crate::bounce::{add_bounces, BounceReport, BounceSettings};
 use crate::bsdf::Bsdf;
 use crate::cache::store::{BACK_SIDED, CLOSED, SOLID};
@@ -330,7 +330,7 @@ pub fn bake_cancellable(
         .enumerate()
         .map(|(i, s)| {
             stop()?;
-            let (bsdf, op) = (&bsdfs[i], near_specular[i].as_deref());
+            let (bsdf, op) = (&bsdfs[i], near_specular[i].as_ref());
             let r = surfel_radiance(scene, &direct, s, i as u64, (bsdf, op), settings.tau);
             let n = done.fetch_add(1, Ordering::Relaxed) + 1;
             if n.is_multiple_of(4096) {
@@ -412,10 +412,16 @@ fn surfel_material<'a>(scene: &'a Scene, s: &Surfel) -> (&'a crate::scene::Mater
     (&scene.materials[mesh.material], uv)
 }
 
-/// The BSDF at surfel `s` (textures looked up).
+/// The BSDF at surfel `s` (textures looked up), its roughness snapped to the operators'
+/// levels ([`quantised_alpha`]) where a texture varies it: the bake then builds one operator
+/// per level, not one per surfel.
 pub fn surfel_bsdf(scene: &Scene, s: &Surfel) -> Bsdf {
     let (material, uv) = surfel_material(scene, s);
-    material.bsdf_at(&scene.textures, uv)
+    let bsdf = material.bsdf_at(&scene.textures, uv);
+    match bsdf.alpha() {
+        Some(alpha) if material.has_textured_roughness() => bsdf.with_alpha(quantised_alpha(alpha)),
+        _ => bsdf,
+    }
 }
 
 /// Direct light plus emission leaving surfel `s` with its BSDF (and that BSDF's operator where
@@ -425,7 +431,7 @@ fn surfel_radiance(
     direct: &DirectLight,
     s: &Surfel,
     id: u64,
-    (bsdf, op): (&Bsdf, Option<&BsdfOperator>),
+    (bsdf, op): (&Bsdf, Option<&SurfelOperator>),
     tau: f32,
 ) -> (SurfelRadiance, Rgb) {
     let (material, uv) = surfel_material(scene, s);

@@ -37,7 +37,16 @@
 //!   stiff scene's bounces would diverge) nor loses it (they would fall short).
 //! - RGB: V holds RGB coefficients (a conductor's Fresnel is coloured), and D\[b\] = Σ_a C\[a\] ⊙
 //!   V\[b\]\[a\] channel by channel.
+//! - Few operators for textured materials ([`Operators`]): an operator is built for the BSDF
+//!   without its tints ([`Bsdf::untinted`]), and the tints of reflection and transmission
+//!   scale V's blocks in the product (K is linear in them, block by block), so a textured
+//!   base colour shares one operator. A textured roughness snaps to
+//!   [`ROUGHNESS_LEVELS_PER_OCTAVE`] levels per octave of α ([`quantised_alpha`]), chosen by
+//!   the bake ([`crate::bake::pipeline::surfel_bsdf`]): at most 9 % from the texel's α, and
+//!   the operator of the nearest level is within [`QUANTISATION_ERROR`] of the exact one
+//!   (tests/bsdf_operator.rs).
 
+use crate::bsdf::microfacet::MIN_ALPHA;
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::gather::microbuffer::Microbuffer;
 use crate::geometry::frame::Frame;
@@ -55,6 +64,25 @@ pub const ALBEDO_SAMPLES: u32 = 256;
 /// Incoming coefficients below this fraction of their norm are dropped before D = V·C.
 pub const INCOMING_TAU: f32 = 1e-3;
 
+/// Tints that leave an operator as built: `[reflected, transmitted]` (see [`Bsdf::untinted`]).
+pub const UNTINTED: [Rgb; 2] = [Rgb::ONE; 2];
+
+/// Levels per octave (factor of 2) of α that a textured roughness snaps to.
+pub const ROUGHNESS_LEVELS_PER_OCTAVE: f32 = 4.0;
+
+/// The largest relative L2 error (over texels) of the outgoing radiance of a roughness level's
+/// operator against the exact α's: 7.8 % measured (tests/bsdf_operator.rs, α from 0.03 to 1,
+/// largest near α = 1), for a snap of at most 9 % in α, 4.4 % in glTF's roughness √α.
+pub const QUANTISATION_ERROR: f32 = 0.08;
+
+/// The level of the roughness grid nearest `alpha`: 2^(−k/4) for the nearest integer k, so
+/// within a factor 2^(1/8) (9 %) of `alpha`. A textured roughness is snapped to it, so that
+/// a bake builds one operator per level, not one per surfel.
+pub fn quantised_alpha(alpha: f32) -> f32 {
+    let k = (-alpha.max(MIN_ALPHA).log2() * ROUGHNESS_LEVELS_PER_OCTAVE).round();
+    (-k / ROUGHNESS_LEVELS_PER_OCTAVE).exp2()
+}
+
 /// A texel of a surfel's sphere map that no texel of its operator's grid feeds (below a
 /// reflecting BSDF's horizon), see [`BsdfOperator::map_texels`].
 pub const NO_TEXEL: u16 = u16::MAX;
@@ -68,23 +96,47 @@ pub fn operator_side(bsdf: &Bsdf) -> u32 {
     }
 }
 
-/// The operators a bake has built, one per distinct BSDF and threshold: the direct light
-/// builds those of near-specular BSDFs, the bounces the rest (and reuse the direct light's).
+/// The operators a bake has built, one per distinct untinted BSDF and threshold: the direct
+/// light builds those of near-specular BSDFs, the bounces the rest (and reuse the direct
+/// light's).
 #[derive(Debug, Default)]
 pub struct Operators {
     built: Vec<(Bsdf, f32, Arc<BsdfOperator>)>,
 }
 
+/// A surfel's operator: its BSDF's untinted operator, shared, and its tints.
+#[derive(Clone, Debug)]
+pub struct SurfelOperator {
+    pub shared: Arc<BsdfOperator>,
+    /// `[reflected, transmitted]`, see [`Bsdf::untinted`].
+    pub tints: [Rgb; 2],
+}
+
+impl SurfelOperator {
+    /// [`BsdfOperator::sphere_map`] with this surfel's tints.
+    pub fn sphere_map(&self, incident: &[Rgb], map_texels: &[u16]) -> Vec<Rgb> {
+        self.shared.sphere_map(incident, map_texels, self.tints)
+    }
+}
+
 impl Operators {
-    /// The operator of `bsdf` thresholded at `tau` (see [`BsdfOperator::new`]), built on first
-    /// use.
-    pub fn get(&mut self, bsdf: &Bsdf, tau: f32) -> Arc<BsdfOperator> {
-        if let Some((_, _, op)) = self.built.iter().find(|(b, t, _)| b == bsdf && *t == tau) {
-            return op.clone();
-        }
-        let op = Arc::new(BsdfOperator::new(bsdf, operator_side(bsdf), tau));
-        self.built.push((*bsdf, tau, op.clone()));
-        op
+    /// The operator of `bsdf` thresholded at `tau` (see [`BsdfOperator::new`]): its untinted
+    /// BSDF's, built on first use, with its tints.
+    pub fn get(&mut self, bsdf: &Bsdf, tau: f32) -> SurfelOperator {
+        let (untinted, tints) = bsdf.untinted();
+        let found = self
+            .built
+            .iter()
+            .find(|(b, t, _)| *b == untinted && *t == tau);
+        let shared = match found {
+            Some((_, _, op)) => op.clone(),
+            None => {
+                let op = Arc::new(BsdfOperator::new(&untinted, operator_side(&untinted), tau));
+                self.built.push((untinted, tau, op.clone()));
+                op
+            }
+        };
+        SurfelOperator { shared, tints }
     }
 
     /// The operator (at `tau`) of each BSDF of `bsdfs` (one per surfel) that is `wanted`,
@@ -94,11 +146,21 @@ impl Operators {
         bsdfs: &[Bsdf],
         tau: f32,
         wanted: impl Fn(&Bsdf) -> bool,
-    ) -> Vec<Option<Arc<BsdfOperator>>> {
+    ) -> Vec<Option<SurfelOperator>> {
         bsdfs
             .iter()
             .map(|b| wanted(b).then(|| self.get(b, tau)))
             .collect()
+    }
+
+    /// How many operators have been built.
+    pub fn len(&self) -> usize {
+        self.built.len()
+    }
+
+    /// Whether none has been built.
+    pub fn is_empty(&self) -> bool {
+        self.built.is_empty()
     }
 }
 
@@ -117,7 +179,7 @@ pub struct BsdfOperator {
     kept_norm: f32,
     dropped_norm: f32,
     /// See [`Kernel`].
-    albedo: Vec<Rgb>,
+    albedo: Vec<[Rgb; 2]>,
     cosines: Vec<f32>,
 }
 
@@ -253,7 +315,7 @@ pub fn kernel(bsdf: &Bsdf, n: u32) -> Kernel {
     }
     Kernel {
         rows: k,
-        albedo: targets.iter().map(|t| t[0] + t[1]).collect(),
+        albedo: targets,
         cosines,
     }
 }
@@ -262,8 +324,9 @@ pub fn kernel(bsdf: &Bsdf, n: u32) -> Kernel {
 pub struct Kernel {
     /// K\[o\]\[i\].
     pub rows: Vec<Vec<Rgb>>,
-    /// Per incoming texel, the fraction of its flux the BSDF sends out (both sides).
-    pub albedo: Vec<Rgb>,
+    /// Per incoming texel, the fractions of its flux the BSDF sends to its own side and to
+    /// the other.
+    pub albedo: Vec<[Rgb; 2]>,
     /// Per texel, the mean |cos θ|.
     pub cosines: Vec<f32>,
 }
@@ -411,8 +474,8 @@ impl BsdfOperator {
     /// of the grid: D = V·C ([`BsdfOperator::outgoing`], incoming coefficients thresholded at
     /// [`INCOMING_TAU`]) read by nearest texel, zero where [`NO_TEXEL`]. The one step from
     /// incident light to a map, for the bounces and the near-specular direct light alike.
-    pub fn sphere_map(&self, incident: &[Rgb], map_texels: &[u16]) -> Vec<Rgb> {
-        let local = self.outgoing(incident, INCOMING_TAU);
+    pub fn sphere_map(&self, incident: &[Rgb], map_texels: &[u16], tints: [Rgb; 2]) -> Vec<Rgb> {
+        let local = self.outgoing(incident, INCOMING_TAU, tints);
         map_texels
             .iter()
             .map(|&t| local.get(t as usize).copied().unwrap_or(Rgb::ZERO))
@@ -439,25 +502,31 @@ impl BsdfOperator {
         self.entries.len()
     }
 
-    /// D = V C for the coefficients `c` of the incoming radiance.
-    pub fn apply(&self, c: &[Rgb]) -> Vec<Rgb> {
+    /// D = V C for the coefficients `c` of the incoming radiance, V's blocks from one
+    /// hemisphere to the same scaled by `tints[0]` (reflection), to the other by `tints[1]`
+    /// (transmission). The coefficients are hemisphere by hemisphere, so a coefficient's
+    /// hemisphere is its index over n².
+    pub fn apply(&self, c: &[Rgb], tints: [Rgb; 2]) -> Vec<Rgb> {
+        let block = (self.n * self.n) as usize;
         let mut d = vec![Rgb::ZERO; self.size()];
         for (a, &ca) in c.iter().enumerate() {
             if ca == Rgb::ZERO {
                 continue;
             }
             let column = &self.entries[self.starts[a] as usize..self.starts[a + 1] as usize];
+            let side = |b: u32| usize::from(b as usize / block != a / block);
             for &(b, v) in column {
-                d[b as usize] += ca * v;
+                d[b as usize] += ca * v * tints[side(b)];
             }
         }
         d
     }
 
     /// The product L = Wᵀ V C for the incoming radiance per texel `radiance`, with the
-    /// incoming coefficients below `tau_c` times their norm dropped; also the bound on its L2
-    /// error (over texels, largest channel) that thresholding can cause.
-    pub fn product(&self, radiance: &[Rgb], tau_c: f32) -> (Vec<Rgb>, f32) {
+    /// incoming coefficients below `tau_c` times their norm dropped and V tinted by `tints`
+    /// (see [`BsdfOperator::apply`]); also the bound on its L2 error (over texels, largest
+    /// channel) that thresholding can cause, for untinted V.
+    pub fn product(&self, radiance: &[Rgb], tau_c: f32, tints: [Rgb; 2]) -> (Vec<Rgb>, f32) {
         let mut c = forward(radiance, self.n);
         let norm = |v: &[Rgb]| {
             v.iter()
@@ -475,7 +544,7 @@ impl BsdfOperator {
             }
         }
         let bound = self.error_bound(full, norm(&dropped));
-        (inverse(&self.apply(&c), self.n), bound)
+        (inverse(&self.apply(&c, tints), self.n), bound)
     }
 
     /// The outgoing radiance per texel for the incoming radiance per texel `radiance`: the
@@ -484,9 +553,9 @@ impl BsdfOperator {
     /// flux, as the unthresholded operator's is. Thresholding then moves light between
     /// directions but neither creates nor loses it: a stiff scene's bounces (albedo near 1)
     /// amplify any loss per bounce (a 0.17 % loss left a closed glossy room at ρ = 0.99 3 %
-    /// dark), and would diverge on any gain.
-    pub fn outgoing(&self, radiance: &[Rgb], tau_c: f32) -> Vec<Rgb> {
-        let (mut out, _) = self.product(radiance, tau_c);
+    /// dark), and would diverge on any gain. `tints` as in [`BsdfOperator::apply`].
+    pub fn outgoing(&self, radiance: &[Rgb], tau_c: f32, tints: [Rgb; 2]) -> Vec<Rgb> {
+        let (mut out, _) = self.product(radiance, tau_c, tints);
         for v in out.iter_mut() {
             *v = v.max(Rgb::ZERO);
         }
@@ -495,7 +564,8 @@ impl BsdfOperator {
                 .enumerate()
                 .fold(Rgb::ZERO, |s, (t, x)| s + *x * weight(t))
         };
-        let allowed = flux(radiance, &|t| self.albedo[t] * self.cosines[t]);
+        let albedo = |t: usize| self.albedo[t][0] * tints[0] + self.albedo[t][1] * tints[1];
+        let allowed = flux(radiance, &|t| albedo(t) * self.cosines[t]);
         let sent = flux(&out, &|t| Rgb::splat(self.cosines[t]));
         let scale = Rgb::select(sent.cmpgt(Rgb::ZERO), allowed / sent, Rgb::ZERO);
         for v in out.iter_mut() {

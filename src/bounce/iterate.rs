@@ -30,7 +30,7 @@
 //! memory budget ([`BounceSettings::transport_budget`]) are gathered again in every bounce by
 //! the same code, so the cache does not depend on the budget.
 
-use super::bsdf_operator::BsdfOperator;
+use super::bsdf_operator::SurfelOperator;
 use super::receivers::Receivers;
 use super::transport::{slot_values, LinkScratch, ReceiverLinks, SlotIndex, Slots};
 use super::view_tree::{receiver_groups, GROUP_SURFELS, VIEW_EPS};
@@ -55,7 +55,6 @@ use glam::{Vec3, Vec3A};
 use rayon::prelude::*;
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::Arc;
 
 /// Microbuffer pixels per side for diffuse surfels (as the final render's default).
 pub const DIFFUSE_BUFFER: u32 = 16;
@@ -598,7 +597,7 @@ struct Gather<'a> {
     surfels: &'a [Surfel],
     tau: f32,
     bsdfs: &'a [Bsdf],
-    ops: &'a [Option<Arc<BsdfOperator>>],
+    ops: &'a [Option<SurfelOperator>],
     slots: &'a Slots,
 }
 
@@ -615,7 +614,7 @@ impl Gather<'_> {
                 match op {
                     Some(op) => {
                         let levels = map_levels(&self.bsdfs[*i as usize]).unwrap_or(3);
-                        links.with_map_texels(op.map_texels(mb.frame, levels))
+                        links.with_map_texels(op.shared.map_texels(mb.frame, levels))
                     }
                     None => links,
                 }
@@ -633,7 +632,7 @@ impl Gather<'_> {
         let side = |i: u32| {
             self.ops[i as usize]
                 .as_ref()
-                .map_or(DIFFUSE_BUFFER, |op| op.n)
+                .map_or(DIFFUSE_BUFFER, |op| op.shared.n)
         };
         let mut buffer = |i: u32| {
             let s = &surfels[i as usize];

@@ -133,6 +133,61 @@ impl Bsdf {
         matches!(self, Bsdf::Dielectric(_) | Bsdf::ThinDielectric(_))
     }
 
+    /// The BSDF with its tints set to one (`specular_reflectance` and
+    /// `specular_transmittance`; diffuse's reflectance is not a tint), and those tints:
+    /// `[reflected, transmitted]`. The BSDF's value and the flux it sends to each side are
+    /// those of the untinted BSDF times the tint of that side (the tints scale the lobes; the
+    /// Fresnel term, not they, splits reflection from transmission). So one operator serves
+    /// every tint of a textured colour ([`crate::bounce::bsdf_operator::Operators`]).
+    pub fn untinted(&self) -> (Bsdf, [Rgb; 2]) {
+        match *self {
+            Bsdf::Diffuse(d) => (Bsdf::Diffuse(d), [Rgb::ONE; 2]),
+            Bsdf::Conductor(c) => (
+                Bsdf::Conductor(RoughConductor {
+                    specular_reflectance: Rgb::ONE,
+                    ..c
+                }),
+                [c.specular_reflectance; 2],
+            ),
+            Bsdf::Dielectric(d) => (
+                Bsdf::Dielectric(RoughDielectric {
+                    specular_reflectance: Rgb::ONE,
+                    specular_transmittance: Rgb::ONE,
+                    ..d
+                }),
+                [d.specular_reflectance, d.specular_transmittance],
+            ),
+            Bsdf::ThinDielectric(d) => (
+                Bsdf::ThinDielectric(ThinDielectric {
+                    specular_reflectance: Rgb::ONE,
+                    specular_transmittance: Rgb::ONE,
+                    ..d
+                }),
+                [d.specular_reflectance, d.specular_transmittance],
+            ),
+        }
+    }
+
+    /// The BSDF with the isotropic microfacet roughness `alpha` (unchanged for diffuse).
+    pub fn with_alpha(&self, alpha: f32) -> Bsdf {
+        let distr = |d: Microfacet| Microfacet::new(d.kind, alpha, alpha);
+        match *self {
+            Bsdf::Diffuse(d) => Bsdf::Diffuse(d),
+            Bsdf::Conductor(c) => Bsdf::Conductor(RoughConductor {
+                distr: distr(c.distr),
+                ..c
+            }),
+            Bsdf::Dielectric(d) => Bsdf::Dielectric(RoughDielectric {
+                distr: distr(d.distr),
+                ..d
+            }),
+            Bsdf::ThinDielectric(d) => Bsdf::ThinDielectric(ThinDielectric {
+                distr: distr(d.distr),
+                ..d
+            }),
+        }
+    }
+
     /// The smaller microfacet roughness, or `None` for the diffuse BSDF.
     pub fn alpha(&self) -> Option<f32> {
         let d = match self {

@@ -15,7 +15,8 @@ pub struct SurfaceHit {
     pub err: Vec3,
     /// Unit geometric normal of the front face (counter-clockwise winding).
     pub ng: Vec3,
-    /// Shading frame around the interpolated normal (or `ng` for flat meshes).
+    /// Shading frame around the interpolated normal (or `ng` for flat meshes), tilted by the
+    /// material's normal map.
     pub frame: Frame,
     pub uv: Vec2,
     pub mesh: u32,
@@ -52,6 +53,10 @@ pub fn intersect(ctx: &RenderContext, o: Vec3, d: Vec3) -> Option<SurfaceHit> {
         None => ng,
     };
     let uv = m.uv_at(hit.triangle, hit.b);
+    let ns = match &ctx.scene.materials[m.material].normal_map {
+        Some(map) => map.shading_normal(&ctx.scene.textures, m, hit.triangle, uv, ns),
+        None => ns,
+    };
     Some(SurfaceHit {
         p: Vec3::from(p),
         err: Vec3::from(err),

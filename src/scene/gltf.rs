@@ -8,6 +8,7 @@
 use super::camera::{Camera, Projection};
 use super::light::{LightKind, PunctualLight};
 use super::material::{Cutout, Emission, Material, PbrParams, Scattering};
+use super::normal_map::NormalMap;
 use super::texture::{ChannelRef, TexRef, Texture, Wrap};
 use super::{Mesh, Scene, Warning};
 use crate::bsdf::mitsuba::parse_bsdf;
@@ -70,6 +71,7 @@ pub(super) fn import(path: &Path, bytes: &[u8]) -> Result<Scene> {
         name: "(default)".into(),
         scattering: Scattering::Pbr(PbrParams::constant(Rgb::ONE, 1.0, 1.0)),
         cutout: None,
+        normal_map: None,
         emission: None,
     });
 
@@ -297,7 +299,43 @@ fn tex_ref(
     warnings: &mut Vec<Warning>,
     what: &str,
 ) -> Option<TexRef> {
-    let tex = info.texture();
+    let reference = (info.texture(), info.tex_coord(), info.texture_transform());
+    texture_ref(reference, image_of_texture, srgb, warnings, what)
+}
+
+/// A material's normal map: glTF's `normalTexture`, 2 × texel − 1 with x and y times its
+/// `scale` (the glTF crate reads no KHR_texture_transform on it).
+fn normal_map(
+    m: &g::Material,
+    image_of_texture: &[usize],
+    warnings: &mut Vec<Warning>,
+    what: &str,
+) -> Option<NormalMap> {
+    let n = m.normal_texture()?;
+    let s = n.scale();
+    let reference = (n.texture(), n.tex_coord(), None);
+    let texture = texture_ref(reference, image_of_texture, false, warnings, what)?;
+    Some(NormalMap {
+        texture: TexRef {
+            scale: Vec4::new(2.0 * s, 2.0 * s, 2.0, 1.0),
+            bias: Vec4::new(-s, -s, -1.0, 0.0),
+            ..texture
+        },
+    })
+}
+
+/// A texture reference from a glTF texture, its TEXCOORD set and its KHR_texture_transform.
+fn texture_ref(
+    (tex, tex_coord, texture_transform): (
+        g::texture::Texture,
+        u32,
+        Option<g::texture::TextureTransform>,
+    ),
+    image_of_texture: &[usize],
+    srgb: bool,
+    warnings: &mut Vec<Warning>,
+    what: &str,
+) -> Option<TexRef> {
     let sampler = tex.sampler();
     let wrap = |w: g::texture::WrappingMode| match w {
         g::texture::WrappingMode::ClampToEdge => Wrap::Clamp,
@@ -305,8 +343,8 @@ fn tex_ref(
         g::texture::WrappingMode::Repeat => Wrap::Repeat,
     };
     let mut transform = Affine2::IDENTITY;
-    let mut tex_coord = info.tex_coord();
-    if let Some(t) = info.texture_transform() {
+    let mut tex_coord = tex_coord;
+    if let Some(t) = texture_transform {
         // KHR_texture_transform: T · R · S, with the rotation's sign as the extension defines it.
         let [ox, oy] = t.offset();
         let [sx, sy] = t.scale();
@@ -433,6 +471,7 @@ fn convert_material(
         scattering,
         emission,
         cutout,
+        normal_map: normal_map(m, image_of_texture, warnings, &what),
     })
 }
 

@@ -10,6 +10,7 @@
 //! and as in glTF, where transmission is a lobe of the dielectric part only. Textured factors
 //! are resolved per shading point, so a metallic mask switches the BSDF per texel.
 
+use super::normal_map::NormalMap;
 use super::texture::{ChannelRef, TexRef, Texture};
 use crate::bsdf::{
     Bsdf, Diffuse, Distribution, Microfacet, RoughConductor, RoughDielectric, ThinDielectric,
@@ -86,6 +87,8 @@ pub struct Material {
     pub emission: Option<Emission>,
     /// Holes cut by the alpha channel (glTF `alphaMode: MASK`, USD `opacityThreshold`).
     pub cutout: Option<Cutout>,
+    /// A tangent-space normal map (glTF `normalTexture`, UsdPreviewSurface `normal`).
+    pub normal_map: Option<NormalMap>,
 }
 
 /// An alpha cut-out: the surface is there where `alpha` (times the texture's channel) is at
@@ -135,6 +138,11 @@ impl Material {
             }
         };
         glass && self.emission.is_none()
+    }
+
+    /// Whether a texture varies the roughness (the bake snaps such roughness to a few levels).
+    pub fn has_textured_roughness(&self) -> bool {
+        matches!(&self.scattering, Scattering::Pbr(p) if p.roughness_texture.is_some())
     }
 
     /// The BSDF at a shading point with texture coordinate `uv`.
@@ -211,6 +219,7 @@ mod tests {
                     ..PbrParams::constant(Rgb::splat(0.8), metallic, 0.3)
                 }),
                 cutout: None,
+                normal_map: None,
                 emission: None,
             }
             .bsdf_at(&[], Vec2::ZERO)

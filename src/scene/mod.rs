@@ -6,6 +6,7 @@ pub mod environment;
 mod gltf;
 pub mod light;
 pub mod material;
+pub mod normal_map;
 pub mod texture;
 #[cfg(feature = "usd")]
 mod usd;
@@ -14,6 +15,7 @@ pub use camera::{Camera, Projection};
 pub use environment::Environment;
 pub use light::{LightKind, PunctualLight};
 pub use material::{Cutout, Emission, Material, PbrParams, Scattering};
+pub use normal_map::NormalMap;
 pub use texture::{ChannelRef, TexRef, Texture, Wrap};
 
 use crate::error::{Error, Result};

@@ -119,6 +119,7 @@ pub fn grey_scene(meshes: Vec<Mesh>) -> wpbgi::scene::Scene {
                 reflectance: wpbgi::spectrum::Rgb::splat(0.5),
             })),
             cutout: None,
+            normal_map: None,
             emission: None,
         }],
         ..Default::default()

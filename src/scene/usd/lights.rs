@@ -223,6 +223,7 @@ impl Importer<'_> {
                 reflectance: Rgb::ZERO,
             })),
             cutout: None,
+            normal_map: None,
             emission: Some(Emission {
                 radiance,
                 texture: None,

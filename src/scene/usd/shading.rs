@@ -16,6 +16,7 @@
 use super::{sample, Importer};
 use crate::error::Result;
 use crate::scene::material::{Cutout, Emission, Material, PbrParams, Scattering};
+use crate::scene::normal_map::NormalMap;
 use crate::scene::texture::{ChannelRef, TexRef, Texture, Wrap};
 use crate::scene::Warning;
 use crate::spectrum::Rgb;
@@ -196,6 +197,7 @@ impl Importer<'_> {
                 name: m.as_str().to_string(),
                 scattering: explicit.map_or(default_material().scattering, Scattering::Explicit),
                 cutout: None,
+                normal_map: None,
                 emission: None,
             });
         };
@@ -268,15 +270,46 @@ impl Importer<'_> {
             }
         };
         let (radiance, texture) = emission;
+        let normal_map = self.normal_map(&surface)?;
         Ok(Material {
             name: m.as_str().to_string(),
             scattering,
             cutout,
+            normal_map,
             emission: (radiance.max_element() > 0.0).then_some(Emission {
                 radiance,
                 texture,
                 two_sided: double_sided,
             }),
+        })
+    }
+
+    /// The `normal` input connected to a texture: a tangent-space normal map, its values
+    /// after the texture node's scale and bias (UsdPreviewSurface: "the expected range is
+    /// [-1, 1]", which an 8-bit image reaches through scale 2 and bias −1). Always read as
+    /// raw data. An authored constant normal is the default (0, 0, 1), a no-op.
+    fn normal_map(&mut self, shader: &Shader) -> Result<Option<NormalMap>> {
+        let sp = shader.path().clone();
+        Ok(match self.input(shader, "normal")? {
+            Input::Texture {
+                texture,
+                channel: None,
+            } => Some(NormalMap {
+                texture: TexRef {
+                    srgb: false,
+                    ..texture
+                },
+            }),
+            Input::Texture {
+                channel: Some(_), ..
+            } => {
+                self.scene.warnings.push(Warning(format!(
+                    "{}: inputs:normal reads one channel of a texture; the normal map is ignored",
+                    sp.as_str()
+                )));
+                None
+            }
+            _ => None,
         })
     }
 
@@ -598,6 +631,7 @@ fn default_material() -> Material {
         name: "default".into(),
         scattering: Scattering::Pbr(PbrParams::constant(Rgb::splat(0.18), 0.0, 1.0)),
         cutout: None,
+        normal_map: None,
         emission: None,
     }
 }
