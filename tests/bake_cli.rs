@@ -90,6 +90,7 @@ fn a_killed_bake_leaves_the_previous_cache_intact() {
                     "400000",
                     "--json",
                 ])
+                .stdout(std::process::Stdio::null())
                 .stderr(std::process::Stdio::null())
                 .spawn()
                 .expect("starts");
@@ -119,10 +120,15 @@ fn inspect_reports_and_refuses_stale_caches() {
     let d = dir("inspect");
     let cache = d.join("scene.wpc");
     let out = bake_ok(&cache);
-    // JSON progress lines end with a summary.
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    let last: serde_json::Value =
-        serde_json::from_str(stderr.lines().last().expect("a line")).expect("JSON lines");
+    // JSON lines on standard output, every one a JSON object: the plan first, the summary
+    // last.
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let events: Vec<serde_json::Value> = stdout
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("JSON lines"))
+        .collect();
+    assert_eq!(events.first().expect("a line")["event"], "plan");
+    let last = events.last().expect("a line");
     assert_eq!(last["event"], "done");
     assert_eq!(last["stats"]["surfels"], 2000);
 
@@ -847,4 +853,149 @@ fn json_reports_on_standard_output() {
     );
     let doc: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON document");
     assert_eq!(doc["frames"][0]["spp"], 2);
+    // Every command's failure under --json is a JSON document on standard output.
+    let missing = d.join("missing.gltf");
+    let missing = missing.to_str().expect("utf-8");
+    let cache = cache.to_str().expect("utf-8");
+    for args in [
+        vec!["bake", missing, "-o", "never.wpc", "--json"],
+        vec!["inspect", missing, "--json"],
+        vec!["compare", missing, "-o", "never", "--json"],
+        vec![
+            "preview",
+            cache,
+            "--scene",
+            missing,
+            "--headless",
+            "-o",
+            "x.png",
+            "--json",
+        ],
+    ] {
+        let out = wpbgi(&args);
+        assert_eq!(out.status.code(), Some(1), "{args:?}");
+        let doc: serde_json::Value =
+            serde_json::from_slice(&out.stdout).unwrap_or_else(|e| panic!("{args:?}: {e}"));
+        assert!(
+            doc["error"].as_str().is_some_and(|e| e.contains("missing")),
+            "{args:?}: {doc}"
+        );
+        assert_eq!(doc["exit"], 1);
+    }
+}
+
+/// `-q` leaves standard error to warnings and errors; `-v` adds the scene as loaded.
+#[test]
+fn quiet_and_verbose() {
+    let d = dir("verbosity");
+    let image = d.join("ref.exr");
+    let reference = |flag: &str| {
+        let out = wpbgi(&[
+            flag,
+            "reference",
+            scene().to_str().expect("utf-8"),
+            "-o",
+            image.to_str().expect("utf-8"),
+            "--size",
+            "8x8",
+            "--spp",
+            "1",
+        ]);
+        assert!(out.status.success(), "{flag}");
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    let quiet = reference("-q");
+    assert!(
+        quiet.lines().all(|l| l.starts_with("warning:")),
+        "-q said: {quiet}"
+    );
+    let normal = reference("--threads=2");
+    assert!(normal.contains("wrote"), "{normal}");
+    assert!(!normal.contains("triangles"), "{normal}");
+    let verbose = reference("-v");
+    assert!(
+        verbose.contains("wrote") && verbose.contains("triangles"),
+        "{verbose}"
+    );
+    let both = wpbgi(&[
+        "-q",
+        "-v",
+        "reference",
+        "x.gltf",
+        "-o",
+        "x.exr",
+        "--spp",
+        "1",
+    ]);
+    assert_eq!(
+        both.status.code(),
+        Some(2),
+        "-q and -v together are refused"
+    );
+}
+
+/// A USD stage's RenderSettings and RenderProduct (tests/data/usd/render-settings.usda): the
+/// product's camera (/cbox/side, over the settings' /cbox/camera), its resolution (40x30,
+/// over the settings' 64x64) and its productName (shot.exr, written where `-o` is not given).
+/// The image is the one `--camera /cbox/side --size 40x30 -o` gives, byte for byte; and the
+/// options, when given, win.
+#[test]
+fn usd_render_settings_pick_camera_size_and_output() {
+    let d = dir("render-settings");
+    let stage = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/usd/render-settings.usda");
+    let stage = stage.to_str().expect("utf-8");
+    let run = |args: &[&str]| {
+        let out = Command::new(WPBGI)
+            .args(args)
+            .current_dir(&d)
+            .output()
+            .expect("runs");
+        assert!(
+            out.status.success(),
+            "{args:?}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    };
+    run(&["reference", stage, "--spp", "1"]);
+    let from_settings = wpbgi::image::read_exr(&d.join("shot.exr")).expect("shot.exr written");
+    assert_eq!((from_settings.width, from_settings.height), (40, 30));
+    run(&[
+        "reference",
+        stage,
+        "--spp",
+        "1",
+        "--camera",
+        "/cbox/side",
+        "--size",
+        "40x30",
+        "-o",
+        "named.exr",
+    ]);
+    assert!(
+        std::fs::read(d.join("shot.exr")).expect("shot")
+            == std::fs::read(d.join("named.exr")).expect("named"),
+        "the settings' camera and size give the named camera's image"
+    );
+    run(&[
+        "reference",
+        stage,
+        "--spp",
+        "1",
+        "--camera",
+        "/cbox/camera",
+        "--size",
+        "20x10",
+        "-o",
+        "other.exr",
+    ]);
+    let other = wpbgi::image::read_exr(&d.join("other.exr")).expect("other");
+    assert_eq!((other.width, other.height), (20, 10));
+    // A scene without render settings and without -o: refused, naming -o.
+    let out = Command::new(WPBGI)
+        .args(["reference", scene().to_str().expect("utf-8"), "--spp", "1"])
+        .current_dir(&d)
+        .output()
+        .expect("runs");
+    assert_eq!(out.status.code(), Some(1));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("-o"));
 }

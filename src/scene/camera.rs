@@ -171,3 +171,17 @@ impl Camera {
         }
     }
 }
+
+/// What a USD stage's `RenderSettings` prim (the first in the stage) and its first
+/// `RenderProduct` ask of the image: the camera (a prim path, as [`Camera::name`]), the
+/// resolution and the output's name. The product's own camera and resolution win over the
+/// settings'. The command line takes each where its own option is not given.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RenderProduct {
+    /// The `RenderSettings` prim.
+    pub settings: String,
+    pub camera: Option<String>,
+    pub resolution: Option<(u32, u32)>,
+    /// `productName`: the file the image goes to.
+    pub name: Option<String>,
+}

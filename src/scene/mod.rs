@@ -11,7 +11,7 @@ pub mod texture;
 #[cfg(feature = "usd")]
 mod usd;
 
-pub use camera::{Camera, Projection};
+pub use camera::{Camera, Projection, RenderProduct};
 pub use environment::Environment;
 pub use light::{LightKind, PunctualLight};
 pub use material::{Cutout, Emission, Material, PbrParams, Scattering};
@@ -120,6 +120,8 @@ pub struct Scene {
     /// Radiance from far away (a USD dome light).
     pub environment: Option<Environment>,
     pub cameras: Vec<Camera>,
+    /// What a USD stage's render settings ask of the image, when it has them.
+    pub render_product: Option<RenderProduct>,
     pub warnings: Vec<Warning>,
 }
 

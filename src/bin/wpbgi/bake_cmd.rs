@@ -88,9 +88,10 @@ pub struct BakeArgs {
     /// Repeatable.
     #[arg(long, value_name = "MATERIAL=FACTOR", value_parser = parse_density)]
     surfel_density: Vec<(String, f32)>,
-    /// Report the plan, progress and summary as JSON lines on standard error.
+    /// Report the plan, progress and summary as JSON lines on standard output (events
+    /// "plan", "progress" and "done"; a failure as {"error": ..., "exit": ...}).
     #[arg(long)]
-    json: bool,
+    pub(crate) json: bool,
 }
 
 fn parse_density(s: &str) -> Result<(String, f32), String> {
@@ -118,9 +119,10 @@ pub(crate) fn parse_bounces(s: &str) -> Result<BounceSettings, String> {
 pub struct InspectArgs {
     /// The cache (.wpc).
     cache: PathBuf,
-    /// Print the report as JSON.
+    /// Print the report as one JSON document on standard output (a failure as
+    /// {"error": ..., "exit": ...}).
     #[arg(long)]
-    json: bool,
+    pub(crate) json: bool,
     /// Also write the surfels as a PLY point cloud with normals and colours.
     #[arg(long)]
     ply: Option<PathBuf>,
@@ -146,9 +148,12 @@ fn settings_of(a: &BakeArgs) -> BakeSettings {
     s
 }
 
+/// One JSON line on standard output, flushed at once (a progress event is read while the
+/// bake runs).
 fn emit_json(v: Value) {
-    let mut err = std::io::stderr().lock();
-    let _ = writeln!(err, "{v}");
+    let mut out = std::io::stdout().lock();
+    let _ = writeln!(out, "{v}");
+    let _ = out.flush();
 }
 
 pub fn bake_command(a: BakeArgs) -> Result<()> {
@@ -161,10 +166,11 @@ pub fn bake_command(a: BakeArgs) -> Result<()> {
     if a.json {
         emit_json(json!({"event": "plan", "plan": plan.json, "settings": settings.to_json()}));
     } else {
-        eprintln!("bake plan for {}:", a.scene.display());
-        eprintln!(
+        say!("bake plan for {}:", a.scene.display());
+        say!(
             "  {} surfels, {} light samples each",
-            settings.points, settings.light_samples
+            settings.points,
+            settings.light_samples
         );
         for m in plan.json["materials"].as_array().into_iter().flatten() {
             let density = settings
@@ -173,16 +179,18 @@ pub fn bake_command(a: BakeArgs) -> Result<()> {
                 .rev()
                 .find(|(name, _)| m["name"].as_str() == Some(name.as_str()))
                 .map_or(String::new(), |(_, w)| format!(", surfels ×{w}"));
-            eprintln!(
+            say!(
                 "  material {}: {}, {}{density}",
-                m["name"], m["model"], m["storage"]
+                m["name"],
+                m["model"],
+                m["storage"]
             );
         }
         if let Some(b) = plan.json["bounces"].as_str() {
-            eprintln!("  indirect bounces: {b}");
+            say!("  indirect bounces: {b}");
         }
         for l in plan.json["left_out"].as_array().into_iter().flatten() {
-            eprintln!("  left out: {}", l.as_str().unwrap_or_default());
+            say!("  left out: {}", l.as_str().unwrap_or_default());
         }
     }
     let bar = (!a.json).then(|| crate::StagedBar::new("baking"));
@@ -222,6 +230,7 @@ pub fn bake_command(a: BakeArgs) -> Result<()> {
             "slots": t.slots,
         });
     }
+    stats["operators"] = json!(baked.operators.len());
     let peak = wpbgi::compare::memory::peak();
     let per_surfel = bytes as f64 / baked.surfels.len().max(1) as f64;
     let total = start.elapsed().as_secs_f64();
@@ -232,7 +241,7 @@ pub fn bake_command(a: BakeArgs) -> Result<()> {
     if a.json {
         emit_json(json!({"event": "done", "output": a.output, "stats": stats}));
     } else {
-        eprintln!(
+        say!(
             "wrote {}: {} surfels, {} nodes, {} coefficients, {} bytes ({:.0} per surfel), {:.2} s{}",
             a.output.display(),
             baked.surfels.len(),
@@ -244,11 +253,19 @@ pub fn bake_command(a: BakeArgs) -> Result<()> {
             peak.map_or(String::new(), |b| format!(", peak memory {} MB", b / 1_000_000)),
         );
         for (stage, secs) in &baked.timings {
-            eprintln!("  {stage}: {secs:.2} s");
+            say!("  {stage}: {secs:.2} s");
+        }
+        if !baked.operators.is_empty() {
+            say!(
+                "  BSDF operators: {} (one per glossy BSDF without its tints, a textured \
+                 roughness snapped to {} levels per octave of α)",
+                baked.operators.len(),
+                wpbgi::bounce::bsdf_operator::ROUGHNESS_LEVELS_PER_OCTAVE
+            );
         }
         if let Some(r) = &baked.bounces {
             let per: Vec<String> = r.seconds.iter().map(|s| format!("{s:.2}")).collect();
-            eprintln!(
+            say!(
                 "  {} bounces ({} s each), residual {:.1e}{}",
                 r.bounces,
                 per.join(", "),
@@ -267,7 +284,7 @@ pub fn bake_command(a: BakeArgs) -> Result<()> {
             } else {
                 String::new()
             };
-            eprintln!(
+            say!(
                 "  transport: {} MB ({:.0} bytes per surfel), {} of {} surfels gather, {} of {} \
                  slots read{regathered}",
                 t.bytes / 1_000_000,
@@ -331,7 +348,7 @@ pub fn inspect_command(a: InspectArgs) -> Result<()> {
     }
     if let Some(p) = &a.ply {
         write_ply(p, &c)?;
-        eprintln!("wrote {} ({} points)", p.display(), c.surfels.len());
+        say!("wrote {} ({} points)", p.display(), c.surfels.len());
     }
     Ok(())
 }

@@ -39,6 +39,10 @@ pub struct CompareArgs {
     /// Seed of the random streams.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// Also write the report (report.json's document) to standard output; a failure as
+    /// {"error": ..., "exit": ...}.
+    #[arg(long)]
+    pub json: bool,
     #[command(flatten)]
     pub camera: CameraArgs,
 }
@@ -69,7 +73,7 @@ pub fn compare_command(a: CompareArgs) -> Result<()> {
                 bar.set_position((f * 1000.0) as u64)
             })?;
             bar.finish_and_clear();
-            eprintln!(
+            say!(
                 "rendered the reference: {} spp in {:.1} s",
                 r.spp.unwrap_or(0),
                 r.seconds.unwrap_or(0.0)
@@ -92,7 +96,10 @@ pub fn compare_command(a: CompareArgs) -> Result<()> {
     })?;
     bar.finish();
     report.write(&a.output)?;
-    eprint!("{}", report.summary_markdown());
-    eprintln!("wrote {}", a.output.display());
+    if a.json {
+        println!("{}", report.to_json());
+    }
+    say!("{}", report.summary_markdown().trim_end());
+    say!("wrote {}", a.output.display());
     Ok(())
 }

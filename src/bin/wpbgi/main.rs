@@ -1,12 +1,32 @@
 //! The `wpbgi` command line: a thin shell over the library that parses arguments, shows progress
 //! and turns every error into one sentence and a non-zero exit code.
 
+/// `eprintln!` unless `-q`: what a command did and its figures (warnings and errors are
+/// always printed, with `eprintln!`).
+macro_rules! say {
+    ($($arg:tt)*) => {
+        if !$crate::verbosity::quiet() {
+            eprintln!($($arg)*);
+        }
+    };
+}
+
+/// `eprintln!` with `-v` only.
+macro_rules! detail {
+    ($($arg:tt)*) => {
+        if $crate::verbosity::verbose() {
+            eprintln!($($arg)*);
+        }
+    };
+}
+
 mod bake_cmd;
 mod compare_cmd;
 mod frames;
 mod interrupt;
 mod preview_cmd;
 mod render_cmd;
+mod verbosity;
 
 use anyhow::{bail, Context, Result};
 use clap::{Args, Parser, Subcommand};
@@ -47,6 +67,14 @@ struct Cli {
     /// +X for 90).
     #[arg(long, global = true, default_value_t = 0.0, allow_hyphen_values = true)]
     env_rotate: f32,
+    /// Say nothing on standard error but warnings and errors: no progress bars, plans or
+    /// summaries.
+    #[arg(short, long, global = true, conflicts_with = "verbose")]
+    quiet: bool,
+    /// Say more on standard error: also the scene as loaded (meshes, triangles, materials,
+    /// textures, lights) and the final render's gather statistics.
+    #[arg(short, long, global = true)]
+    verbose: bool,
     #[command(subcommand)]
     command: Command,
 }
@@ -83,10 +111,12 @@ enum Command {
 
 #[derive(Args)]
 pub(crate) struct CameraArgs {
-    /// Image size as WIDTHxHEIGHT.
-    #[arg(long, default_value = "512x512", value_parser = parse_size)]
-    pub(crate) size: (u32, u32),
-    /// Use the scene camera with this name (default: the first camera, or an automatic framing).
+    /// Image size as WIDTHxHEIGHT (default: the USD stage's render settings' resolution, or
+    /// 512x512).
+    #[arg(long, value_parser = parse_size)]
+    pub(crate) size: Option<(u32, u32)>,
+    /// Use the scene camera with this name (default: the USD stage's render settings' camera,
+    /// else the first camera, or an automatic framing).
     #[arg(long)]
     camera: Option<String>,
     /// Place a camera at this point instead (x,y,z); needs --target.
@@ -104,9 +134,10 @@ pub(crate) struct CameraArgs {
 struct ReferenceArgs {
     /// The scene (.gltf, .glb, .usd, .usda, .usdc or .usdz).
     scene: PathBuf,
-    /// Output image (OpenEXR, float32 RGB).
+    /// Output image (OpenEXR, float32 RGB). Default: the USD stage's RenderProduct
+    /// productName.
     #[arg(short, long)]
-    output: PathBuf,
+    output: Option<PathBuf>,
     /// Samples per pixel.
     #[arg(long, conflicts_with = "time", required_unless_present = "time")]
     spp: Option<u32>,
@@ -180,6 +211,10 @@ struct DemoArgs {
     /// Output folder.
     #[arg(short, long, default_value = "wpbgi-demo")]
     output: PathBuf,
+    /// Write one JSON document to standard output: the files, the bake's and the render's
+    /// seconds, and the error against Mitsuba's render; a failure as {"error": ...}.
+    #[arg(long)]
+    json: bool,
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
@@ -210,6 +245,9 @@ fn parse_vec3(s: &str) -> Result<Vec3, String> {
 }
 
 pub(crate) fn progress_bar(what: &str) -> ProgressBar {
+    if verbosity::quiet() {
+        return ProgressBar::hidden();
+    }
     let bar = ProgressBar::new(1000);
     bar.set_style(
         ProgressStyle::with_template("{msg} [{bar:40}] {percent}% ({elapsed}, eta {eta})")
@@ -258,10 +296,34 @@ fn run_render(scene: &Scene, camera: &Camera, settings: &RenderSettings) -> Resu
     Ok(out)
 }
 
+/// The image size without `--size` or render settings.
+const DEFAULT_SIZE: (u32, u32) = (512, 512);
+
+/// `-o`, or else the scene's RenderProduct productName (the scene is read for it once more,
+/// at `--time-code`); an error naming both when neither is there.
+pub(crate) fn output_or_product(output: Option<&Path>, scene: &Path) -> Result<PathBuf> {
+    if let Some(o) = output {
+        return Ok(o.to_path_buf());
+    }
+    let product = load_scene(scene)?.render_product.and_then(|p| p.name);
+    product.map(PathBuf::from).with_context(|| {
+        format!(
+            "{}: no output: give -o (the scene has no RenderProduct with a productName)",
+            scene.display()
+        )
+    })
+}
+
 impl CameraArgs {
-    /// The camera of --eye, --target and --fov, if given.
-    pub(crate) fn eye_camera(&self) -> Result<Option<Camera>> {
-        let (w, h) = self.size;
+    /// `--size`, or else the render settings' resolution of `scene`, or else 512x512.
+    pub(crate) fn size_for(&self, scene: Option<&Scene>) -> (u32, u32) {
+        self.size
+            .or_else(|| scene?.render_product.as_ref()?.resolution)
+            .unwrap_or(DEFAULT_SIZE)
+    }
+
+    /// The camera of --eye, --target and --fov, if given, at `size`.
+    pub(crate) fn eye_camera(&self, (w, h): (u32, u32)) -> Result<Option<Camera>> {
         let (Some(eye), Some(target)) = (self.eye, self.target) else {
             return Ok(None);
         };
@@ -278,12 +340,18 @@ impl CameraArgs {
     }
 }
 
+/// The camera the options name (`--eye`, `--camera`), or else the render settings' camera,
+/// or else the scene's first (or a framing one), at [`CameraArgs::size_for`].
 pub(crate) fn pick_camera(scene: &Scene, args: &CameraArgs) -> Result<Camera> {
-    if let Some(c) = args.eye_camera()? {
+    let (w, h) = args.size_for(Some(scene));
+    if let Some(c) = args.eye_camera((w, h))? {
         return Ok(c);
     }
-    let (w, h) = args.size;
-    Ok(scene.camera(args.camera_name(), w, h)?)
+    let settings_camera = scene
+        .render_product
+        .as_ref()
+        .and_then(|p| p.camera.as_deref());
+    Ok(scene.camera(args.camera_name().or(settings_camera), w, h)?)
 }
 
 /// The `--time-code` of this run.
@@ -323,7 +391,31 @@ pub(crate) fn load_scene_at(path: &Path, time: Option<f64>) -> Result<Scene> {
         }
         scene.environment = Some(env);
     }
+    detail!("{}", scene_summary(&scene));
     Ok(scene)
+}
+
+/// One line on what a scene holds, for `-v`.
+fn scene_summary(scene: &Scene) -> String {
+    let triangles: usize = scene.meshes.iter().map(|m| m.triangles.len()).sum();
+    let textured = |m: &wpbgi::scene::Material| {
+        m.normal_map.is_some() || m.cutout.is_some() || m.has_textured_roughness()
+    };
+    format!(
+        "loaded {}: {} meshes, {triangles} triangles, {} materials ({} with textured \
+         roughness, normal maps or cut-outs), {} textures, {} lights{}",
+        scene.path.display(),
+        scene.meshes.len(),
+        scene.materials.len(),
+        scene.materials.iter().filter(|m| textured(m)).count(),
+        scene.textures.len(),
+        scene.lights.len(),
+        if scene.environment.is_some() {
+            ", an environment"
+        } else {
+            ""
+        }
+    )
 }
 
 /// Whether the run named a `--time-code`.
@@ -338,7 +430,8 @@ pub(crate) fn warn(scene: &Scene) {
 }
 
 fn reference(a: ReferenceArgs) -> Result<()> {
-    let frames = frames::outputs(a.frames, &a.output, a.png.as_deref())?;
+    let output = output_or_product(a.output.as_deref(), &a.scene)?;
+    let frames = frames::outputs(a.frames, &output, a.png.as_deref())?;
     let variance = |time: Option<f64>| -> Result<Option<PathBuf>> {
         match (&a.variance, time) {
             (Some(p), Some(f)) => frames::named(p, f as i64).map(Some),
@@ -379,7 +472,7 @@ fn reference(a: ReferenceArgs) -> Result<()> {
             a.display.write(p, &out.mean)?;
         }
         let mp = (camera.width as f64 * camera.height as f64) / 1e6;
-        eprintln!(
+        say!(
             "wrote {} ({}x{}, {} spp, {:.2} s, {:.3} s/spp/MP)",
             output.display(),
             camera.width,
@@ -436,7 +529,7 @@ fn demo(a: DemoArgs) -> Result<()> {
     std::fs::write(&reference_path, DEMO_REFERENCE)
         .with_context(|| format!("cannot write {}", reference_path.display()))?;
     let reference = wpbgi::image::read_exr(&reference_path)?;
-    eprintln!(
+    say!(
         "wrote {} and {}: bake {:.2} s ({} surfels), render {:.2} s, total {:.2} s",
         exr.display(),
         png.display(),
@@ -445,9 +538,25 @@ fn demo(a: DemoArgs) -> Result<()> {
         render_seconds,
         start.elapsed().as_secs_f64()
     );
-    if let Some((mse, rel)) = wpbgi::image::error_against(&out.beauty, &reference) {
-        eprintln!(
+    let error = wpbgi::image::error_against(&out.beauty, &reference);
+    if let Some((mse, rel)) = error {
+        say!(
             "error against Mitsuba 3 (path tracing, max_depth 3, 8192 spp): MSE {mse:.3e}, relMSE {rel:.3e}"
+        );
+    }
+    if a.json {
+        println!(
+            "{}",
+            serde_json::json!({
+                "command": "demo",
+                "files": [exr.display().to_string(), png.display().to_string()],
+                "surfels": baked.surfels.len(),
+                "bake_seconds": bake_seconds,
+                "render_seconds": render_seconds,
+                "total_seconds": start.elapsed().as_secs_f64(),
+                "mse": error.map(|e| e.0),
+                "rel_mse": error.map(|e| e.1),
+            })
         );
     }
     Ok(())
@@ -455,6 +564,7 @@ fn demo(a: DemoArgs) -> Result<()> {
 
 fn main() {
     let cli = Cli::parse();
+    verbosity::set(cli.quiet, cli.verbose);
     interrupt::install();
     if cli.time_code.is_some_and(|t| !t.is_finite()) {
         eprintln!("error: --time-code must be a finite number");
@@ -485,7 +595,11 @@ fn main() {
     let json_errors = match &cli.command {
         Command::Render(a) => a.json,
         Command::Reference(a) => a.json,
-        _ => false,
+        Command::Bake(a) => a.json,
+        Command::Inspect(a) => a.json,
+        Command::Preview(a) => a.json,
+        Command::Compare(a) => a.json,
+        Command::Demo(a) => a.json,
     };
     let result = match cli.command {
         Command::Reference(a) => reference(a),

@@ -3,6 +3,7 @@
 use crate::CameraArgs;
 use anyhow::{bail, Context, Result};
 use clap::{Args, ValueEnum};
+use serde_json::json;
 use std::path::PathBuf;
 use std::sync::Arc;
 use wpbgi::cache::store::BakedCache;
@@ -66,6 +67,10 @@ pub struct PreviewArgs {
     /// pixels are drawn whole (smaller: sharper and slower).
     #[arg(long, default_value_t = DEFAULT_CUT_PIXELS)]
     pub cut_pixels: f32,
+    /// Write one JSON document to standard output: the files, the size, the device and the
+    /// last frame's cut and draw times; a failure as {"error": ..., "exit": ...}.
+    #[arg(long)]
+    pub json: bool,
     #[command(flatten)]
     pub camera: CameraArgs,
 }
@@ -87,7 +92,7 @@ pub fn preview_command(a: PreviewArgs) -> Result<()> {
         Some(s) => BakedCache::open_fresh(s, &a.cache)?,
         None => BakedCache::read(&a.cache, None)?,
     };
-    let (w, h) = a.camera.size;
+    let (w, h) = a.camera.size_for(scene.as_ref());
     let camera = match &scene {
         Some(s) => crate::pick_camera(s, &a.camera)?,
         None => pick_camera_without_scene(&cache, &a.camera)?,
@@ -104,7 +109,7 @@ pub fn preview_command(a: PreviewArgs) -> Result<()> {
         Some(e) if e.eq_ignore_ascii_case("png") => write_png(&output, &frame.image)?,
         _ => bail!("{}: the output must end in .png or .exr", output.display()),
     }
-    eprintln!(
+    say!(
         "wrote {} ({w}x{h} on {}): cut of {} nodes in {:.1} ms, drawn in {:.1} ms",
         output.display(),
         gpu.name,
@@ -112,8 +117,24 @@ pub fn preview_command(a: PreviewArgs) -> Result<()> {
         1e3 * frame.cut_seconds,
         1e3 * frame.draw_seconds
     );
-    for m in gpu.validation_messages() {
+    let validation = gpu.validation_messages();
+    for m in &validation {
         eprintln!("validation: {m}");
+    }
+    if a.json {
+        println!(
+            "{}",
+            json!({
+                "command": "preview",
+                "output": output.display().to_string(),
+                "size": [w, h],
+                "device": gpu.name,
+                "cut_nodes": frame.cut_size,
+                "cut_seconds": frame.cut_seconds,
+                "draw_seconds": frame.draw_seconds,
+                "validation": validation,
+            })
+        );
     }
     Ok(())
 }
@@ -123,8 +144,8 @@ fn pick_camera_without_scene(cache: &BakedCache, args: &CameraArgs) -> Result<Ca
     if args.camera_name().is_some() {
         bail!("--camera names a scene camera and needs --scene");
     }
-    let (w, h) = args.size;
-    match args.eye_camera()? {
+    let (w, h) = args.size_for(None);
+    match args.eye_camera((w, h))? {
         Some(c) => Ok(c),
         None => {
             framing_camera(bounds(cache, None), w, h).context("the cache holds no surfels to frame")
@@ -148,7 +169,7 @@ fn windowed(
         validate: std::env::var("WPBGI_VALIDATE").is_ok_and(|v| v == "1"),
     };
     let report = run_window(cache, scene, camera, &settings)?;
-    eprintln!(
+    say!(
         "{} frames on {}; the last: cut of {} nodes in {:.1} ms, drawn in {:.1} ms",
         report.frames,
         report.device,
@@ -160,7 +181,22 @@ fn windowed(
         eprintln!("validation: {m}");
     }
     if let Some(p) = &a.screenshot {
-        eprintln!("wrote {}", p.display());
+        say!("wrote {}", p.display());
+    }
+    if a.json {
+        println!(
+            "{}",
+            json!({
+                "command": "preview",
+                "screenshot": a.screenshot.as_ref().map(|p| p.display().to_string()),
+                "frames": report.frames,
+                "device": report.device,
+                "cut_nodes": report.last_cut_size,
+                "cut_seconds": report.last_cut_seconds,
+                "draw_seconds": report.last_draw_seconds,
+                "validation": report.validation,
+            })
+        );
     }
     Ok(())
 }

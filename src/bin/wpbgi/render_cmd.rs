@@ -89,8 +89,9 @@ pub struct RenderArgs {
     /// worldToCamera, worldToNDC, capDate and a `wpbgi` text attribute with the settings, the
     /// cache's hash and the render's seconds. With SOURCE_DATE_EPOCH set, capDate is that time
     /// and the seconds are left out, so that two renders give the same file byte for byte).
+    /// Default: the USD stage's RenderProduct productName.
     #[arg(short, long)]
-    pub output: PathBuf,
+    pub output: Option<PathBuf>,
     /// Sample precision of the EXR.
     #[arg(long, value_enum, default_value = "float")]
     pub exr_precision: ExrPrecisionArg,
@@ -244,11 +245,15 @@ pub fn exr_options(
 
 pub fn print_summary(out: &FinalOutput) {
     let s = &out.stats;
-    eprintln!(
+    detail!(
         "  {} camera samples, {} receivers ({} interpolated, {} in {} clusters)",
-        out.samples, s.receivers, s.interpolated, s.clustered, s.clusters
+        out.samples,
+        s.receivers,
+        s.interpolated,
+        s.clustered,
+        s.clusters
     );
-    eprintln!(
+    detail!(
         "  cut: {} nodes visited and {} splatted by receivers, {} and {} by clusters; {} near surfels split",
         s.receiver_cut.visited,
         s.receiver_cut.splats,
@@ -257,15 +262,16 @@ pub fn print_summary(out: &FinalOutput) {
         s.receiver_cut.split_leaves
     );
     for (stage, secs) in &out.timings {
-        eprintln!("  {stage}: {secs:.2} s");
+        say!("  {stage}: {secs:.2} s");
     }
     if let Some(b) = wpbgi::compare::memory::peak() {
-        eprintln!("  peak memory {} MB", b / 1_000_000);
+        say!("  peak memory {} MB", b / 1_000_000);
     }
 }
 
 pub fn render_command(a: RenderArgs) -> Result<()> {
-    let frames = crate::frames::outputs(a.frames, &a.output, a.png.as_deref())?;
+    let output = crate::output_or_product(a.output.as_deref(), &a.scene)?;
+    let frames = crate::frames::outputs(a.frames, &output, a.png.as_deref())?;
     let cache = BakedCache::read(&a.cache, None)?;
     crate::interrupt::guard_outputs(
         frames
@@ -407,7 +413,7 @@ fn render_frame(
     if let Some(p) = png {
         a.display.write(p, &out.beauty)?;
     }
-    eprintln!(
+    say!(
         "wrote {} ({}x{}, {} gather, {:.2} s)",
         output.display(),
         camera.width,
@@ -442,7 +448,7 @@ fn render_frame(
             "rel_mse": rel_mse,
             "mssim": mssim,
         });
-        eprintln!(
+        say!(
             "  error against the reference: MSE {mse:.3e}, relMSE {rel_mse:.3e}, MSSIM {mssim:.4}"
         );
         let record = serde_json::json!({
@@ -457,7 +463,7 @@ fn render_frame(
         wpbgi::atomic::write_atomically(&sidecar, |tmp| {
             std::fs::write(tmp, format!("{record:#}\n")).map_err(|e| e.to_string())
         })?;
-        eprintln!("  wrote {}", sidecar.display());
+        say!("  wrote {}", sidecar.display());
     }
     Ok(frame)
 }

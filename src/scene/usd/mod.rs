@@ -103,6 +103,7 @@ fn import_unguarded(path: &Path, time: Option<f64>) -> Result<Scene> {
         match ty.as_ref().map(|t| t.as_str()) {
             Some("Mesh") => importer.mesh(&p)?,
             Some("Camera") => importer.camera(&p)?,
+            Some("RenderSettings") => importer.render_settings(&p)?,
             Some(
                 t @ ("RectLight" | "DiskLight" | "SphereLight" | "DistantLight" | "DomeLight"
                 | "DomeLight_1" | "CylinderLight"),
@@ -432,6 +433,64 @@ impl Importer<'_> {
             sdf::Value::Vec2fVec(v) => Some(v.iter().map(|p| glam::Vec2::new(p.x, p.y)).collect()),
             _ => None,
         })
+    }
+
+    /// The first `RenderSettings` prim and its first product (UsdRender): camera, resolution
+    /// and product name. Later settings prims are named in a warning and left alone.
+    fn render_settings(&mut self, prim: &sdf::Path) -> Result<()> {
+        if let Some(first) = &self.scene.render_product {
+            self.scene.warnings.push(Warning(format!(
+                "{} is a second RenderSettings prim; {} is used",
+                prim.as_str(),
+                first.settings
+            )));
+            return Ok(());
+        }
+        let settings = self.stage.prim(prim.clone());
+        let target = |p: &openusd::usd::Prim, name: &str| -> Result<Option<sdf::Path>> {
+            Ok(p.relationship(name)
+                .targets()
+                .map_err(|e| self.prim_err(prim, format!("{name}: {e:#}")))?
+                .into_iter()
+                .next())
+        };
+        let resolution = |p: &openusd::usd::Prim| -> Result<Option<(u32, u32)>> {
+            match sample(&p.attribute("resolution"), self.time)
+                .map_err(|e| self.prim_err(prim, format!("resolution: {e:#}")))?
+            {
+                None => Ok(None),
+                Some(sdf::Value::Vec2i(v))
+                    if v.x > 0 && v.y > 0 && v.x <= 16384 && v.y <= 16384 =>
+                {
+                    Ok(Some((v.x as u32, v.y as u32)))
+                }
+                Some(other) => Err(self.prim_err(
+                    p.path(),
+                    format!("resolution {other:?} must be two numbers from 1 to 16384"),
+                )),
+            }
+        };
+        let mut product = crate::scene::RenderProduct {
+            settings: prim.as_str().to_string(),
+            camera: target(&settings, "camera")?.map(|c| c.as_str().to_string()),
+            resolution: resolution(&settings)?,
+            name: None,
+        };
+        if let Some(p) = target(&settings, "products")? {
+            let p = self.stage.prim(p);
+            if let Some(c) = target(&p, "camera")? {
+                product.camera = Some(c.as_str().to_string());
+            }
+            if let Some(r) = resolution(&p)? {
+                product.resolution = Some(r);
+            }
+            product.name = sample(&p.attribute("productName"), self.time)
+                .map_err(|e| self.prim_err(p.path(), format!("productName: {e:#}")))?
+                .and_then(|v| v.cast::<String>().ok())
+                .filter(|n| !n.is_empty());
+        }
+        self.scene.render_product = Some(product);
+        Ok(())
     }
 
     fn camera(&mut self, prim: &sdf::Path) -> Result<()> {
