@@ -123,7 +123,9 @@ fn irradiance(poly: &[Vec3], samples: u32) -> f32 {
             reflectance: Rgb::splat(0.5),
         }),
     );
-    with_direct(&sc, samples, 7, |d| d.irradiance(&surfel(), 0).x)
+    with_direct(&sc, samples, 7, |d| {
+        d.irradiance(&surfel(), surfel().n, 0).x
+    })
 }
 
 #[test]
@@ -187,7 +189,7 @@ fn rough_conductor_surfel_under_a_small_light() {
     let sc = scene(&square, bsdf);
     let n = 64u32;
     let map = with_direct(&sc, 1024, 3, |d| {
-        d.radiance_map(&surfel(), 0, &bsdf, n.trailing_zeros())
+        d.radiance_map((&surfel(), surfel().n), 0, &bsdf, n.trailing_zeros())
     });
     let mirror = Vec3::new(-dir.x, -dir.y, dir.z);
     let (tx, ty) = texel_of(mirror, n);

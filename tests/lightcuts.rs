@@ -150,7 +150,7 @@ fn direct_light_uses_the_light_tree() {
             triangle,
             b,
         };
-        let ours = luminance(d.irradiance(&s, k as u64)) as f64;
+        let ours = luminance(d.irradiance(&s, s.n, k as u64)) as f64;
         let exact: f64 = all
             .iter()
             .map(|l| {

@@ -2,8 +2,8 @@
 //! distant light of irradiance E from straight above sends ρ E cos θ / π, where θ is the angle
 //! between the light and the shading normal (Mitsuba's `diffuse` takes its cosine in the
 //! shading frame). With a constant normal map tilting the normal by θ the floor darkens by
-//! cos θ, both in the path tracer and in the final render from a baked cache; the flat map
-//! (0.5, 0.5, 1) changes nothing; and the tilt follows the image's axes (+X right, along +s;
+//! cos θ in the path tracer, in the bake's surfels (the light they send on) and in the final
+//! render from the cache; the flat map (0.5, 0.5, 1) changes nothing; and the tilt follows the image's axes (+X right, along +s;
 //! +Y up, along +t), checked by a light from the side the map leans to and from the other.
 //!
 //! The scene is USD written here: a 2 × 2 floor facing +Y with texture coordinates
@@ -11,11 +11,10 @@
 //! UsdPreviewSurface asks of an 8-bit map), a `DistantLight` (normalize: its intensity is the
 //! irradiance) and a camera looking straight down.
 
-mod common;
-
 use glam::Vec3;
 use std::path::{Path, PathBuf};
-use wpbgi::bake::{BakeSettings, Quality};
+use wpbgi::bake::{bake, BakeSettings, Quality, SurfelRadiance};
+use wpbgi::cache::store::BakedCache;
 use wpbgi::reference::{render, RenderSettings};
 use wpbgi::render::{render_final, FinalSettings};
 use wpbgi::scene::Scene;
@@ -164,14 +163,27 @@ fn a_normal_map_tilts_the_cosine_as_analytic() {
             (m - Vec3::splat(expected)).abs().max_element() <= 1e-4 * expected.max(1e-3),
             "{name}: path tracer {m}, expected {expected}"
         );
-        let cache = common::bake_to_cache(
+        let baked = bake(
             &scene,
             &BakeSettings {
                 points: 2000,
                 ..BakeSettings::from_quality(Quality::Draft)
             },
-            &d.join(format!("{name}.wpbgi")),
-        );
+            &|_, _| {},
+        )
+        .expect("bakes");
+        // Every surfel of the floor holds the mapped cosine's light too (a delta light: exact
+        // to rounding), which is what it sends to other surfaces.
+        for (i, r) in baked.radiance.iter().enumerate() {
+            let SurfelRadiance::Rgb(v) = r else {
+                panic!("{name}: a diffuse surfel with a map");
+            };
+            assert!(
+                (*v - Vec3::splat(expected)).abs().max_element() <= 1e-4 * expected.max(1e-3),
+                "{name}: surfel {i} holds {v}, expected {expected}"
+            );
+        }
+        let cache = BakedCache::in_memory(&path, &baked).expect("cache");
         let out = render_final(
             &scene,
             &cache,

@@ -111,11 +111,12 @@ impl DirectLight<'_> {
         out
     }
 
-    /// Irradiance on the front face of surfel `id` (for diffuse surfels).
-    pub fn irradiance(&self, s: &Surfel, id: u64) -> Rgb {
+    /// Irradiance on the front face of surfel `id` (for diffuse surfels), the cosine taken
+    /// to its shading normal `shading` (`s.n` unless a normal map tilts it).
+    pub fn irradiance(&self, s: &Surfel, shading: Vec3, id: u64) -> Rgb {
         self.arrivals(s, id)
             .iter()
-            .map(|a| a.value * s.n.dot(a.wi).max(0.0))
+            .map(|a| a.value * shading.dot(a.wi).max(0.0))
             .fold(Rgb::ZERO, |acc, x| acc + x)
     }
 
@@ -124,12 +125,12 @@ impl DirectLight<'_> {
     /// map by nearest texel, as a bounce turns gathered light into a map.
     pub fn radiance_map_through(
         &self,
-        s: &Surfel,
+        (s, shading): (&Surfel, Vec3),
         id: u64,
         op: &SurfelOperator,
         levels: u32,
     ) -> Vec<Rgb> {
-        let frame = Frame::from_normal(s.n);
+        let frame = Frame::from_normal(shading);
         let incident = op.shared.incident(
             self.arrivals(s, id)
                 .into_iter()
@@ -139,9 +140,16 @@ impl DirectLight<'_> {
     }
 
     /// Outgoing radiance of surfel `id` with BSDF `bsdf` at the centre of every texel of the
-    /// `2^levels × 2^levels` octahedral map (row-major), over the whole sphere.
-    pub fn radiance_map(&self, s: &Surfel, id: u64, bsdf: &Bsdf, levels: u32) -> Vec<Rgb> {
-        let frame = Frame::from_normal(s.n);
+    /// `2^levels × 2^levels` octahedral map (row-major), over the whole sphere; the BSDF's
+    /// frame is around the shading normal `shading`.
+    pub fn radiance_map(
+        &self,
+        (s, shading): (&Surfel, Vec3),
+        id: u64,
+        bsdf: &Bsdf,
+        levels: u32,
+    ) -> Vec<Rgb> {
+        let frame = Frame::from_normal(shading);
         let arrivals: Vec<(Vec3, Rgb)> = self
             .arrivals(s, id)
             .into_iter()

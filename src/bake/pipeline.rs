@@ -21,6 +21,7 @@ use crate::error::{Error, Result};
 use crate::haar::{texel_directions, Haar2d, SparseHaar};
 use crate::scene::{LightKind, Scene};
 use crate::spectrum::Rgb;
+use glam::Vec3;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
@@ -237,6 +238,8 @@ pub struct Baked {
     pub mesh_flags: Vec<u32>,
     /// Per surfel: its BSDF (textures looked up).
     pub bsdfs: Vec<Bsdf>,
+    /// Per surfel: the normal its BSDF's frame is around ([`surfel_shading_normal`]).
+    pub shading_normals: Vec<Vec3>,
     /// The BSDF operators built so far (the direct light's, for the bounces to reuse).
     pub operators: Operators,
     pub tree: SurfelTree,
@@ -320,6 +323,10 @@ pub fn bake_cancellable(
         max_cut: settings.max_cut.max(1),
     };
     let bsdfs: Vec<Bsdf> = surfels.iter().map(|s| surfel_bsdf(scene, s)).collect();
+    let shading_normals: Vec<Vec3> = surfels
+        .iter()
+        .map(|s| surfel_shading_normal(scene, s))
+        .collect();
     let mut operators = Operators::default();
     let near_specular = operators.of_each(&bsdfs, settings.bounces.operator_tau, |b| {
         b.alpha().is_some_and(|a| a < NEAR_SPECULAR_ALPHA)
@@ -331,7 +338,8 @@ pub fn bake_cancellable(
         .map(|(i, s)| {
             stop()?;
             let (bsdf, op) = (&bsdfs[i], near_specular[i].as_ref());
-            let r = surfel_radiance(scene, &direct, s, i as u64, (bsdf, op), settings.tau);
+            let at = (s, shading_normals[i]);
+            let r = surfel_radiance(scene, &direct, at, i as u64, (bsdf, op), settings.tau);
             let n = done.fetch_add(1, Ordering::Relaxed) + 1;
             if n.is_multiple_of(4096) {
                 progress("direct light", n as f32 / surfels.len() as f32);
@@ -384,6 +392,7 @@ pub fn bake_cancellable(
         emitted,
         mesh_flags,
         bsdfs,
+        shading_normals,
         operators,
         tree,
         coded,
@@ -424,12 +433,34 @@ pub fn surfel_bsdf(scene: &Scene, s: &Surfel) -> Bsdf {
     }
 }
 
+/// The normal surfel `s` shades with: its geometric normal `s.n`, or where its material has a
+/// normal map, the interpolated normal tilted by the map (as at a ray hit, docs/scene.md).
+/// The surfel's disc, its emission and its projected area keep `s.n`.
+pub fn surfel_shading_normal(scene: &Scene, s: &Surfel) -> Vec3 {
+    let mesh = &scene.meshes[s.mesh as usize];
+    let Some(map) = &scene.materials[mesh.material].normal_map else {
+        return s.n;
+    };
+    let b = [1.0 - s.b.x - s.b.y, s.b.x, s.b.y];
+    let interpolated = mesh
+        .normal_at(s.triangle, b)
+        .filter(|n| n.dot(s.n) > 0.0)
+        .unwrap_or(s.n);
+    map.shading_normal(
+        &scene.textures,
+        mesh,
+        s.triangle,
+        mesh.uv_at(s.triangle, b),
+        interpolated,
+    )
+}
+
 /// Direct light plus emission leaving surfel `s` with its BSDF (and that BSDF's operator where
 /// its direct light goes through it, see [`NEAR_SPECULAR_ALPHA`]), and the emission alone.
 fn surfel_radiance(
     scene: &Scene,
     direct: &DirectLight,
-    s: &Surfel,
+    (s, shading): (&Surfel, Vec3),
     id: u64,
     (bsdf, op): (&Bsdf, Option<&SurfelOperator>),
     tau: f32,
@@ -440,14 +471,14 @@ fn surfel_radiance(
     let emitted = material.emission_at(&scene.textures, uv, true);
     let radiance = match (map_levels(bsdf), bsdf) {
         (None, Bsdf::Diffuse(d)) => {
-            let e = direct.irradiance(s, id);
+            let e = direct.irradiance(s, shading, id);
             SurfelRadiance::Rgb(d.reflectance * e * std::f32::consts::FRAC_1_PI + emitted)
         }
         (levels, _) => {
             let levels = levels.unwrap_or(3);
             let mut texels = match op {
-                Some(op) => direct.radiance_map_through(s, id, op, levels),
-                None => direct.radiance_map(s, id, bsdf, levels),
+                Some(op) => direct.radiance_map_through((s, shading), id, op, levels),
+                None => direct.radiance_map((s, shading), id, bsdf, levels),
             };
             if emitted != Rgb::ZERO {
                 for (v, w) in texels.iter_mut().zip(texel_directions(levels)) {

@@ -296,6 +296,7 @@ pub fn add_bounces(
         surfels: &baked.surfels,
         tau,
         bsdfs,
+        normals: &baked.shading_normals,
         ops: &ops,
         slots: &slots,
     };
@@ -597,6 +598,8 @@ struct Gather<'a> {
     surfels: &'a [Surfel],
     tau: f32,
     bsdfs: &'a [Bsdf],
+    /// The surfels' shading normals: their microbuffers' and operators' frames.
+    normals: &'a [Vec3],
     ops: &'a [Option<SurfelOperator>],
     slots: &'a Slots,
 }
@@ -635,9 +638,8 @@ impl Gather<'_> {
                 .map_or(DIFFUSE_BUFFER, |op| op.shared.n)
         };
         let mut buffer = |i: u32| {
-            let s = &surfels[i as usize];
             let spherical = self.bsdfs[i as usize].is_two_sided();
-            let frame = Frame::from_normal(s.n);
+            let frame = Frame::from_normal(self.normals[i as usize]);
             let n = side(i);
             match buffers.iter().rposition(|mb| mb.n == n) {
                 Some(k) => {
@@ -844,6 +846,7 @@ mod tests {
             surfels: &baked.surfels,
             tau: 0.0,
             bsdfs,
+            normals: &baked.shading_normals,
             ops: &ops,
             slots: &slots,
         };

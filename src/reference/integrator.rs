@@ -44,14 +44,7 @@ pub fn intersect(ctx: &RenderContext, o: Vec3, d: Vec3) -> Option<SurfaceHit> {
     let v = [t[0], t[1], t[2]].map(|k| Vec3A::from(m.positions[k as usize]));
     let (p, err) = interpolate_with_error(v, hit.b);
     let ng = Vec3::from((v[1] - v[0]).cross(v[2] - v[0])).normalize();
-    let ns = match &m.normals {
-        Some(n) => (hit.b[0] * n[t[0] as usize]
-            + hit.b[1] * n[t[1] as usize]
-            + hit.b[2] * n[t[2] as usize])
-            .try_normalize()
-            .unwrap_or(ng),
-        None => ng,
-    };
+    let ns = m.normal_at(hit.triangle, hit.b).unwrap_or(ng);
     let uv = m.uv_at(hit.triangle, hit.b);
     let ns = match &ctx.scene.materials[m.material].normal_map {
         Some(map) => map.shading_normal(&ctx.scene.textures, m, hit.triangle, uv, ns),
