@@ -507,16 +507,25 @@ impl BsdfOperator {
     /// (transmission). The coefficients are hemisphere by hemisphere, so a coefficient's
     /// hemisphere is its index over n².
     pub fn apply(&self, c: &[Rgb], tints: [Rgb; 2]) -> Vec<Rgb> {
-        let block = (self.n * self.n) as usize;
+        let block = self.n * self.n;
         let mut d = vec![Rgb::ZERO; self.size()];
         for (a, &ca) in c.iter().enumerate() {
             if ca == Rgb::ZERO {
                 continue;
             }
             let column = &self.entries[self.starts[a] as usize..self.starts[a + 1] as usize];
-            let side = |b: u32| usize::from(b as usize / block != a / block);
-            for &(b, v) in column {
-                d[b as usize] += ca * v * tints[side(b)];
+            // A column's entries are in order of b: the upper hemisphere's, then the lower's.
+            let (upper, lower) = column.split_at(column.partition_point(|(b, _)| *b < block));
+            let (same, other) = (ca * tints[0], ca * tints[1]);
+            let (to_upper, to_lower) = if (a as u32) < block {
+                (same, other)
+            } else {
+                (other, same)
+            };
+            for (part, weight) in [(upper, to_upper), (lower, to_lower)] {
+                for &(b, v) in part {
+                    d[b as usize] += weight * v;
+                }
             }
         }
         d
