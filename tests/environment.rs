@@ -16,7 +16,7 @@ use glam::Vec3;
 use std::path::{Path, PathBuf};
 use wpbgi::bake::{BakeSettings, Quality};
 use wpbgi::reference::{render, RenderSettings};
-use wpbgi::render::{render_final, FinalSettings};
+
 use wpbgi::scene::{Camera, Scene};
 
 fn data(name: &str) -> PathBuf {
@@ -96,14 +96,7 @@ fn convex_object_under_a_uniform_environment_reflects_albedo_times_radiance() {
         &BakeSettings::from_quality(Quality::Draft),
         &dir.join("dome.wpbgi"),
     );
-    let out = render_final(
-        &scene,
-        &cache,
-        &camera,
-        &FinalSettings::default(),
-        &|_, _| {},
-    )
-    .expect("final render");
+    let out = common::final_render(&scene, &cache, &camera);
     let (object, background) = split(&out.beauty.pixels, &out.depth.pixels, 32);
     assert!(object.len() > 100 && background.len() > 100);
     assert!(out.beauty.pixels.iter().all(|p| p.is_finite()));

@@ -13,7 +13,7 @@ mod common;
 use wpbgi::bake::{BakeSettings, Quality};
 use wpbgi::bounce::BounceSettings;
 use wpbgi::image::error_against;
-use wpbgi::render::{render_final, FinalSettings};
+
 use wpbgi::scene::Scene;
 
 /// What a render of a multi-bounce cache shows against max_depth 8.
@@ -37,14 +37,7 @@ fn against_depth_8(name: &str, bounces: BounceSettings, window: [u32; 4]) -> Aga
     std::fs::create_dir_all(&dir).expect("temp dir");
     let cache = common::bake_to_cache(&scene, &settings, &dir.join(format!("{name}.wpc")));
     let camera = scene.default_camera(128, 128).expect("camera");
-    let out = render_final(
-        &scene,
-        &cache,
-        &camera,
-        &FinalSettings::default(),
-        &|_, _| {},
-    )
-    .expect("render");
+    let out = common::final_render(&scene, &cache, &camera);
     assert!(out.beauty.pixels.iter().all(|p| p.is_finite()));
     let reference = common::reference_128(name, 8);
     let (_, rel) = error_against(&out.beauty, &reference).expect("same size");

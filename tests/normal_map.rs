@@ -12,11 +12,13 @@
 //! irradiance) and a camera looking straight down.
 
 use glam::Vec3;
+mod common;
+
 use std::path::{Path, PathBuf};
 use wpbgi::bake::{bake, BakeSettings, Quality, SurfelRadiance};
 use wpbgi::cache::store::BakedCache;
 use wpbgi::reference::{render, RenderSettings};
-use wpbgi::render::{render_final, FinalSettings};
+
 use wpbgi::scene::Scene;
 
 const ALBEDO: f32 = 0.5;
@@ -184,14 +186,7 @@ fn a_normal_map_tilts_the_cosine_as_analytic() {
             );
         }
         let cache = BakedCache::in_memory(&path, &baked).expect("cache");
-        let out = render_final(
-            &scene,
-            &cache,
-            &camera,
-            &FinalSettings::default(),
-            &|_, _| {},
-        )
-        .expect("final render");
+        let out = common::final_render(&scene, &cache, &camera);
         let m = mean(&out.beauty.pixels);
         eprintln!("{name}: final render {m}");
         assert!(

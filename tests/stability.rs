@@ -28,7 +28,7 @@ use wpbgi::bsdf::{
 use wpbgi::cache::store::BakedCache;
 use wpbgi::image::{error_against, Image};
 use wpbgi::reference::{render, RenderSettings};
-use wpbgi::render::{render_final, FinalSettings};
+
 use wpbgi::scene::{Camera, Emission, Material, Mesh, Scattering, Scene};
 use wpbgi::spectrum::Rgb;
 
@@ -332,8 +332,7 @@ fn bake_settings() -> BakeSettings {
 fn final_render(scene: &Scene, camera: &Camera) -> Image {
     let baked = bake(scene, &bake_settings(), &|_, _| {}).expect("bake");
     let cache = BakedCache::in_memory(Path::new("memory"), &baked).expect("cache");
-    let out =
-        render_final(scene, &cache, camera, &FinalSettings::default(), &|_, _| {}).expect("render");
+    let out = common::final_render(scene, &cache, camera);
     assert!(out.beauty.pixels.iter().all(|p| p.is_finite()));
     out.beauty
 }

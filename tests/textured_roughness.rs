@@ -17,7 +17,7 @@ use wpbgi::bounce::bsdf_operator::{quantised_alpha, ROUGHNESS_LEVELS_PER_OCTAVE}
 use wpbgi::bounce::BounceSettings;
 use wpbgi::cache::store::BakedCache;
 use wpbgi::reference::{render, RenderSettings};
-use wpbgi::render::{render_final, FinalSettings};
+
 use wpbgi::scene::Scene;
 
 fn data(name: &str) -> PathBuf {
@@ -45,14 +45,7 @@ fn plate_means(scene: &Scene, baked: &wpbgi::bake::Baked) -> (Vec3, Vec3, f32) {
     let camera = scene
         .camera(None, size as u32, size as u32)
         .expect("camera");
-    let out = render_final(
-        scene,
-        &cache,
-        &camera,
-        &FinalSettings::default(),
-        &|_, _| {},
-    )
-    .expect("final render");
+    let out = common::final_render(scene, &cache, &camera);
     let spp = 256;
     let traced = render(
         scene,

@@ -107,6 +107,17 @@ pub fn bake_to_cache(
     wpbgi::cache::store::BakedCache::read(path, None).expect("read")
 }
 
+/// The final render of `scene` from `cache` through `camera` with the default settings.
+#[allow(dead_code)] // not every test file renders
+pub fn final_render(
+    scene: &wpbgi::scene::Scene,
+    cache: &wpbgi::cache::store::BakedCache,
+    camera: &wpbgi::scene::Camera,
+) -> wpbgi::render::FinalOutput {
+    let settings = wpbgi::render::FinalSettings::default();
+    wpbgi::render::render_final(scene, cache, camera, &settings, &|_, _| {}).expect("final render")
+}
+
 /// A scene of `meshes`, all of one grey (albedo 0.5) diffuse material.
 pub fn grey_scene(meshes: Vec<Mesh>) -> wpbgi::scene::Scene {
     use wpbgi::bsdf::{Bsdf, Diffuse};
