@@ -4,7 +4,7 @@
 //! direct light for the first) through a microbuffer around its normal (spherical for
 //! `roughdielectric`), and turns it into outgoing radiance: diffuse surfels by the cosine
 //! convolution (one RGB value), the others through their BSDF's 4D Haar operator
-//! ([`BsdfOperator`]), resampled from the local grid onto the surfel's global sphere map. The
+//! ([`BsdfOperator`](super::BsdfOperator)), resampled from the local grid onto the surfel's global sphere map. The
 //! result is added to the surfels' total radiance and becomes what the next bounce sends
 //! (spec §8.5's recommendation: `emit` and `total` kept apart, never re-sending the total).
 //!
@@ -21,7 +21,7 @@
 //! pixel by pixel, and a bounce that lost a few percent of coverage would pass that loss on
 //! to every further bounce (inside a closed room of radiance 1 the gather fell 3 % short).
 //! With that, the senders' exact radiance (see [`Senders::seen`]) and the operator's exact
-//! flux ([`BsdfOperator::outgoing`]), a closed room gathers π to 1e-4 and the white furnaces
+//! flux ([`BsdfOperator::outgoing`](super::BsdfOperator::outgoing)), a closed room gathers π to 1e-4 and the white furnaces
 //! of tests/furnace.rs hold to 0.2 % (diffuse) and 1.2 % (conductor, ρ = 0.99).
 //!
 //! The gather is geometry alone, so it runs once: the first bounce records, per receiver, its
