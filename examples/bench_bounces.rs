@@ -21,12 +21,11 @@
 use serde_json::Value;
 use std::path::Path;
 use std::process::Command;
-use std::time::Instant;
 use wpbgi::bake::{BakeSettings, Quality};
 use wpbgi::bounce::BounceSettings;
 use wpbgi::compare::memory;
 use wpbgi::image::{error_against, read_exr};
-use wpbgi::render::{render_final, FinalSettings};
+use wpbgi::render::FinalSettings;
 use wpbgi::scene::Scene;
 
 mod common;
@@ -109,15 +108,8 @@ fn main() -> common::Result<()> {
             let max_later = later.iter().copied().fold(0.0, f64::max);
             let bounce_stage = report.seconds.iter().sum::<f64>();
             let cache_bytes = std::fs::metadata(&cache.cache.path)?.len();
-            let t = Instant::now();
-            let out = render_final(
-                &scene,
-                &cache,
-                &camera,
-                &FinalSettings::default(),
-                &|_, _| {},
-            )?;
-            let render_s = t.elapsed().as_secs_f64();
+            let (out, render_s) =
+                common::timed_render(&scene, &cache, &camera, &FinalSettings::default())?;
             let rel = rel_of(&out.beauty);
             let pt = common::path_tracer_for(&scene, &camera, 8, bake_s + render_s)?;
             let surfels = baked.surfels.len() as f64;

@@ -20,7 +20,6 @@
 //! `WPBGI_ANCHOR_PYTHON` (see `bench_bounces`) Mitsuba + OIDN at 256 spp, with the ratios.
 //! `WPBGI_SIZES=256` renders 256² only.
 
-use std::time::Instant;
 use wpbgi::bake::{BakeSettings, Quality};
 use wpbgi::bounce::BounceSettings;
 use wpbgi::cache::store::BakedCache;
@@ -171,9 +170,7 @@ fn compare_modes(names: &[String]) -> Result<(), Box<dyn std::error::Error>> {
             let camera = scene.default_camera(size, size)?;
             let mut first: Option<FinalOutput> = None;
             for (mode, settings) in modes() {
-                let t = Instant::now();
-                let out = render_final(&scene, &cache, &camera, &settings, &|_, _| {})?;
-                let seconds = t.elapsed().as_secs_f64();
+                let (out, seconds) = common::timed_render(&scene, &cache, &camera, &settings)?;
                 // At 256² against Mitsuba; at 512² (no reference) against the first mode.
                 let (against, image) = if size == 256 {
                     ("Mitsuba", &reference)
@@ -277,9 +274,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             max_depth: 3,
             ..Default::default()
         };
-        let t = Instant::now();
-        let fast = render_final(&scene, &cache, &camera, &depth3, &|_, _| {})?;
-        let render_s = t.elapsed().as_secs_f64();
+        let (fast, render_s) = common::timed_render(&scene, &cache, &camera, &depth3)?;
         let total = bake_s + render_s;
         let (mse, rel) = error_against(&fast.beauty, &reference).ok_or("size")?;
         let pt = common::path_tracer_for(&scene, &camera, 3, total)?;

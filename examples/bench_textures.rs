@@ -8,6 +8,9 @@
 //!
 //! `cargo run --release --example bench_textures [-- SPP]`
 
+#[allow(dead_code)] // the benchmarks' shared helpers, of which this one uses one
+mod common;
+
 use std::path::Path;
 use std::time::Instant;
 use wpbgi::bake::{bake, BakeSettings, Quality};
@@ -16,7 +19,7 @@ use wpbgi::cache::store::BakedCache;
 use wpbgi::compare::errors;
 use wpbgi::compare::memory::{peak, reset_peak};
 use wpbgi::reference::{render, RenderSettings};
-use wpbgi::render::{render_final, FinalSettings};
+use wpbgi::render::FinalSettings;
 use wpbgi::scene::Scene;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -47,15 +50,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let bake_s = t.elapsed().as_secs_f64();
         let peak_mb = peak().map_or(0, |b| b / 1_000_000);
         let cache = BakedCache::in_memory(&path, &baked)?;
-        let t = Instant::now();
-        let image = render_final(
-            &scene,
-            &cache,
-            &camera,
-            &FinalSettings::default(),
-            &|_, _| {},
-        )?;
-        let render_s = t.elapsed().as_secs_f64();
+        let (image, render_s) =
+            common::timed_render(&scene, &cache, &camera, &FinalSettings::default())?;
         let reference = render(
             &scene,
             &camera,

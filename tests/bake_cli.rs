@@ -37,17 +37,29 @@ fn bake(out: &Path, threads: &str, points: &str) -> Output {
     ])
 }
 
+/// `out` succeeded (its standard error in the message otherwise).
+fn assert_ok(out: &Output) {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// `out` failed with one line of standard error that says `needle`.
+fn assert_refused(out: &Output, needle: &str) {
+    assert!(!out.status.success());
+    let msg = String::from_utf8_lossy(&out.stderr);
+    assert!(msg.contains(needle) && msg.lines().count() == 1, "{msg}");
+}
+
 #[test]
 fn same_cache_for_one_and_two_threads() {
     let d = dir("threads");
     let (a, b) = (d.join("one.wpc"), d.join("two.wpc"));
     for (path, t) in [(&a, "1"), (&b, "2")] {
         let out = bake(path, t, "4000");
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        assert_ok(&out);
     }
     assert!(std::fs::read(&a).expect("a") == std::fs::read(&b).expect("b"));
 }
@@ -57,7 +69,7 @@ fn same_cache_for_one_and_two_threads() {
 /// Bake 2000 surfels to `out`, which must succeed.
 fn bake_ok(out: &Path) -> Output {
     let o = bake(out, "2", "2000");
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_ok(&o);
     o
 }
 
@@ -142,11 +154,7 @@ fn inspect_reports_and_refuses_stale_caches() {
         "--scene",
         scene().to_str().expect("utf-8"),
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_ok(&out);
     let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON report");
     assert_eq!(report["format_version"], 1);
     let names: Vec<&str> = report["sections"]
@@ -178,9 +186,7 @@ fn inspect_reports_and_refuses_stale_caches() {
         "--scene",
         changed.to_str().expect("utf-8"),
     ]);
-    assert!(!out.status.success());
-    let msg = String::from_utf8_lossy(&out.stderr);
-    assert!(msg.contains("stale") && msg.lines().count() == 1, "{msg}");
+    assert_refused(&out, "stale");
 
     // Damage gives its own one-sentence error.
     let mut bytes = std::fs::read(&cache).expect("cache");
@@ -226,11 +232,7 @@ fn render_writes_layers_and_refuses_stale_caches() {
     };
     let render = |scene: &Path| render_with(scene, &image, "2");
     let out = render(&scene());
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_ok(&out);
     let beauty = wpbgi::image::read_exr(&image).expect("an EXR");
     assert_eq!((beauty.width, beauty.height), (128, 128));
     assert!(beauty.mean().max_element() > 0.0);
@@ -337,11 +339,7 @@ fn render_writes_layers_and_refuses_stale_caches() {
         "--exr-compression",
         "piz",
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_ok(&out);
     let h = wpbgi::image::read_exr(&half).expect("half EXR");
     for (x, y) in h.pixels.iter().zip(&beauty.pixels) {
         assert!((*x - *y).abs().max_element() <= 1e-3 * y.max_element().max(1e-2));
@@ -356,9 +354,7 @@ fn render_writes_layers_and_refuses_stale_caches() {
         "the files differ"
     );
     let out = render(&brighter_scene(&d));
-    assert!(!out.status.success());
-    let msg = String::from_utf8_lossy(&out.stderr);
-    assert!(msg.contains("stale") && msg.lines().count() == 1, "{msg}");
+    assert_refused(&out, "stale");
 }
 
 /// Ctrl-C (SIGINT) during a bake and during a render: the command exits with 130 within a
@@ -473,11 +469,7 @@ fn crops_assemble_into_the_whole_image() {
     };
     let whole = d.join("whole.exr");
     let out = render(&whole, None);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_ok(&out);
     let read = |p: &Path| exr::prelude::read_all_flat_layers_from_file(p).expect("reads");
     let full = read(&whole);
     let full_layer = &full.layer_data[0];
@@ -512,11 +504,7 @@ fn crops_assemble_into_the_whole_image() {
     {
         let part = d.join(format!("part{i}.exr"));
         let out = render(&part, Some(&format!("{x0},{y0},{x1},{y1}")));
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        assert_ok(&out);
         let img = read(&part);
         assert_eq!(img.attributes.display_window.size.width(), 80);
         assert_eq!(img.attributes.display_window.size.height(), 72);
@@ -551,9 +539,7 @@ fn crops_assemble_into_the_whole_image() {
     }
     assert!(covered.iter().all(|&c| c == 1));
     let out = render(&d.join("bad.exr"), Some("10,10,81,20"));
-    assert!(!out.status.success());
-    let msg = String::from_utf8_lossy(&out.stderr);
-    assert!(msg.contains("crop") && msg.lines().count() == 1, "{msg}");
+    assert_refused(&out, "crop");
 }
 
 /// `render --frames` of a USD stage whose camera moves: one bake, one file per frame named by
@@ -576,11 +562,7 @@ fn render_frames_write_one_file_per_frame() {
         "--bounces",
         "0",
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_ok(&out);
     let render = |output: &Path, extra: &[&str]| {
         Command::new(WPBGI)
             .args([
@@ -599,11 +581,7 @@ fn render_frames_write_one_file_per_frame() {
             .expect("runs")
     };
     let out = render(&d.join("beauty.$F4.exr"), &["--frames", "1-3"]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_ok(&out);
     let frame = |n: u32| std::fs::read(d.join(format!("beauty.{n:04}.exr"))).expect("a frame");
     let (one, two, three) = (frame(1), frame(2), frame(3));
     assert!(
@@ -627,26 +605,16 @@ fn render_frames_write_one_file_per_frame() {
         .env("SOURCE_DATE_EPOCH", "1764000000")
         .output()
         .expect("runs");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_ok(&out);
     assert!(std::fs::read(&at_two).expect("time code 2") == two);
     // A step, and the '#' convention.
     let out = render(&d.join("step.####.exr"), &["--frames", "1-3:2"]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_ok(&out);
     assert!(d.join("step.0001.exr").exists() && d.join("step.0003.exr").exists());
     assert!(!d.join("step.0002.exr").exists());
     assert!(std::fs::read(d.join("step.0001.exr")).expect("step 1") == one);
     let out = render(&d.join("still.exr"), &["--frames", "1-3"]);
-    assert!(!out.status.success());
-    let msg = String::from_utf8_lossy(&out.stderr);
-    assert!(msg.contains("$F4") && msg.lines().count() == 1, "{msg}");
+    assert_refused(&out, "$F4");
 }
 
 /// `--env R,G,B` lights an asset that has no light of its own (issue 22). Under a constant
@@ -668,9 +636,7 @@ fn a_constant_environment_gives_the_furnace_answer() {
         "--spp",
         "1",
     ]);
-    assert!(!unlit.status.success());
-    let msg = String::from_utf8_lossy(&unlit.stderr);
-    assert!(msg.contains("--env") && msg.lines().count() == 1, "{msg}");
+    assert_refused(&unlit, "--env");
     // The image's pixels: those that see L (the sky) and those wholly on the cube (their
     // eight neighbours see the cube too), whose mean and spread are returned.
     let check = |image: &Path, what: &str, mean_tol: f32, pixel_tol: f32| {
@@ -722,11 +688,7 @@ fn a_constant_environment_gives_the_furnace_answer() {
             .chain(size)
             .collect();
         let out = wpbgi(&args);
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        assert_ok(&out);
     };
     let reference = d.join("reference.exr");
     trace(&["--env", "0.5,1,2"], &reference);
@@ -757,11 +719,7 @@ fn a_constant_environment_gives_the_furnace_answer() {
         "--points",
         "3000",
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_ok(&out);
     let image = d.join("render.exr");
     let render = |env: Option<&str>| {
         let mut args: Vec<&str> = Vec::new();
@@ -776,11 +734,7 @@ fn a_constant_environment_gives_the_furnace_answer() {
         wpbgi(&args)
     };
     let out = render(Some("0.5,1,2"));
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_ok(&out);
     // The render's direct light takes 32 environment samples per shading point: the mean came
     // out within 0.2 % of ρL (held to the 1 % of tests/render.rs's image means), single pixels
     // up to 11 % off (held to 20 %).
@@ -813,11 +767,7 @@ fn json_reports_on_standard_output() {
         ])
     };
     let out = render(&scene());
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_ok(&out);
     let doc: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON document");
     let frame = &doc["frames"][0];
     assert_eq!(doc["command"], "render");
@@ -846,11 +796,7 @@ fn json_reports_on_standard_output() {
         "2",
         "--json",
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_ok(&out);
     let doc: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON document");
     assert_eq!(doc["frames"][0]["spp"], 2);
     // Every command's failure under --json is a JSON document on standard output.

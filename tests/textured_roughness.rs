@@ -3,7 +3,7 @@
 //! roughness map spans α 0.0625 to 0.5625 builds one operator per level it meets, not one per
 //! surfel, and the texture is read (the surfels' roughness takes many levels). Beside it the
 //! same plate at constant roughness builds one. The cache's image of the textured plate is as
-//! close to the path tracer's as the constant plate's.
+//! close to the path tracer's as the constant plate's, up to the path tracer's noise.
 //!
 //! Fixtures: tests/data/usd/rough-plate*.usda, made by make_rough_plate.py (README.md there).
 
@@ -38,8 +38,9 @@ fn settings() -> BakeSettings {
 
 /// The floor's mean (rows near the bottom of the view, columns in its middle third: the
 /// plate, seen directly) from the cache's render and from the path tracer at 256 spp, and
-/// the path tracer's standard error of that mean (its per-pixel variance is of one sample).
-fn plate_means(scene: &Scene, baked: &wpbgi::bake::Baked) -> (Vec3, Vec3, f32) {
+/// the path tracer's standard error of that mean per channel (its per-pixel variance is of
+/// one sample).
+fn plate_means(scene: &Scene, baked: &wpbgi::bake::Baked) -> (Vec3, Vec3, Vec3) {
     let cache = BakedCache::in_memory(Path::new("plate"), baked).expect("cache");
     let size = 48usize;
     let camera = scene
@@ -64,11 +65,8 @@ fn plate_means(scene: &Scene, baked: &wpbgi::bake::Baked) -> (Vec3, Vec3, f32) {
         .collect();
     let n = pixels.len() as f32;
     let mean = |img: &[Vec3]| pixels.iter().map(|&i| img[i]).sum::<Vec3>() / n;
-    let var: f32 = pixels
-        .iter()
-        .map(|&i| traced.variance.pixels[i].max_element())
-        .sum();
-    let stderr = (var / (spp as f32 * n * n)).sqrt();
+    let var: Vec3 = pixels.iter().map(|&i| traced.variance.pixels[i]).sum();
+    let stderr = (var / (spp as f32 * n * n)).powf(0.5);
     (mean(&out.beauty.pixels), mean(&traced.mean.pixels), stderr)
 }
 
@@ -99,7 +97,8 @@ fn textured_roughness_builds_one_operator_per_level() {
             "{name}: one operator per level"
         );
         if name == "rough-plate.usda" {
-            // Every level the texture spans is met, and every α is a level.
+            // The map was read: its surfels take many of the levels it spans (14 of at most
+            // 14 measured; 10 allows a coarser sampling of the map), and every α is a level.
             assert!(
                 levels.len() >= 10,
                 "{name}: the texture gave {} levels",
@@ -109,18 +108,26 @@ fn textured_roughness_builds_one_operator_per_level() {
         }
         let (cached, traced, stderr) = plate_means(&scene, &baked);
         let off = ((cached - traced) / traced).abs().max_element();
-        eprintln!("{name}: plate {cached} from the cache, {traced} ± {stderr} traced: {off:.4}");
-        offs.push(off);
+        // The path tracer's standard error relative to its mean, in its noisiest channel.
+        let noise = (stderr / traced).max_element();
+        eprintln!(
+            "{name}: plate {cached} from the cache, {traced} ± {stderr} traced: off {off:.4}, \
+             noise {noise:.4}"
+        );
+        offs.push((off, noise));
     }
-    // The cache's plate is as far from the path tracer's with the texture as without it: a
-    // small bake's own error (8000 surfels, two of the path tracer's seven bounces: 8.3 %
-    // measured on the constant plate), and the levels' (at most 7.8 % of the plate's
-    // reflected light, QUANTISATION_ERROR) is within it. Wrong operators or tints (a plate
-    // reflecting nothing, or its untinted white) would be tens of per cent off.
-    assert!(offs[0] < 0.1, "constant plate {:.3} off", offs[0]);
+    let ((constant, noise_c), (textured, noise_t)) = (offs[0], offs[1]);
+    // A small bake's own error on the constant plate (8000 surfels, two of the path tracer's
+    // seven bounces): 8.3 % measured. The bound of 10 % is that figure with room, not a
+    // derivation; it catches a plate gone wrong (black is 100 % off, its untinted white
+    // tens of per cent).
+    assert!(constant < 0.1, "constant plate {constant:.3} off");
+    // With the texture the cache is no further from the path tracer than without it, up to
+    // three standard errors of the difference of two independent path-traced means (2.6
+    // points here). Measured: 0.9 points closer.
+    let allowed = 3.0 * noise_c.hypot(noise_t);
     assert!(
-        offs[1] < offs[0] + 0.02,
-        "textured plate {:.3} off",
-        offs[1]
+        textured < constant + allowed,
+        "textured plate {textured:.3} off, constant {constant:.3} (+ {allowed:.3} allowed)"
     );
 }

@@ -8,6 +8,7 @@ use std::time::{Duration, Instant};
 use wpbgi::bake::{bake, BakeSettings, Baked};
 use wpbgi::cache::store::{bake_hash, write, BakedCache};
 use wpbgi::reference::{render, RenderOutput, RenderSettings};
+use wpbgi::render::{render_final, FinalOutput, FinalSettings};
 use wpbgi::scene::camera::Camera;
 use wpbgi::scene::Scene;
 
@@ -44,6 +45,19 @@ pub fn bake_cache(
     write(&path, hash, &baked, serde_json::json!({}))?;
     let seconds = start.elapsed().as_secs_f64();
     Ok((baked, BakedCache::read(&path, None)?, seconds))
+}
+
+/// The final render of `scene` from `cache` through `camera` with `settings`, and its seconds.
+#[allow(dead_code)] // not every benchmark renders from a cache
+pub fn timed_render(
+    scene: &Scene,
+    cache: &BakedCache,
+    camera: &Camera,
+    settings: &FinalSettings,
+) -> Result<(FinalOutput, f64)> {
+    let t = Instant::now();
+    let out = render_final(scene, cache, camera, settings, &|_, _| {})?;
+    Ok((out, t.elapsed().as_secs_f64()))
 }
 
 /// Our path tracer at `max_depth`, one sample per pixel per pass, for `seconds` of wall time.

@@ -120,6 +120,18 @@ impl DirectLight<'_> {
             .fold(Rgb::ZERO, |acc, x| acc + x)
     }
 
+    /// The shading frame around `shading` and the visible emitter samples of surfel `id` in
+    /// it: each one's local direction and value.
+    fn local_arrivals(&self, s: &Surfel, shading: Vec3, id: u64) -> (Frame, Vec<(Vec3, Rgb)>) {
+        let frame = Frame::from_normal(shading);
+        let arrivals = self
+            .arrivals(s, id)
+            .into_iter()
+            .map(|a| (frame.to_local(a.wi), a.value))
+            .collect();
+        (frame, arrivals)
+    }
+
     /// [`DirectLight::radiance_map`] of a near-specular BSDF, through its operator `op`: the
     /// emitter samples binned into the operator's grid, D = V·C, and the result read onto the
     /// map by nearest texel, as a bounce turns gathered light into a map.
@@ -130,12 +142,8 @@ impl DirectLight<'_> {
         op: &SurfelOperator,
         levels: u32,
     ) -> Vec<Rgb> {
-        let frame = Frame::from_normal(shading);
-        let incident = op.shared.incident(
-            self.arrivals(s, id)
-                .into_iter()
-                .map(|a| (frame.to_local(a.wi), a.value)),
-        );
+        let (frame, arrivals) = self.local_arrivals(s, shading, id);
+        let incident = op.shared.incident(arrivals.into_iter());
         op.sphere_map(&incident, &op.shared.map_texels(frame, levels))
     }
 
@@ -149,12 +157,7 @@ impl DirectLight<'_> {
         bsdf: &Bsdf,
         levels: u32,
     ) -> Vec<Rgb> {
-        let frame = Frame::from_normal(shading);
-        let arrivals: Vec<(Vec3, Rgb)> = self
-            .arrivals(s, id)
-            .into_iter()
-            .map(|a| (frame.to_local(a.wi), a.value))
-            .collect();
+        let (frame, arrivals) = self.local_arrivals(s, shading, id);
         // The arrivals in lanes, evaluated several at a time (the same values).
         let lanes = [0, 1, 2].map(|c| arrivals.iter().map(|(wi, _)| wi[c]).collect::<Vec<f32>>());
         let lanes: [&[f32]; 3] = [&lanes[0], &lanes[1], &lanes[2]];

@@ -4,9 +4,10 @@
 //! direct light for the first) through a microbuffer around its normal (spherical for
 //! `roughdielectric`), and turns it into outgoing radiance: diffuse surfels by the cosine
 //! convolution (one RGB value), the others through their BSDF's 4D Haar operator
-//! ([`BsdfOperator`](super::BsdfOperator)), resampled from the local grid onto the surfel's global sphere map. The
-//! result is added to the surfels' total radiance and becomes what the next bounce sends
-//! (spec §8.5's recommendation: `emit` and `total` kept apart, never re-sending the total).
+//! ([`BsdfOperator`](super::BsdfOperator)), resampled from the local grid onto the surfel's
+//! global sphere map. The result is added to the surfels' total radiance and becomes what the
+//! next bounce sends (spec §8.5's recommendation: `emit` and `total` kept apart, never
+//! re-sending the total).
 //!
 //! Bounce control: the energy of a bounce is Σ area × luminance of the surfels' mean outgoing
 //! radiance. The loop stops when a bounce carries less than `tolerance` of the reflected
