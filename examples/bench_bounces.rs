@@ -106,7 +106,7 @@ fn main() -> common::Result<()> {
             let later = &report.seconds[1.min(report.seconds.len())..];
             let mean_later = later.iter().sum::<f64>() / later.len().max(1) as f64;
             let max_later = later.iter().copied().fold(0.0, f64::max);
-            let bounce_stage = report.seconds.iter().sum::<f64>();
+            let bounce_stage = report.seconds.iter().sum::<f64>() + report.final_seconds;
             let cache_bytes = std::fs::metadata(&cache.cache.path)?.len();
             let (out, render_s) =
                 common::timed_render(&scene, &cache, &camera, &FinalSettings::default())?;
@@ -222,7 +222,9 @@ fn regather_ratio(scene: &Scene, settings: &BakeSettings) -> common::Result<(f64
             ..settings.clone()
         };
         let (baked, cache, _) = common::bake_cache(scene, &s, "regather")?;
-        let seconds = baked.bounces.map_or(0.0, |r| r.seconds.iter().sum());
+        let seconds = baked
+            .bounces
+            .map_or(0.0, |r| r.seconds.iter().sum::<f64>() + r.final_seconds);
         Ok((seconds, std::fs::read(&cache.cache.path)?))
     };
     let (again, a) = run(Some(0))?;
@@ -243,13 +245,22 @@ fn previous_bounces(bin: &Path, scene: &Path, points: usize) -> common::Result<f
             .arg(&out)
             .args(["--points", &points.to_string(), "--bounces", "3", "--json"]),
     )?;
-    let done = String::from_utf8_lossy(&run.stderr)
+    // The JSON lines are on stdout since `--json` covered every command, on stderr before.
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&run.stdout),
+        String::from_utf8_lossy(&run.stderr),
+    );
+    let done = stdout
         .lines()
+        .chain(stderr.lines())
         .filter_map(|l| serde_json::from_str::<Value>(l).ok())
         .find(|v| v["event"] == "done")
         .ok_or("no summary from the previous binary")?;
-    let seconds = done["stats"]["bounces"]["seconds"]
+    let bounces = &done["stats"]["bounces"];
+    let seconds = bounces["seconds"]
         .as_array()
         .ok_or("the previous binary reported no bounce times")?;
-    Ok(seconds.iter().filter_map(Value::as_f64).sum())
+    // Older binaries added each bounce to the total within it, and report no final step.
+    let last = bounces["final_seconds"].as_f64().unwrap_or(0.0);
+    Ok(seconds.iter().filter_map(Value::as_f64).sum::<f64>() + last)
 }

@@ -129,7 +129,7 @@ fn mean_radiance(baked: &Baked) -> f64 {
 /// same furnaces measured −1.7 %, −8.9 % and −49 %.
 #[test]
 fn diffuse_furnace_holds_le_over_one_minus_rho() {
-    for (rho, tolerance) in [(0.5f32, 0.01), (0.9, 0.01), (0.99, 0.02)] {
+    for (rho, tolerance) in [(0.5f32, 0.01), (0.9, 0.01), (0.99, 0.01)] {
         let expected = 1.0 / (1.0 - f64::from(rho));
         let baked = bake_furnace(&furnace(rho, 1.0), 2);
         let report = baked.bounces.clone().unwrap_or_default();
@@ -156,17 +156,20 @@ fn diffuse_furnace_holds_le_over_one_minus_rho() {
 
 /// Conductor furnaces (α = 0.1, `material: none`) at ρ = 0.5, 0.9 and 0.99 against the path
 /// tracer: the mean cached radiance of every surfel towards the box's centre against
-/// [`PATHS`] paths from the centre through each, within 1 %, 1 % and 2 %. The path tracer's
-/// own standard error is under a quarter of the tolerance (asserted).
+/// [`PATHS`] paths from the centre through each, within 1 % each. The path tracer's own
+/// standard error is under a quarter of the tolerance (asserted).
 ///
-/// Measured: +0.17 %, +0.03 %, +1.14 % (the path tracer's standard error 0.05 %, 0.19 %,
-/// 0.45 %); the furnace holds 1.96, 8.0 and 26 where Le/(1 − ρ) is 2, 10 and 100. Before the operator's
-/// output was scaled to its albedo's flux, and before the gather was exact, the same
-/// furnaces measured +1.3 %, +8.8 % and +35 %.
+/// Measured: +0.16 %, −0.15 %, +0.40 % (the path tracer's standard error 0.05 %, 0.19 %,
+/// 0.22 %); the furnace holds 1.96, 8.0 and 26 where Le/(1 − ρ) is 2, 10 and 100. Before the
+/// receivers' light was summed over the bounces and turned into outgoing radiance once,
+/// +0.17 %, +0.03 % and +1.14 % (ρ = 0.99's bound was 2 % then); with the light sent between
+/// bounces thresholded at 5× the cache's threshold but its flux not kept, ρ = 0.9 fell to
+/// −3.3 %. Before the operator's output was scaled to its albedo's flux, and before the
+/// gather was exact, the same furnaces measured +1.3 %, +8.8 % and +35 %.
 #[test]
 fn conductor_furnace_matches_the_path_tracer() {
     const PATHS: u32 = 64;
-    for (rho, tolerance) in [(0.5f32, 0.01), (0.9, 0.01), (0.99, 0.02)] {
+    for (rho, tolerance) in [(0.5f32, 0.01), (0.9, 0.01), (0.99, 0.01)] {
         let scene = conductor_furnace(rho, 1.0, 0.1);
         let baked = bake_furnace(&scene, 2);
         let settings = wpbgi::reference::RenderSettings {

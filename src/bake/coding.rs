@@ -58,10 +58,32 @@ pub fn encode<T: Coefficient + Send + Sync>(
     split_level: u32,
     tau: f32,
 ) -> CodedTree<T> {
+    encode_some(tree, leaf, levels, split_level, tau, &|_| true)
+}
+
+/// [`encode`] storing the maps of only the nodes `j` for which `stores(j)` holds (the others
+/// store nothing), each bit for bit what [`encode`] stores: for a reader that expands a few
+/// nodes (a bounce reads the intensity of a fifth of the inner nodes), the sums are still
+/// made for every node, but the thresholded copies only for those.
+pub fn encode_some<T: Coefficient + Send + Sync>(
+    tree: &SurfelTree,
+    leaf: &(dyn Fn(u32) -> SparseHaar<T> + Sync),
+    levels: u32,
+    split_level: u32,
+    tau: f32,
+    stores: &(dyn Fn(u32) -> bool + Sync),
+) -> CodedTree<T> {
     let mut nodes = vec![NodeCoding::default(); tree.nodes.len()];
     if !tree.nodes.is_empty() {
         let mut out = Vec::new();
-        encode_node(tree, leaf, split_level, tau, 0, &mut out);
+        let coder = Coder {
+            tree,
+            leaf,
+            eps: split_level,
+            tau,
+            stores,
+        };
+        coder.node(0, false, &mut out);
         for (i, c) in out {
             nodes[i as usize] = NodeCoding {
                 g: c.g.map(|g| g.refined_to(levels)),
@@ -72,48 +94,68 @@ pub fn encode<T: Coefficient + Send + Sync>(
     CodedTree { split_level, nodes }
 }
 
-/// Returns the uncompressed G of node `j`, appending what the subtree stores to `out`.
-fn encode_node<T: Coefficient + Send + Sync>(
-    tree: &SurfelTree,
-    leaf: &(dyn Fn(u32) -> SparseHaar<T> + Sync),
+/// What [`encode_some`] codes with.
+struct Coder<'a, T> {
+    tree: &'a SurfelTree,
+    leaf: &'a (dyn Fn(u32) -> SparseHaar<T> + Sync),
     eps: u32,
     tau: f32,
-    j: u32,
-    out: &mut Vec<(u32, NodeCoding<T>)>,
-) -> SparseHaar<T> {
-    let node = &tree.nodes[j as usize];
-    if node.is_leaf() {
-        let g = leaf(tree.order[node.first as usize]);
-        if node.level <= eps {
-            let stored = SparseHaar::weighted_sum(&[(&g, 1.0)], tau);
-            out.push((
-                j,
-                NodeCoding {
-                    g: Some(stored),
-                    h: None,
-                },
-            ));
+    stores: &'a (dyn Fn(u32) -> bool + Sync),
+}
+
+impl<T: Coefficient + Send + Sync> Coder<'_, T> {
+    /// Returns the uncompressed G of node `j`, appending what the subtree stores to `out`; or
+    /// `None` where neither `j` nor an ancestor (`stored_above`) stores anything: no stored
+    /// map sums it.
+    fn node(
+        &self,
+        j: u32,
+        stored_above: bool,
+        out: &mut Vec<(u32, NodeCoding<T>)>,
+    ) -> Option<SparseHaar<T>> {
+        let (tree, eps, tau) = (self.tree, self.eps, self.tau);
+        let node = &tree.nodes[j as usize];
+        let stores = (self.stores)(j);
+        let summed = stored_above || stores;
+        if node.is_leaf() {
+            if !summed {
+                return None;
+            }
+            let g = (self.leaf)(tree.order[node.first as usize]);
+            if node.level <= eps && stores {
+                let stored = SparseHaar::weighted_sum(&[(&g, 1.0)], tau);
+                out.push((
+                    j,
+                    NodeCoding {
+                        g: Some(stored),
+                        h: None,
+                    },
+                ));
+            }
+            return Some(g);
         }
-        return g;
+        let [l, r] = node.children;
+        let (mut out_l, mut out_r) = (Vec::new(), Vec::new());
+        let (gl, gr) = rayon::join(
+            || self.node(l, summed, &mut out_l),
+            || self.node(r, summed, &mut out_r),
+        );
+        out.append(&mut out_l);
+        out.append(&mut out_r);
+        let (Some(gl), Some(gr)) = (gl, gr) else {
+            return None;
+        };
+        let g = SparseSum::of(&[(&gl, 1.0), (&gr, 1.0)]);
+        if stores {
+            let cut = tau * g.norm();
+            let stored = NodeCoding {
+                g: (node.level <= eps).then(|| g.keep(cut)),
+                h: (node.level >= eps).then(|| SparseSum::of(&[(&gl, 0.5), (&gr, -0.5)]).keep(cut)),
+            };
+            out.push((j, stored));
+        }
+        Some(g.keep(0.0))
     }
-    let [l, r] = node.children;
-    let (mut out_l, mut out_r) = (Vec::new(), Vec::new());
-    let (gl, gr) = rayon::join(
-        || encode_node(tree, leaf, eps, tau, l, &mut out_l),
-        || encode_node(tree, leaf, eps, tau, r, &mut out_r),
-    );
-    out.append(&mut out_l);
-    out.append(&mut out_r);
-    let g = SparseSum::of(&[(&gl, 1.0), (&gr, 1.0)]);
-    let cut = tau * g.norm();
-    let stored = NodeCoding {
-        g: (node.level <= eps).then(|| g.keep(cut)),
-        h: (node.level >= eps).then(|| SparseSum::of(&[(&gl, 0.5), (&gr, -0.5)]).keep(cut)),
-    };
-    if stored.g.is_some() || stored.h.is_some() {
-        out.push((j, stored));
-    }
-    g.keep(0.0)
 }
 
 impl<T: Coefficient> CodedTree<T> {

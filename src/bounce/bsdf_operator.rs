@@ -54,7 +54,7 @@ use crate::geometry::warp::square_to_hemisphere_equal_area;
 use crate::haar::{texel_directions, Haar2d};
 use crate::sampler::{sobol02, Sampler};
 use crate::spectrum::Rgb;
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec3A};
 use rayon::prelude::*;
 use std::sync::Arc;
 
@@ -174,13 +174,58 @@ pub struct BsdfOperator {
     /// Column a of V (incoming coefficient a) is `entries[starts[a]..starts[a + 1]]`, pairs of
     /// (outgoing coefficient b, V[b][a]).
     starts: Vec<u32>,
-    entries: Vec<(u32, Rgb)>,
+    entries: Entries,
     /// ‖V_kept‖_F and ‖E_V‖_F, each coefficient measured by its largest channel.
     kept_norm: f32,
     dropped_norm: f32,
     /// See [`Kernel`].
     albedo: Vec<[Rgb; 2]>,
     cosines: Vec<f32>,
+}
+
+/// V's coefficients: RGB, or one value for all three channels where every coefficient is
+/// grey (a dielectric's Fresnel, a white conductor's), which the product reads at a third
+/// of the bytes (it is bound by reading V: glass took a fifth of a later bounce) and
+/// multiplies to the same bits.
+#[derive(Clone, Debug)]
+enum Entries {
+    Rgb(Vec<(u32, Rgb)>),
+    Grey(Vec<(u32, f32)>),
+}
+
+impl Entries {
+    /// `entries` as grey ones where every one is.
+    fn of(entries: Vec<(u32, Rgb)>) -> Entries {
+        if entries.iter().all(|(_, v)| v.x == v.y && v.y == v.z) {
+            Entries::Grey(entries.into_iter().map(|(b, v)| (b, v.x)).collect())
+        } else {
+            Entries::Rgb(entries)
+        }
+    }
+
+    fn len(&self) -> usize {
+        match self {
+            Entries::Rgb(e) => e.len(),
+            Entries::Grey(e) => e.len(),
+        }
+    }
+}
+
+/// `d[b] += weight · v` over the `(b, v)` of `column`, which are in order of b: those below
+/// `block` add `weights[0]`, the others `weights[1]`.
+fn add_column<V: Copy>(
+    d: &mut [Vec3A],
+    column: &[(u32, V)],
+    block: u32,
+    weights: [Vec3A; 2],
+    scaled: impl Fn(Vec3A, V) -> Vec3A,
+) {
+    let (upper, lower) = column.split_at(column.partition_point(|(b, _)| *b < block));
+    for (part, weight) in [(upper, weights[0]), (lower, weights[1])] {
+        for &(b, v) in part {
+            d[b as usize] += scaled(weight, v);
+        }
+    }
 }
 
 /// The local direction through point `u` of hemisphere `h`'s unit square.
@@ -436,7 +481,7 @@ impl BsdfOperator {
             n,
             hemispheres,
             starts,
-            entries,
+            entries: Entries::of(entries),
             kept_norm: kept.sqrt() as f32,
             dropped_norm: dropped.sqrt() as f32,
             albedo,
@@ -508,27 +553,30 @@ impl BsdfOperator {
     /// hemisphere is its index over n².
     pub fn apply(&self, c: &[Rgb], tints: [Rgb; 2]) -> Vec<Rgb> {
         let block = self.n * self.n;
-        let mut d = vec![Rgb::ZERO; self.size()];
+        // Summed in SIMD lanes (the same products and sums as Rgb's, channel by channel).
+        let mut d = vec![Vec3A::ZERO; self.size()];
+        let tints = tints.map(Vec3A::from);
         for (a, &ca) in c.iter().enumerate() {
-            if ca == Rgb::ZERO {
+            let ca = Vec3A::from(ca);
+            if ca == Vec3A::ZERO {
                 continue;
             }
-            let column = &self.entries[self.starts[a] as usize..self.starts[a + 1] as usize];
+            let column = self.starts[a] as usize..self.starts[a + 1] as usize;
             // A column's entries are in order of b: the upper hemisphere's, then the lower's.
-            let (upper, lower) = column.split_at(column.partition_point(|(b, _)| *b < block));
             let (same, other) = (ca * tints[0], ca * tints[1]);
-            let (to_upper, to_lower) = if (a as u32) < block {
-                (same, other)
+            let weights = if (a as u32) < block {
+                [same, other]
             } else {
-                (other, same)
+                [other, same]
             };
-            for (part, weight) in [(upper, to_upper), (lower, to_lower)] {
-                for &(b, v) in part {
-                    d[b as usize] += weight * v;
-                }
+            match &self.entries {
+                Entries::Rgb(e) => add_column(&mut d, &e[column], block, weights, |w, v| {
+                    w * Vec3A::from(v)
+                }),
+                Entries::Grey(e) => add_column(&mut d, &e[column], block, weights, |w, v| w * v),
             }
         }
-        d
+        d.into_iter().map(Rgb::from).collect()
     }
 
     /// The product L = Wᵀ V C for the incoming radiance per texel `radiance`, with the
@@ -537,22 +585,18 @@ impl BsdfOperator {
     /// channel) that thresholding can cause, for untinted V.
     pub fn product(&self, radiance: &[Rgb], tau_c: f32, tints: [Rgb; 2]) -> (Vec<Rgb>, f32) {
         let mut c = forward(radiance, self.n);
-        let norm = |v: &[Rgb]| {
-            v.iter()
-                .map(|x| f64::from(x.abs().max_element()).powi(2))
-                .sum::<f64>()
-                .sqrt() as f32
-        };
-        let full = norm(&c);
+        let magnitude = |x: &Rgb| f64::from(x.abs().max_element());
+        let full = c.iter().map(|x| magnitude(x).powi(2)).sum::<f64>().sqrt() as f32;
         let cut = tau_c * full;
-        let mut dropped = Vec::new();
+        let mut dropped = 0.0f64;
         for v in c.iter_mut() {
-            if v.abs().max_element() < cut {
-                dropped.push(*v);
+            let m = magnitude(v);
+            if m < f64::from(cut) {
+                dropped += m * m;
                 *v = Rgb::ZERO;
             }
         }
-        let bound = self.error_bound(full, norm(&dropped));
+        let bound = self.error_bound(full, dropped.sqrt() as f32);
         (inverse(&self.apply(&c, tints), self.n), bound)
     }
 

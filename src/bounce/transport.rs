@@ -14,7 +14,9 @@
 //!   three (slot, factor) terms. Only slots some receiver reads are kept (a bitmap and its
 //!   ranks), and each bounce fills them once: surfels' maps decoded once, S summed bottom-up,
 //!   and node intensities decoded from the tree coded for the bounce's light at the bake's
-//!   threshold, as a render of that light would read them. (Exact, unthresholded node sums
+//!   threshold, as a render of that light would read them: only the nodes some receiver
+//!   reads, and those they are rebuilt from, are coded and decoded ([`expanded_nodes`]; a
+//!   fifth of the inner nodes in the Cornell-class scenes). (Exact, unthresholded node sums
 //!   put the conductor furnace at ρ = 0.99 at +2.22 % against the path tracer, past its 2 %
 //!   bound, where the coded tree gives +1.21 %: tests/furnace.rs.)
 //! - **Receivers.** A diffuse receiver's outgoing radiance is ρ ⊙ Σ w·L(slot): the cosine
@@ -193,9 +195,19 @@ impl SlotIndex {
 
     /// The index of marked slot `slot` among the read ones.
     fn compact(&self, slot: u32) -> u32 {
+        self.rank(slot) as u32
+    }
+
+    /// How many read slots lie before `slot` (any slot up to the total).
+    fn rank(&self, slot: u32) -> usize {
         let (word, bit) = ((slot / 64) as usize, slot % 64);
-        let below = self.words[word].load(Ordering::Relaxed) & ((1u64 << bit) - 1);
-        self.ranks[word] + below.count_ones()
+        match self.words.get(word) {
+            Some(w) => {
+                let below = w.load(Ordering::Relaxed) & ((1u64 << bit) - 1);
+                (self.ranks[word] + below.count_ones()) as usize
+            }
+            None => self.len(),
+        }
     }
 
     /// The read slots in `[begin, begin + count)`, as offsets from `begin`, in order: a word
@@ -411,53 +423,94 @@ impl ReceiverLinks {
     }
 }
 
+/// Per node of `tree` (coded at split level `split_level`), whether a bounce expands its
+/// coded intensity: the inner nodes some of whose texels a receiver reads, and the ancestors
+/// those below the split level are rebuilt from (spec §6.5). The bounces code only these
+/// nodes' maps ([`crate::bake::coding::encode_some`]).
+pub fn expanded_nodes(
+    slots: &Slots,
+    index: &SlotIndex,
+    tree: &SurfelTree,
+    split_level: u32,
+) -> Vec<bool> {
+    let side = 1u32 << slots.tree_levels;
+    let mut expanded: Vec<bool> = (0..tree.nodes.len())
+        .into_par_iter()
+        .map(|j| {
+            !tree.nodes[j].is_leaf()
+                && index
+                    .read_in(slots.node_base[j] + 3, side * side)
+                    .next()
+                    .is_some()
+        })
+        .collect();
+    // Children come after their parents.
+    for j in (0..tree.nodes.len()).rev() {
+        let node = &tree.nodes[j];
+        if expanded[j] && node.level > split_level && node.parent != NONE {
+            expanded[node.parent as usize] = true;
+        }
+    }
+    expanded
+}
+
 /// What every read slot holds in the light `sent` (per surfel, reflected light only), in
-/// compact slot order. Node intensities are read from `coded`, the tree coded for `sent` at the
-/// bake's threshold: what a render of a cache of that light would read.
+/// compact slot order, into `values` (whose memory is reused from bounce to bounce). Node
+/// intensities are read from `coded`, the tree coded for `sent` at the bake's threshold (at
+/// least for the `expanded` nodes, see [`expanded_nodes`]): what a render of a cache of that
+/// light would read.
 pub fn slot_values(
     slots: &Slots,
     index: &SlotIndex,
     tree: &SurfelTree,
     surfels: &[crate::bake::surfels::Surfel],
     sent: &[SurfelRadiance],
-    coded: &CodedTree<Rgb>,
-) -> Vec<Rgb> {
-    let mut values: Vec<Rgb> = Vec::with_capacity(index.len());
-    // Surfel slots come first, surfel by surfel: RGB, or the map's texels (a thresholded
-    // map rings a little below zero; what a lookup reads is clamped, as in the render).
-    let per_surfel: Vec<Vec<Rgb>> = sent
-        .par_iter()
+    (coded, expanded): (&CodedTree<Rgb>, &[bool]),
+    values: &mut Vec<Rgb>,
+) {
+    values.clear();
+    values.resize(index.len(), Rgb::ZERO);
+    // Surfel slots come first, surfel by surfel, each surfel's read ones a run of `values`:
+    // RGB, or the map's texels (a thresholded map rings a little below zero; what a lookup
+    // reads is clamped, as in the render).
+    let count = |i: usize| slots.surfel_levels[i].map_or(1, |l| 1u32 << (2 * l));
+    let mut runs: Vec<&mut [Rgb]> = Vec::with_capacity(sent.len());
+    let mut rest = &mut values[..];
+    for i in 0..sent.len() {
+        let base = slots.surfel_base[i];
+        let read = index.rank(base + count(i)) - index.rank(base);
+        let (run, after) = rest.split_at_mut(read);
+        runs.push(run);
+        rest = after;
+    }
+    runs.into_par_iter()
+        .zip(sent)
         .enumerate()
-        .map_init(Vec::new, |texels, (i, r)| {
-            let count = slots.surfel_levels[i].map_or(1, |l| 1 << (2 * l));
-            let mut read = index.read_in(slots.surfel_base[i], count).peekable();
+        .for_each_init(Vec::new, |texels, (i, (run, r))| {
+            // A map nobody reads is not decoded.
+            if run.is_empty() {
+                return;
+            }
             match r {
-                // A map nobody reads is not decoded.
-                _ if read.peek().is_none() => Vec::new(),
-                SurfelRadiance::Rgb(c) => vec![c.max(Rgb::ZERO)],
+                SurfelRadiance::Rgb(c) => run[0] = c.max(Rgb::ZERO),
                 SurfelRadiance::Map(m) => {
                     m.texels_into(texels);
-                    read.map(|t| texels[t as usize].max(Rgb::ZERO)).collect()
+                    let read = index.read_in(slots.surfel_base[i], count(i));
+                    for (v, t) in run.iter_mut().zip(read) {
+                        *v = texels[t as usize].max(Rgb::ZERO);
+                    }
                 }
             }
-        })
-        .collect();
-    values.extend(per_surfel.into_iter().flatten());
+        });
     // Then inner nodes, in node order: S = Σ A L n over the diffuse surfels below (exact, as
     // the render sums it), and the texels of the coded intensity.
     let s_sums = normal_sums(tree, surfels, sent);
     let mut per_node: Vec<NodeValues> = Vec::new();
     let side = 1u32 << slots.tree_levels;
-    let intensity_read = |j: u32| {
-        index
-            .read_in(slots.node_base[j as usize] + 3, side * side)
-            .next()
-            .is_some()
-    };
     for_each_coded_intensity(
         tree,
         coded,
-        intensity_read,
+        expanded,
         |j, intensity| {
             let j = j as usize;
             let offsets: Vec<u32> = index.read_in(slots.node_base[j], 3 + side * side).collect();
@@ -475,23 +528,23 @@ pub fn slot_values(
         },
         &mut per_node,
     );
-    per_node.sort_by_key(|(j, _)| *j);
-    values.extend(per_node.into_iter().flat_map(|(_, v)| v));
-    values
+    for (j, read) in per_node {
+        let at = index.rank(slots.node_base[j as usize]);
+        values[at..at + read.len()].copy_from_slice(&read);
+    }
 }
 
-/// The texels `read` (row-major) of a map of `levels` texels a side, from `map` (whose own
-/// resolution may be coarser: its finer details are zero), clamped at zero (a thresholded map
-/// rings a little below it; a lookup's read is clamped, as in the render).
-fn read_texels(read: &[u32], levels: u32, map: &Haar2d<Rgb>) -> Vec<Rgb> {
-    let texels = map.inverse();
-    let shift = levels - map.levels.min(levels);
+/// The texels `read` (row-major) of a map of `levels` a side, from the `texels` of a map of
+/// `texel_levels` (which may be coarser: its finer details are zero), clamped at zero (a
+/// thresholded map rings a little below it; a lookup's read is clamped, as in the render).
+fn read_texels(read: &[u32], levels: u32, (texels, texel_levels): (&[Rgb], u32)) -> Vec<Rgb> {
+    let shift = levels - texel_levels.min(levels);
     let side = 1u32 << levels;
     read.iter()
         .map(|&t| {
             let (x, y) = ((t % side) >> shift, (t / side) >> shift);
             texels
-                .get(((y << map.levels) + x) as usize)
+                .get(((y << texel_levels) + x) as usize)
                 .map_or(Rgb::ZERO, |l| l.max(Rgb::ZERO))
         })
         .collect()
@@ -532,18 +585,24 @@ fn normal_sums(
 /// An inner node's read slots' values.
 type NodeValues = (u32, Vec<Rgb>);
 
-/// Call `read` with every inner node and its coded intensity G (stored at or above the split
-/// level, rebuilt below it from the parent's G and H, spec §6.5), level by level so that only
-/// two levels of maps exist at once; what it returns is collected into `out`. G is expanded
-/// only for the nodes `wanted` names and those a child is rebuilt from; the others are passed
-/// over (`read` sees only S then).
+/// Call `read` with every inner node and the texels of its coded intensity G with their
+/// levels (G stored at or above the split level, rebuilt below it from the parent's G and H,
+/// spec §6.5), level by level; what it returns is collected into `out`. G is expanded only
+/// for the `expanded` nodes (see [`expanded_nodes`]); the others are passed over (`read`
+/// sees only S then). A stored G is decoded straight into a thread's texel buffer; only the
+/// parents of rebuilt nodes keep a dense decomposition, for the level below (dense maps of
+/// every expanded node, a few MB a level allocated anew in every bounce, cost a fifth of
+/// the bounces' time in clearing fresh pages).
 fn for_each_coded_intensity(
     tree: &SurfelTree,
     coded: &CodedTree<Rgb>,
-    wanted: impl Fn(u32) -> bool + Sync,
-    read: impl Fn(u32, Option<&Haar2d<Rgb>>) -> Option<NodeValues> + Sync,
+    expanded: &[bool],
+    read: impl Fn(u32, Option<(&[Rgb], u32)>) -> Option<NodeValues> + Sync,
     out: &mut Vec<NodeValues>,
 ) {
+    let rebuilt = |c: u32| {
+        c != NONE && expanded[c as usize] && tree.nodes[c as usize].level > coded.split_level
+    };
     // Nodes are breadth-first: each level is a run, after its parents'.
     let mut above: Vec<Option<Haar2d<Rgb>>> = Vec::new();
     let mut above_start = 0usize;
@@ -557,20 +616,20 @@ fn for_each_coded_intensity(
                 .count();
         let maps: Vec<(Option<Haar2d<Rgb>>, Option<NodeValues>)> = (start..end)
             .into_par_iter()
-            .map(|j| {
+            .map_init(Vec::new, |texels, j| {
                 let node = &tree.nodes[j];
                 if node.is_leaf() {
                     return (None, None);
                 }
-                let rebuilds_child = node.children.iter().any(|&c| {
-                    c != NONE
-                        && !tree.nodes[c as usize].is_leaf()
-                        && coded.nodes[c as usize].g.is_none()
-                });
-                if !wanted(j as u32) && !rebuilds_child {
+                if !expanded[j] {
                     return (None, read(j as u32, None));
                 }
+                let parent_of_rebuilt = node.children.iter().any(|&c| rebuilt(c));
                 let g = match &coded.nodes[j].g {
+                    Some(g) if !parent_of_rebuilt => {
+                        let levels = g.trimmed_texels_into(texels);
+                        return (None, read(j as u32, Some((texels, levels))));
+                    }
                     Some(g) => g.to_dense_trimmed(),
                     None => {
                         let p = node.parent as usize;
@@ -592,8 +651,8 @@ fn for_each_coded_intensity(
                         }
                     }
                 };
-                let r = read(j as u32, Some(&g));
-                (Some(g), r)
+                let r = read(j as u32, Some((&g.inverse(), g.levels)));
+                (parent_of_rebuilt.then_some(g), r)
             })
             .collect();
         above = Vec::with_capacity(maps.len());

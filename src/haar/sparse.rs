@@ -209,6 +209,21 @@ impl<T: Coefficient> SparseHaar<T> {
         }
     }
 
+    /// The map with `f` applied to every stored coefficient (the scaling one and the
+    /// details; a zero detail stays zero, so `f` must map zero to zero): a scaling per
+    /// channel, say.
+    pub fn map_coefficients(mut self, f: impl Fn(T) -> T) -> Self {
+        self.scale = f(self.scale);
+        for node in &mut self.nodes {
+            for c in &mut node.details {
+                if *c != T::default() {
+                    *c = f(*c);
+                }
+            }
+        }
+        self
+    }
+
     /// The means of f over the cells of level `k` (row-major, `2^k` a side): the texels of
     /// the map averaged down to that resolution, as [`SparseHaar::texels_into`] gives them.
     pub fn means_into(&self, k: u32, out: &mut Vec<T>) {
@@ -268,6 +283,19 @@ impl<T: Coefficient> SparseHaar<T> {
         out.resize(n * n, T::default());
         let root = if self.nodes.is_empty() { NONE } else { 0 };
         self.decode_to(self.levels, out, root, 0, (0, 0), self.scale);
+    }
+
+    /// The texels of [`SparseHaar::to_dense_trimmed`] (row-major) into `out`, as its
+    /// `inverse()` gives them, bit for bit, without the dense decomposition; returns their
+    /// levels (`2^levels` a side).
+    pub fn trimmed_texels_into(&self, out: &mut Vec<T>) -> u32 {
+        let levels = self.stored_depth(0, 0);
+        let n = 1usize << levels;
+        out.clear();
+        out.resize(n * n, T::default());
+        let root = if self.nodes.is_empty() { NONE } else { 0 };
+        self.decode_to(levels, out, root, 0, (0, 0), self.scale);
+        levels
     }
 
     /// Cell `(i, j)` of level `l`, whose (scaled) mean is `m`, and below, down to level

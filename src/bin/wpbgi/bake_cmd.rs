@@ -220,6 +220,7 @@ pub fn bake_command(a: BakeArgs) -> Result<()> {
     if let Some(r) = &baked.bounces {
         stats["bounces"] = r.to_json();
         stats["bounces"]["seconds"] = json!(r.seconds);
+        stats["bounces"]["final_seconds"] = json!(r.final_seconds);
         let t = &r.transport;
         stats["bounces"]["transport"] = json!({
             "bytes": t.bytes,
