@@ -93,8 +93,9 @@ pub struct BounceSettings {
     /// their nearest gathering neighbours on the same surface (see [`super::receivers`]).
     /// 1: every surfel gathers.
     pub receiver_stride: u32,
-    /// The most bytes the recorded transport may hold; receivers past it gather again in
-    /// every bounce. It changes the time, never the cache (so it is not part of the cache's
+    /// The most bytes the recorded transport may hold, with the receivers' summed light
+    /// ([`TransportReport::incident_bytes`]); receivers past it gather again in every
+    /// bounce. It changes the time, never the cache (so it is not part of the cache's
     /// hash). `None`: [`default_transport_budget`].
     pub transport_budget: Option<u64>,
 }
@@ -195,6 +196,9 @@ pub struct TransportReport {
     /// Slots the receivers read, of all the tree's.
     pub read_slots: usize,
     pub slots: u64,
+    /// Bytes of the directional receivers' incident light summed over the bounces, and of
+    /// one bounce's beside it ([`Incident`]): taken from the budget before the links.
+    pub incident_bytes: u64,
 }
 
 impl BounceReport {
@@ -321,14 +325,23 @@ pub fn add_bounces(
 
     // The first bounce records every group's links, keeping them in group order while they
     // fit the budget.
+    // The receivers' summed incident light (and one bounce's beside it) is held whatever the
+    // budget: the links get what it leaves.
+    let incident_bytes: u64 = (0..baked.surfels.len())
+        .filter(|&i| receivers.gathers(i as u32))
+        .filter_map(|i| ops[i].as_ref())
+        .map(|op| 2 * (op.shared.size() * size_of::<Rgb>()) as u64)
+        .sum();
     let budget = settings
         .transport_budget
-        .unwrap_or_else(default_transport_budget);
+        .unwrap_or_else(default_transport_budget)
+        .saturating_sub(incident_bytes);
     let mut index = SlotIndex::new(&slots);
     let mut kept: Vec<Vec<ReceiverLinks>> = Vec::new();
     let mut transport = TransportReport {
         receivers: receivers.count(),
         slots: slots.total(),
+        incident_bytes,
         ..TransportReport::default()
     };
     let mut full = false;

@@ -140,6 +140,11 @@ impl Receivers {
         Receivers { gathers, blends }
     }
 
+    /// Whether surfel `i` gathers.
+    pub fn gathers(&self, i: u32) -> bool {
+        self.gathers[i as usize]
+    }
+
     /// Surfels that gather.
     pub fn count(&self) -> usize {
         self.gathers.iter().filter(|&&g| g).count()

@@ -228,6 +228,7 @@ pub fn bake_command(a: BakeArgs) -> Result<()> {
             "kept_groups": t.kept_groups,
             "regathered_groups": t.regathered_groups,
             "read_slots": t.read_slots,
+            "incident_bytes": t.incident_bytes,
             "slots": t.slots,
         });
     }
@@ -286,10 +287,11 @@ pub fn bake_command(a: BakeArgs) -> Result<()> {
                 String::new()
             };
             say!(
-                "  transport: {} MB ({:.0} bytes per surfel), {} of {} surfels gather, {} of {} \
-                 slots read{regathered}",
+                "  transport: {} MB ({:.0} bytes per surfel) and {} MB of summed light, {} of {} \
+                 surfels gather, {} of {} slots read{regathered}",
                 t.bytes / 1_000_000,
                 t.bytes as f64 / baked.surfels.len().max(1) as f64,
+                t.incident_bytes / 1_000_000,
                 t.receivers,
                 baked.surfels.len(),
                 t.read_slots,
