@@ -197,7 +197,7 @@ pub struct TransportReport {
     pub read_slots: usize,
     pub slots: u64,
     /// Bytes of the directional receivers' incident light summed over the bounces, and of
-    /// one bounce's beside it ([`Incident`]): taken from the budget before the links.
+    /// one bounce's beside it: taken from the budget before the links.
     pub incident_bytes: u64,
 }
 
