@@ -650,18 +650,17 @@ pub fn close_buffer(
 /// furnace of ρ = 0.9, which its stiff tail turned into 3 % (tests/furnace.rs). What a lookup
 /// reads is clamped at zero, so the thresholded map's flux is measured so too.
 fn with_flux_of(map: SparseHaar<Rgb>, texels: &[Rgb], n: Vec3) -> SparseHaar<Rgb> {
-    let levels = map.levels();
-    let weights = texel_directions(levels).iter().map(|w| w.dot(n).abs());
-    let exact = texels
+    let mut decoded = Vec::new();
+    map.texels_into(&mut decoded);
+    // The exact and the thresholded texels' fluxes in one pass, each cosine found once.
+    let (exact, kept) = texels
         .iter()
-        .zip(weights.clone())
-        .fold(Rgb::ZERO, |f, (l, w)| f + *l * w);
-    let mut kept = Vec::new();
-    map.texels_into(&mut kept);
-    let kept = kept
-        .iter()
-        .zip(weights)
-        .fold(Rgb::ZERO, |f, (l, w)| f + l.max(Rgb::ZERO) * w);
+        .zip(&decoded)
+        .zip(texel_directions(map.levels()))
+        .fold((Rgb::ZERO, Rgb::ZERO), |(e, k), ((l, d), w)| {
+            let cos = w.dot(n).abs();
+            (e + *l * cos, k + d.max(Rgb::ZERO) * cos)
+        });
     let scale = Rgb::select(kept.cmpgt(Rgb::ZERO), exact / kept, Rgb::ONE);
     map.map_coefficients(|c| c * scale)
 }

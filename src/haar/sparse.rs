@@ -227,11 +227,17 @@ impl<T: Coefficient> SparseHaar<T> {
     /// The means of f over the cells of level `k` (row-major, `2^k` a side): the texels of
     /// the map averaged down to that resolution, as [`SparseHaar::texels_into`] gives them.
     pub fn means_into(&self, k: u32, out: &mut Vec<T>) {
-        let n = 1usize << k;
+        self.decode_at(k, out);
+    }
+
+    /// The map's texels at `levels` (`2^levels` a side, row-major) into `out`: each cell of
+    /// that level holds the map's mean over it.
+    fn decode_at(&self, levels: u32, out: &mut Vec<T>) {
+        let n = 1usize << levels;
         out.clear();
         out.resize(n * n, T::default());
         let root = if self.nodes.is_empty() { NONE } else { 0 };
-        self.decode_to(k, out, root, 0, (0, 0), self.scale);
+        self.decode_to(levels, out, root, 0, (0, 0), self.scale);
     }
 
     /// f at the point `(x, y)` of the unit square.
@@ -278,11 +284,7 @@ impl<T: Coefficient> SparseHaar<T> {
     /// `to_dense().inverse()` gives them, bit for bit (the same sums, and scalings by powers
     /// of two), without the dense decomposition: a dropped subtree fills its block at once.
     pub fn texels_into(&self, out: &mut Vec<T>) {
-        let n = 1usize << self.levels;
-        out.clear();
-        out.resize(n * n, T::default());
-        let root = if self.nodes.is_empty() { NONE } else { 0 };
-        self.decode_to(self.levels, out, root, 0, (0, 0), self.scale);
+        self.decode_at(self.levels, out);
     }
 
     /// The texels of [`SparseHaar::to_dense_trimmed`] (row-major) into `out`, as its
@@ -290,11 +292,7 @@ impl<T: Coefficient> SparseHaar<T> {
     /// levels (`2^levels` a side).
     pub fn trimmed_texels_into(&self, out: &mut Vec<T>) -> u32 {
         let levels = self.stored_depth(0, 0);
-        let n = 1usize << levels;
-        out.clear();
-        out.resize(n * n, T::default());
-        let root = if self.nodes.is_empty() { NONE } else { 0 };
-        self.decode_to(levels, out, root, 0, (0, 0), self.scale);
+        self.decode_at(levels, out);
         levels
     }
 
