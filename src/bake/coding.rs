@@ -58,21 +58,6 @@ pub fn encode<T: Coefficient + Send + Sync>(
     split_level: u32,
     tau: f32,
 ) -> CodedTree<T> {
-    encode_some(tree, leaf, levels, split_level, tau, &|_| true)
-}
-
-/// [`encode`] storing the maps of only the nodes `j` for which `stores(j)` holds (the others
-/// store nothing), each bit for bit what [`encode`] stores: for a reader that expands a few
-/// nodes (a bounce reads the intensity of a fifth of the inner nodes), the sums are still
-/// made for every node, but the thresholded copies only for those.
-pub fn encode_some<T: Coefficient + Send + Sync>(
-    tree: &SurfelTree,
-    leaf: &(dyn Fn(u32) -> SparseHaar<T> + Sync),
-    levels: u32,
-    split_level: u32,
-    tau: f32,
-    stores: &(dyn Fn(u32) -> bool + Sync),
-) -> CodedTree<T> {
     let mut nodes = vec![NodeCoding::default(); tree.nodes.len()];
     if !tree.nodes.is_empty() {
         let mut out = Vec::new();
@@ -81,9 +66,8 @@ pub fn encode_some<T: Coefficient + Send + Sync>(
             leaf,
             eps: split_level,
             tau,
-            stores,
         };
-        coder.node(0, false, &mut out);
+        coder.node(0, &mut out);
         for (i, c) in out {
             nodes[i as usize] = NodeCoding {
                 g: c.g.map(|g| g.refined_to(levels)),
@@ -94,35 +78,22 @@ pub fn encode_some<T: Coefficient + Send + Sync>(
     CodedTree { split_level, nodes }
 }
 
-/// What [`encode_some`] codes with.
+/// What [`encode`] codes with.
 struct Coder<'a, T> {
     tree: &'a SurfelTree,
     leaf: &'a (dyn Fn(u32) -> SparseHaar<T> + Sync),
     eps: u32,
     tau: f32,
-    stores: &'a (dyn Fn(u32) -> bool + Sync),
 }
 
 impl<T: Coefficient + Send + Sync> Coder<'_, T> {
-    /// Returns the uncompressed G of node `j`, appending what the subtree stores to `out`; or
-    /// `None` where neither `j` nor an ancestor (`stored_above`) stores anything: no stored
-    /// map sums it.
-    fn node(
-        &self,
-        j: u32,
-        stored_above: bool,
-        out: &mut Vec<(u32, NodeCoding<T>)>,
-    ) -> Option<SparseHaar<T>> {
+    /// Returns the uncompressed G of node `j`, appending what the subtree stores to `out`.
+    fn node(&self, j: u32, out: &mut Vec<(u32, NodeCoding<T>)>) -> SparseHaar<T> {
         let (tree, eps, tau) = (self.tree, self.eps, self.tau);
         let node = &tree.nodes[j as usize];
-        let stores = (self.stores)(j);
-        let summed = stored_above || stores;
         if node.is_leaf() {
-            if !summed {
-                return None;
-            }
             let g = (self.leaf)(tree.order[node.first as usize]);
-            if node.level <= eps && stores {
+            if node.level <= eps {
                 let stored = SparseHaar::weighted_sum(&[(&g, 1.0)], tau);
                 out.push((
                     j,
@@ -132,30 +103,76 @@ impl<T: Coefficient + Send + Sync> Coder<'_, T> {
                     },
                 ));
             }
-            return Some(g);
+            return g;
         }
         let [l, r] = node.children;
         let (mut out_l, mut out_r) = (Vec::new(), Vec::new());
+        let (gl, gr) = rayon::join(|| self.node(l, &mut out_l), || self.node(r, &mut out_r));
+        out.append(&mut out_l);
+        out.append(&mut out_r);
+        let g = SparseSum::of(&[(&gl, 1.0), (&gr, 1.0)]);
+        let cut = tau * g.norm();
+        let stored = NodeCoding {
+            g: (node.level <= eps).then(|| g.keep(cut)),
+            h: (node.level >= eps).then(|| SparseSum::of(&[(&gl, 0.5), (&gr, -0.5)]).keep(cut)),
+        };
+        out.push((j, stored));
+        g.keep(0.0)
+    }
+}
+
+/// The exact radiant intensity G(j) of every node `j` for which `wanted(j)` holds, `None`
+/// for the others: the sum of its leaves' maps `leaf(surfel index)`, nothing dropped, at the
+/// finest resolution below it. What a reader of a few nodes' own light needs (a bounce reads
+/// a fifth of the inner nodes), without the split-level coding a cache stores for its size.
+/// Only the subtrees below a wanted node are summed.
+pub fn node_sums<T: Coefficient + Send + Sync>(
+    tree: &SurfelTree,
+    leaf: &(dyn Fn(u32) -> SparseHaar<T> + Sync),
+    wanted: &(dyn Fn(u32) -> bool + Sync),
+) -> Vec<Option<SparseHaar<T>>> {
+    let mut sums = vec![None; tree.nodes.len()];
+    if !tree.nodes.is_empty() {
+        let mut out = Vec::new();
+        sum_below(tree, leaf, wanted, 0, false, &mut out);
+        for (j, g) in out {
+            sums[j as usize] = Some(g);
+        }
+    }
+    sums
+}
+
+/// The G of node `j` if it or an ancestor is wanted (`wanted_above`), appending the wanted
+/// nodes' G below it to `out`.
+fn sum_below<T: Coefficient + Send + Sync>(
+    tree: &SurfelTree,
+    leaf: &(dyn Fn(u32) -> SparseHaar<T> + Sync),
+    wanted: &(dyn Fn(u32) -> bool + Sync),
+    j: u32,
+    wanted_above: bool,
+    out: &mut Vec<(u32, SparseHaar<T>)>,
+) -> Option<SparseHaar<T>> {
+    let node = &tree.nodes[j as usize];
+    let this = wanted(j);
+    let needed = wanted_above || this;
+    let g = if node.is_leaf() {
+        needed.then(|| leaf(tree.order[node.first as usize]))
+    } else {
+        let [l, r] = node.children;
+        let (mut out_l, mut out_r) = (Vec::new(), Vec::new());
         let (gl, gr) = rayon::join(
-            || self.node(l, summed, &mut out_l),
-            || self.node(r, summed, &mut out_r),
+            || sum_below(tree, leaf, wanted, l, needed, &mut out_l),
+            || sum_below(tree, leaf, wanted, r, needed, &mut out_r),
         );
         out.append(&mut out_l);
         out.append(&mut out_r);
-        let (Some(gl), Some(gr)) = (gl, gr) else {
-            return None;
-        };
-        let g = SparseSum::of(&[(&gl, 1.0), (&gr, 1.0)]);
-        if stores {
-            let cut = tau * g.norm();
-            let stored = NodeCoding {
-                g: (node.level <= eps).then(|| g.keep(cut)),
-                h: (node.level >= eps).then(|| SparseSum::of(&[(&gl, 0.5), (&gr, -0.5)]).keep(cut)),
-            };
-            out.push((j, stored));
-        }
-        Some(g.keep(0.0))
+        gl.zip(gr)
+            .map(|(gl, gr)| SparseSum::of(&[(&gl, 1.0), (&gr, 1.0)]).keep(0.0))
+    };
+    if this {
+        out.extend(g.clone().map(|g| (j, g)));
     }
+    g
 }
 
 impl<T: Coefficient> CodedTree<T> {

@@ -8,7 +8,7 @@ pub mod plan;
 pub mod surfels;
 pub mod tree;
 
-pub use coding::{encode, encode_some, CodedTree, NodeCoding};
+pub use coding::{encode, node_sums, CodedTree, NodeCoding};
 pub use direct::DirectLight;
 pub use pipeline::{bake, bake_cancellable, BakeSettings, Baked, Quality, SurfelRadiance};
 pub use plan::Plan;

@@ -370,13 +370,14 @@ pub fn bake_cancellable(
     plan.map_levels = levels;
     plan.json["map_resolution"] = (1u32 << levels).into();
     let mesh_flags = mesh_flags(scene);
-    let leaf = |i: u32| {
-        let s = &surfels[i as usize];
-        let back = mesh_flags[s.mesh as usize] & SOLID == 0;
-        intensity_map(s, &radiance[i as usize], back)
-    };
     progress("coding", 0.0);
-    let coded = encode(&tree, &leaf, levels, eps, settings.tau);
+    let coded = encode(
+        &tree,
+        &intensity_of(&surfels, &mesh_flags, &radiance),
+        levels,
+        eps,
+        settings.tau,
+    );
     let area_leaf =
         |i: u32| SparseHaar::compress_below(&projected_area_map(&surfels[i as usize]), 0.0);
     let projected = encode(&tree, &area_leaf, PROJECTED_AREA_LEVELS, eps, settings.tau);
@@ -525,6 +526,21 @@ pub fn mesh_flags(scene: &Scene) -> Vec<u32> {
             .fold(0, |flags, (_, bit)| flags | bit)
         })
         .collect()
+}
+
+/// Surfel `i`'s [`intensity_map`] in the light `radiance` (one per surfel), the lower half
+/// of a map kept where its mesh is not a closed solid (`mesh_flags`): the tree's leaf
+/// functions, for the cache's coding and the bounces' node sums alike.
+pub fn intensity_of<'a>(
+    surfels: &'a [Surfel],
+    mesh_flags: &'a [u32],
+    radiance: &'a [SurfelRadiance],
+) -> impl Fn(u32) -> SparseHaar<Rgb> + Sync + 'a {
+    move |i| {
+        let s = &surfels[i as usize];
+        let back = mesh_flags[s.mesh as usize] & SOLID == 0;
+        intensity_map(s, &radiance[i as usize], back)
+    }
 }
 
 /// A surfel's radiant intensity A |n·ω| L(ω) as a map at its own resolution (the diffuse

@@ -36,15 +36,15 @@
 
 use super::bsdf_operator::SurfelOperator;
 use super::receivers::Receivers;
-use super::transport::{expanded_nodes, slot_values, LinkScratch, ReceiverLinks, SlotIndex, Slots};
+use super::transport::{read_nodes, slot_values, LinkScratch, ReceiverLinks, SlotIndex, Slots};
 use super::view_tree::{receiver_groups, GROUP_SURFELS, VIEW_EPS};
 use crate::accel::Accel;
-use crate::bake::coding::{encode_some, CodedTree};
-use crate::bake::pipeline::{intensity_map, Baked, Progress, SurfelRadiance};
+use crate::bake::coding::{encode, node_sums, CodedTree};
+use crate::bake::pipeline::{intensity_of, Baked, Progress, SurfelRadiance};
 use crate::bake::plan::map_levels;
 use crate::bake::surfels::Surfel;
 use crate::bsdf::Bsdf;
-use crate::cache::store::{records_of, NodeRecord, SurfelRecord, SOLID};
+use crate::cache::store::{records_of, NodeRecord, SurfelRecord};
 use crate::error::{Error, Result};
 use crate::gather::cut::splat_cut;
 use crate::gather::fpbgi::{cluster_cut, member_buffer, Cluster, ClusterReceivers};
@@ -384,7 +384,7 @@ pub fn add_bounces(
     transport.read_slots = index.len();
     report.transport = transport;
     let regathered = &groups[kept.len()..];
-    let expanded = expanded_nodes(&slots, &index, &baked.tree, baked.coded.split_level);
+    let read = read_nodes(&slots, &index, &baked.tree);
 
     let mut total_energy = energy(baked, &reflected_direct);
     // What the receivers gathered over the bounces, summed before their BSDFs: the bounces'
@@ -401,7 +401,7 @@ pub fn add_bounces(
         // made: the heap reuses its memory (fresh pages are cleared by the kernel).
         {
             let sent = std::mem::take(&mut emit);
-            fill_slots(baked, (&slots, &index, &expanded), &sent, &mut values);
+            fill_slots(baked, (&slots, &index, &read), &sent, &mut values);
         }
         let (mut light, incident) = gather.evaluate(&kept, regathered, &index, &values, cancel)?;
         receivers.blend(&mut light, tau);
@@ -518,52 +518,29 @@ fn without_emission(r: &SurfelRadiance, emitted: Rgb, n: Vec3, tau: f32) -> Surf
     }
 }
 
-/// Fill `values` with what every read slot of `index` holds in the light `sent`: the tree
-/// coded for it (the maps of the `expanded` nodes, see [`expanded_nodes`]), then the slots.
+/// Fill `values` with what every read slot of `index` holds in the light `sent`: the exact
+/// intensity of the inner nodes whose texels are `read` ([`node_sums`]), then the slots.
 fn fill_slots(
     baked: &Baked,
-    (slots, index, expanded): (&Slots, &SlotIndex, &[bool]),
+    (slots, index, read): (&Slots, &SlotIndex, &[bool]),
     sent: &[SurfelRadiance],
     values: &mut Vec<Rgb>,
 ) {
-    let coded = coded_light(baked, sent, &|j| expanded[j as usize]);
-    let tree = (&coded, expanded);
-    slot_values(
-        slots,
-        index,
-        &baked.tree,
-        &baked.surfels,
-        sent,
-        tree,
-        values,
-    );
+    let leaf = intensity_of(&baked.surfels, &baked.mesh_flags, sent);
+    let sums = node_sums(&baked.tree, &leaf, &|j| read[j as usize]);
+    let tree = (&baked.tree, &sums[..]);
+    slot_values(slots, index, tree, &baked.surfels, sent, values);
 }
 
 /// The tree of `baked` coded for its surfels' radiance.
 fn coded_for(baked: &Baked) -> CodedTree<Rgb> {
-    coded_light(baked, &baked.radiance, &|_| true)
-}
-
-/// The tree of `baked` coded for the surfels sending `light`, the maps of only the nodes
-/// `j` for which `stores(j)` holds stored (see [`encode_some`]).
-fn coded_light(
-    baked: &Baked,
-    light: &[SurfelRadiance],
-    stores: &(dyn Fn(u32) -> bool + Sync),
-) -> CodedTree<Rgb> {
-    let levels = baked.plan.map_levels;
-    let leaf = |i: u32| {
-        let s = &baked.surfels[i as usize];
-        let back = baked.mesh_flags[s.mesh as usize] & SOLID == 0;
-        intensity_map(s, &light[i as usize], back)
-    };
-    encode_some(
+    let leaf = intensity_of(&baked.surfels, &baked.mesh_flags, &baked.radiance);
+    encode(
         &baked.tree,
         &leaf,
-        levels,
+        baked.plan.map_levels,
         baked.coded.split_level,
         baked.settings.tau,
-        stores,
     )
 }
 
@@ -1077,9 +1054,9 @@ mod tests {
             .zip(&baked.surfels)
             .map(|((r, e), s)| without_emission(r, *e, s.n, 0.0))
             .collect();
-        let expanded = expanded_nodes(&slots, &index, &baked.tree, baked.coded.split_level);
+        let read = read_nodes(&slots, &index, &baked.tree);
         let mut values = Vec::new();
-        fill_slots(&baked, (&slots, &index, &expanded), &sent, &mut values);
+        fill_slots(&baked, (&slots, &index, &read), &sent, &mut values);
         let (mut diffuse, mut directional) = (0, 0);
         for (mb, mut links) in recorded {
             links.compact(&index);

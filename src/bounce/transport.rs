@@ -13,12 +13,13 @@
 //!   resolution. A lookup becomes one or
 //!   three (slot, factor) terms. Only slots some receiver reads are kept (a bitmap and its
 //!   ranks), and each bounce fills them once: surfels' maps decoded once, S summed bottom-up,
-//!   and node intensities decoded from the tree coded for the bounce's light at the bake's
-//!   threshold, as a render of that light would read them: only the nodes some receiver
-//!   reads, and those they are rebuilt from, are coded and decoded ([`expanded_nodes`]; a
-//!   fifth of the inner nodes in the Cornell-class scenes). (Exact, unthresholded node sums
-//!   put the conductor furnace at ρ = 0.99 at +2.22 % against the path tracer, past its 2 %
-//!   bound, where the coded tree gives +1.21 %: tests/furnace.rs.)
+//!   and node intensities summed exactly from their surfels' maps (only for the nodes some
+//!   receiver reads, [`read_nodes`]; a fifth of the inner nodes in the Cornell-class
+//!   scenes). Not the tree coded at the cache's threshold, which a render of that light
+//!   would read: rebuilding nodes below the split level from their ancestors' G and H cost
+//!   a third of a later bounce, and the conductor furnaces (tests/furnace.rs) measured
+//!   +0.16 %, −0.10 %, +0.46 % with the exact sums against +0.16 %, −0.15 %, +0.40 % with
+//!   the coded tree.
 //! - **Receivers.** A diffuse receiver's outgoing radiance is ρ ⊙ Σ w·L(slot): the cosine
 //!   convolution is folded into the weights and the terms merged by slot. A directional one
 //!   keeps its pixels (Σ w·L(slot) each), which its BSDF operator turns into its map.
@@ -28,13 +29,12 @@
 //! - **Determinism.** Terms are sorted by slot (and pixel) and summed in that order; which
 //!   groups are kept depends on their sizes alone, never on threads.
 
-use crate::bake::coding::CodedTree;
 use crate::bake::pipeline::SurfelRadiance;
 use crate::bake::tree::{SurfelTree, NONE};
 use crate::bsdf::Diffuse;
 use crate::gather::lookup::Lookup;
 use crate::gather::microbuffer::{group_by_pixel, Microbuffer};
-use crate::haar::{texel_at, Haar2d};
+use crate::haar::{texel_at, SparseHaar};
 use crate::spectrum::Rgb;
 use glam::Vec3;
 use rayon::prelude::*;
@@ -423,18 +423,12 @@ impl ReceiverLinks {
     }
 }
 
-/// Per node of `tree` (coded at split level `split_level`), whether a bounce expands its
-/// coded intensity: the inner nodes some of whose texels a receiver reads, and the ancestors
-/// those below the split level are rebuilt from (spec §6.5). The bounces code only these
-/// nodes' maps ([`crate::bake::coding::encode_some`]).
-pub fn expanded_nodes(
-    slots: &Slots,
-    index: &SlotIndex,
-    tree: &SurfelTree,
-    split_level: u32,
-) -> Vec<bool> {
+/// Per node of `tree`, whether a receiver reads some texel of its intensity: the inner
+/// nodes whose exact intensity a bounce sums ([`crate::bake::coding::node_sums`]; a fifth of
+/// the inner nodes in the Cornell-class scenes).
+pub fn read_nodes(slots: &Slots, index: &SlotIndex, tree: &SurfelTree) -> Vec<bool> {
     let side = 1u32 << slots.tree_levels;
-    let mut expanded: Vec<bool> = (0..tree.nodes.len())
+    (0..tree.nodes.len())
         .into_par_iter()
         .map(|j| {
             !tree.nodes[j].is_leaf()
@@ -443,29 +437,19 @@ pub fn expanded_nodes(
                     .next()
                     .is_some()
         })
-        .collect();
-    // Children come after their parents.
-    for j in (0..tree.nodes.len()).rev() {
-        let node = &tree.nodes[j];
-        if expanded[j] && node.level > split_level && node.parent != NONE {
-            expanded[node.parent as usize] = true;
-        }
-    }
-    expanded
+        .collect()
 }
 
 /// What every read slot holds in the light `sent` (per surfel, reflected light only), in
 /// compact slot order, into `values` (whose memory is reused from bounce to bounce). Node
-/// intensities are read from `coded`, the tree coded for `sent` at the bake's threshold (at
-/// least for the `expanded` nodes, see [`expanded_nodes`]): what a render of a cache of that
-/// light would read.
+/// intensities are read from `sums`, the exact intensity G of every node of `tree` whose
+/// texels are read ([`read_nodes`]).
 pub fn slot_values(
     slots: &Slots,
     index: &SlotIndex,
-    tree: &SurfelTree,
+    (tree, sums): (&SurfelTree, &[Option<SparseHaar<Rgb>>]),
     surfels: &[crate::bake::surfels::Surfel],
     sent: &[SurfelRadiance],
-    (coded, expanded): (&CodedTree<Rgb>, &[bool]),
     values: &mut Vec<Rgb>,
 ) {
     values.clear();
@@ -503,16 +487,13 @@ pub fn slot_values(
             }
         });
     // Then inner nodes, in node order: S = Σ A L n over the diffuse surfels below (exact, as
-    // the render sums it), and the texels of the coded intensity.
+    // the render sums it), and the read texels of the intensity G.
     let s_sums = normal_sums(tree, surfels, sent);
-    let mut per_node: Vec<NodeValues> = Vec::new();
     let side = 1u32 << slots.tree_levels;
-    for_each_coded_intensity(
-        tree,
-        coded,
-        expanded,
-        |j, intensity| {
-            let j = j as usize;
+    let per_node: Vec<(u32, Vec<Rgb>)> = (0..tree.nodes.len())
+        .into_par_iter()
+        .filter(|&j| !tree.nodes[j].is_leaf())
+        .map_init(Vec::new, |decoded, j| {
             let offsets: Vec<u32> = index.read_in(slots.node_base[j], 3 + side * side).collect();
             let s_read = offsets.iter().take_while(|&&k| k < 3).count();
             let mut read: Vec<Rgb> = offsets[..s_read]
@@ -520,14 +501,15 @@ pub fn slot_values(
                 .map(|&k| s_sums[j][k as usize])
                 .collect();
             let texels: Vec<u32> = offsets[s_read..].iter().map(|&k| k - 3).collect();
-            // `intensity` is there whenever one of its texels is read.
-            if let Some(g) = intensity.filter(|_| !texels.is_empty()) {
-                read.extend(read_texels(&texels, slots.tree_levels, g));
+            // `sums` holds G whenever one of its texels is read.
+            if let Some(g) = sums[j].as_ref().filter(|_| !texels.is_empty()) {
+                let levels = g.trimmed_texels_into(decoded);
+                read.extend(read_texels(&texels, slots.tree_levels, (decoded, levels)));
             }
             (!read.is_empty()).then_some((j as u32, read))
-        },
-        &mut per_node,
-    );
+        })
+        .flatten()
+        .collect();
     for (j, read) in per_node {
         let at = index.rank(slots.node_base[j as usize]);
         values[at..at + read.len()].copy_from_slice(&read);
@@ -580,89 +562,6 @@ fn normal_sums(
         };
     }
     sums
-}
-
-/// An inner node's read slots' values.
-type NodeValues = (u32, Vec<Rgb>);
-
-/// Call `read` with every inner node and the texels of its coded intensity G with their
-/// levels (G stored at or above the split level, rebuilt below it from the parent's G and H,
-/// spec §6.5), level by level; what it returns is collected into `out`. G is expanded only
-/// for the `expanded` nodes (see [`expanded_nodes`]); the others are passed over (`read`
-/// sees only S then). A stored G is decoded straight into a thread's texel buffer; only the
-/// parents of rebuilt nodes keep a dense decomposition, for the level below (dense maps of
-/// every expanded node, a few MB a level allocated anew in every bounce, cost a fifth of
-/// the bounces' time in clearing fresh pages).
-fn for_each_coded_intensity(
-    tree: &SurfelTree,
-    coded: &CodedTree<Rgb>,
-    expanded: &[bool],
-    read: impl Fn(u32, Option<(&[Rgb], u32)>) -> Option<NodeValues> + Sync,
-    out: &mut Vec<NodeValues>,
-) {
-    let rebuilt = |c: u32| {
-        c != NONE && expanded[c as usize] && tree.nodes[c as usize].level > coded.split_level
-    };
-    // Nodes are breadth-first: each level is a run, after its parents'.
-    let mut above: Vec<Option<Haar2d<Rgb>>> = Vec::new();
-    let mut above_start = 0usize;
-    let mut start = 0usize;
-    while start < tree.nodes.len() {
-        let level = tree.nodes[start].level;
-        let end = start
-            + tree.nodes[start..]
-                .iter()
-                .take_while(|n| n.level == level)
-                .count();
-        let maps: Vec<(Option<Haar2d<Rgb>>, Option<NodeValues>)> = (start..end)
-            .into_par_iter()
-            .map_init(Vec::new, |texels, j| {
-                let node = &tree.nodes[j];
-                if node.is_leaf() {
-                    return (None, None);
-                }
-                if !expanded[j] {
-                    return (None, read(j as u32, None));
-                }
-                let parent_of_rebuilt = node.children.iter().any(|&c| rebuilt(c));
-                let g = match &coded.nodes[j].g {
-                    Some(g) if !parent_of_rebuilt => {
-                        let levels = g.trimmed_texels_into(texels);
-                        return (None, read(j as u32, Some((texels, levels))));
-                    }
-                    Some(g) => g.to_dense_trimmed(),
-                    None => {
-                        let p = node.parent as usize;
-                        let parent = above
-                            .get(p.wrapping_sub(above_start))
-                            .and_then(Option::as_ref);
-                        let h = coded.nodes[p].h.as_ref();
-                        match (parent, h) {
-                            (Some(parent), Some(h)) => {
-                                let sign = if tree.nodes[p].children[0] == j as u32 {
-                                    1.0
-                                } else {
-                                    -1.0
-                                };
-                                Haar2d::combine(parent, 0.5, &h.to_dense_trimmed(), sign)
-                            }
-                            // The coder stores every node's G or its parent's H.
-                            _ => return (None, None),
-                        }
-                    }
-                };
-                let r = read(j as u32, Some((&g.inverse(), g.levels)));
-                (parent_of_rebuilt.then_some(g), r)
-            })
-            .collect();
-        above = Vec::with_capacity(maps.len());
-        for (g, r) in maps {
-            above.push(g);
-            out.extend(r);
-        }
-        above_start = start;
-        start = end;
-    }
 }
 
 #[cfg(test)]
