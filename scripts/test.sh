@@ -50,4 +50,31 @@ else
   unset WPBGI_USD_PYTHON
   echo "note: usd-core could not be installed; the USD pipeline example's test is skipped" >&2
 fi
+# The farm tests (tests/farm.rs): the Open Job Description CLI (openjd-cli, from PyPI) in a
+# virtual environment under target/, and a single-node Slurm (the Debian packages slurm-wlm and
+# munge; the test starts and stops its daemons, as root). Without them (no network, not root)
+# those tests say so and are skipped; everything else runs.
+FARM_PACKAGES="slurm-wlm munge"
+if [ "$(id -u)" -eq 0 ] && ! dpkg -s $FARM_PACKAGES >/dev/null 2>&1; then
+  { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $FARM_PACKAGES; } \
+    >/dev/null 2>&1 || echo "note: slurm-wlm and munge could not be installed; the Slurm test is skipped" >&2
+fi
+openjd_cli() {
+  local venv=target/farm-venv
+  if [ ! -x "$venv/bin/python" ]; then
+    python3 -m venv "$venv" >/dev/null 2>&1 ||
+      { $SUDO apt-get install -y -qq python3-venv >/dev/null 2>&1 && python3 -m venv "$venv"; } ||
+      return
+  fi
+  if [ -x "$venv/bin/openjd" ] || "$venv/bin/python" -m pip install -q openjd-cli >/dev/null 2>&1; then
+    echo "$PWD/$venv/bin/openjd"
+  fi
+}
+WPBGI_OPENJD="$(openjd_cli || true)"
+if [ -n "$WPBGI_OPENJD" ]; then
+  export WPBGI_OPENJD
+else
+  unset WPBGI_OPENJD
+  echo "note: openjd-cli could not be installed; the Open Job Description test is skipped" >&2
+fi
 cargo test --release --workspace --all-targets "$@"

@@ -172,7 +172,7 @@ pub struct ExrHeader {
 pub fn write_exr_channels(path: &Path, channels: &ExrChannels, options: &ExrOptions) -> Result<()> {
     use exr::prelude::{
         AnyChannel, AnyChannels, AttributeValue, Blocks, Compression, Encoding, FlatSamples,
-        IntegerBounds, Layer, LayerAttributes, LineOrder, SmallVec, Text, Vec2, WritableImage,
+        IntegerBounds, Layer, LayerAttributes, LineOrder, SmallVec, Text, Vec2,
     };
     let beauty = channels.beauty;
     let (w, h) = (beauty.width, beauty.height);
@@ -289,6 +289,19 @@ pub fn write_exr_channels(path: &Path, channels: &ExrChannels, options: &ExrOpti
     let mut image = exr::prelude::Image::from_layer(layer);
     image.attributes.display_window =
         IntegerBounds::new(Vec2(0, 0), Vec2(dx as usize, dy as usize));
+    write_flat_layer(path, image)
+}
+
+/// An image of one layer of flat channels, as wpbgi writes it: atomically, its blocks in
+/// increasing order (so that two writes of one image are the same bytes). The one writer of
+/// renders ([`write_exr_channels`]) and assembled tiles ([`crate::assemble`]).
+pub fn write_flat_layer(
+    path: &Path,
+    image: exr::prelude::Image<
+        exr::prelude::Layer<exr::prelude::AnyChannels<exr::prelude::FlatSamples>>,
+    >,
+) -> Result<()> {
+    use exr::prelude::WritableImage;
     write_atomically(path, |tmp| {
         image.write().to_file(tmp).map_err(|e| e.to_string())
     })

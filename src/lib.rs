@@ -24,6 +24,7 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod accel;
+pub mod assemble;
 pub mod atomic;
 pub mod bake;
 pub mod bounce;

@@ -62,6 +62,22 @@ fn round_trip() {
     assert_eq!(leftovers, 0);
 }
 
+/// A cache is mapped, not copied, and a new cache written over its path (as a bake writes:
+/// to a temporary file, then renamed) leaves a reader of the old one reading the old bytes
+/// to its end: the rule farm renders rely on (docs/farm.md).
+#[test]
+fn a_mapped_cache_survives_a_new_one_renamed_over_it() {
+    let (path, _, hash) = sample_file("replaced.wpc");
+    let old = Cache::read(&path, Some(hash)).expect("valid");
+    let new_hash = content_hash(&[b"another scene"]);
+    write(&path, new_hash, &[("plan", b"{}".as_slice())]).expect("writes");
+    for (name, data) in sections() {
+        assert_eq!(old.section(name).expect("still there"), data.as_slice());
+    }
+    let new = Cache::read(&path, Some(new_hash)).expect("the new one");
+    assert_eq!(new.section("plan").expect("plan"), b"{}");
+}
+
 #[test]
 fn every_truncation_is_reported_as_truncated() {
     let (path, bytes, _) = sample_file("trunc.wpc");

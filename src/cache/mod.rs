@@ -204,26 +204,70 @@ pub struct Cache {
     pub version: u32,
     pub hash: [u8; 16],
     pub sections: Vec<SectionInfo>,
-    bytes: Vec<u8>,
+    bytes: CacheBytes,
+}
+
+/// A cache's bytes: the file mapped read-only into memory, or bytes made in memory.
+#[derive(Debug)]
+pub enum CacheBytes {
+    /// Processes that map one file share its pages (the kernel's page cache): a node's
+    /// render tasks hold one copy of the cache between them, not one each.
+    Mapped(memmap2::Mmap),
+    Owned(Vec<u8>),
+}
+
+impl std::ops::Deref for CacheBytes {
+    type Target = [u8];
+
+    fn deref(&self) -> &[u8] {
+        match self {
+            CacheBytes::Mapped(m) => m,
+            CacheBytes::Owned(v) => v,
+        }
+    }
+}
+
+impl From<Vec<u8>> for CacheBytes {
+    fn from(bytes: Vec<u8>) -> Self {
+        CacheBytes::Owned(bytes)
+    }
 }
 
 impl Cache {
-    /// Read and validate `path`. With `expected_hash`, a file baked from other content or
+    /// Map and validate `path`. With `expected_hash`, a file baked from other content or
     /// settings is refused as stale.
+    ///
+    /// The file is memory-mapped read-only, so that every process reading one cache (a farm
+    /// node's render tasks) shares its pages. wpbgi never writes a cache in place: a bake
+    /// writes a temporary file and renames it over the old one, which leaves a mapped old
+    /// file intact until its readers close it. Another program truncating the file while it
+    /// is mapped would stop the reader (SIGBUS): caches are to be replaced, never rewritten
+    /// (docs/farm.md).
     pub fn read(path: &Path, expected_hash: Option<[u8; 16]>) -> Result<Cache, CacheError> {
-        let bytes = std::fs::read(path).map_err(|source| CacheError::Io {
+        let io = |source| CacheError::Io {
             path: path.to_path_buf(),
             source,
-        })?;
+        };
+        let file = std::fs::File::open(path).map_err(io)?;
+        let bytes = if file.metadata().map_err(io)?.len() == 0 {
+            // An empty file cannot be mapped; parse says what is wrong with it.
+            CacheBytes::Owned(Vec::new())
+        } else {
+            // SAFETY: the map is read-only and private to this process; its contents are
+            // checked (checksums, bounds) before any is used. The one hazard, another
+            // process truncating the file meanwhile, is excluded by the rule above.
+            CacheBytes::Mapped(unsafe { memmap2::Mmap::map(&file) }.map_err(io)?)
+        };
         Self::parse(path, bytes, expected_hash)
     }
 
     /// Validate `bytes` as the contents of `path`.
     pub fn parse(
         path: &Path,
-        bytes: Vec<u8>,
+        bytes: impl Into<CacheBytes>,
         expected_hash: Option<[u8; 16]>,
     ) -> Result<Cache, CacheError> {
+        let bytes = bytes.into();
         let p = || path.to_path_buf();
         let truncated = |what: &str| CacheError::Truncated {
             path: p(),

@@ -114,6 +114,52 @@ impl Default for FinalSettings {
 /// The image side of a tile.
 pub const TILE: u32 = 32;
 
+/// The crop (`[x0, y0, x1, y1]`, as [`FinalSettings::crop`]) of tile `[column, row]`
+/// (counted from 1, row 1 at the top) of a grid of `[columns, rows]` tiles over a
+/// `width × height` image: a farm's split of a frame. Column i spans ⌊(i − 1)·W/C⌋ to
+/// ⌊i·W/C⌋, each inner bound rounded down to a multiple of [`TILE`] where no tile comes
+/// out empty so (the render works in whole tiles of [`TILE`] pixels: a crop that cuts one
+/// renders all of it), and likewise for rows.
+pub fn grid_crop(
+    (width, height): (u32, u32),
+    [columns, rows]: [u32; 2],
+    [column, row]: [u32; 2],
+) -> Result<[u32; 4]> {
+    if columns == 0 || rows == 0 || columns > width || rows > height {
+        return Err(Error::InvalidSetting(format!(
+            "a {columns}x{rows} tile grid does not fit a {width}x{height} image (at least one \
+             pixel a tile each way)"
+        )));
+    }
+    if !(1..=columns).contains(&column) || !(1..=rows).contains(&row) {
+        return Err(Error::InvalidSetting(format!(
+            "tile {column},{row} is not in the {columns}x{rows} grid (columns 1 to {columns}, \
+             rows 1 to {rows})"
+        )));
+    }
+    let bound = |size: u32, parts: u32, i: u32| {
+        let plain = |i: u32| (u64::from(i) * u64::from(size) / u64::from(parts)) as u32;
+        let aligned = |i: u32| {
+            if i == parts {
+                size
+            } else {
+                plain(i) / TILE * TILE
+            }
+        };
+        if (0..parts).all(|k| aligned(k) < aligned(k + 1)) {
+            aligned(i)
+        } else {
+            plain(i)
+        }
+    };
+    Ok([
+        bound(width, columns, column - 1),
+        bound(height, rows, row - 1),
+        bound(width, columns, column),
+        bound(height, rows, row),
+    ])
+}
+
 /// Edge pixels take EDGE_SIDE² samples of a (0, 2)-sequence for primary hits and direct
 /// light (an emitter's edge needs them); one in each quarter of the pixel gathers.
 pub const EDGE_SIDE: u32 = 8;

@@ -20,6 +20,7 @@ macro_rules! detail {
     };
 }
 
+mod assemble_cmd;
 mod bake_cmd;
 mod compare_cmd;
 mod frames;
@@ -107,6 +108,10 @@ enum Command {
     /// the same wall time, and compare both with a reference (given, or path-traced here).
     /// Writes report.json, error_vs_time.svg and .png, and summary.md.
     Compare(compare_cmd::CompareArgs),
+    /// Stitch the tiles of one frame (`render --tile` or `--crop`, e.g. from a farm) into the
+    /// frame: the tiles' data windows say where each goes; a missing or overlapping tile is
+    /// refused. The frame equals a render of the whole image byte for byte (docs/farm.md).
+    Assemble(assemble_cmd::AssembleArgs),
 }
 
 #[derive(Args)]
@@ -600,6 +605,7 @@ fn main() {
         Command::Preview(a) => a.json,
         Command::Compare(a) => a.json,
         Command::Demo(a) => a.json,
+        Command::Assemble(a) => a.json,
     };
     let result = match cli.command {
         Command::Reference(a) => reference(a),
@@ -609,6 +615,7 @@ fn main() {
         Command::Render(a) => render_cmd::render_command(a),
         Command::Preview(a) => preview_cmd::preview_command(a),
         Command::Compare(a) => compare_cmd::compare_command(a),
+        Command::Assemble(a) => assemble_cmd::assemble_command(a),
     };
     if let Err(e) = result {
         let cancelled = matches!(e.downcast_ref(), Some(wpbgi::Error::Cancelled));

@@ -10,7 +10,7 @@ use wpbgi::image::{
     exr_capture_date, read_exr, write_exr_channels, ExrChannels, ExrCompression, ExrHeader,
     ExrOptions, ExrPrecision, Image,
 };
-use wpbgi::render::{render_final_cancellable, FinalOutput, FinalSettings, GatherMode};
+use wpbgi::render::{grid_crop, render_final_cancellable, FinalOutput, FinalSettings, GatherMode};
 use wpbgi::scene::{Camera, Scene};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -138,8 +138,16 @@ pub struct RenderArgs {
     /// Render only the pixels x0 ≤ x < x1, y0 ≤ y < y1 (x0,y0,x1,y1), each exactly as in
     /// the whole image: the EXR's data window is the crop, its display window the whole
     /// image, so crops assemble into the whole image byte for byte (tiles for a farm).
-    #[arg(long, value_parser = parse_crop)]
+    #[arg(long, value_parser = parse_crop, conflicts_with = "tile")]
     pub crop: Option<[u32; 4]>,
+    /// Render only tile COLUMN,ROW (from 1,1 at the top left) of the --tile-grid: the crop
+    /// of that part of the image (inner bounds on multiples of 32 pixels where the grid
+    /// allows). `wpbgi assemble` stitches the tiles of a frame (docs/farm.md).
+    #[arg(long, value_parser = parse_pair, requires = "tile_grid")]
+    pub tile: Option<[u32; 2]>,
+    /// The grid of tiles a frame is split into, COLUMNSxROWS (see --tile).
+    #[arg(long, value_parser = parse_grid, requires = "tile")]
+    pub tile_grid: Option<[u32; 2]>,
     /// Also write an 8-bit sRGB preview: PNG, or JPEG for a name ending in .jpg (see
     /// --exposure and --view).
     #[arg(long)]
@@ -165,15 +173,32 @@ pub struct RenderArgs {
     pub camera: CameraArgs,
 }
 
-/// `x0,y0,x1,y1` as four pixel bounds.
-fn parse_crop(s: &str) -> std::result::Result<[u32; 4], String> {
+/// `s` as `N` comma-separated numbers, or a message saying `expected`.
+fn parse_numbers<const N: usize>(s: &str, expected: &str) -> std::result::Result<[u32; N], String> {
+    let refused = || format!("expected {expected}, got \"{s}\"");
     let v: Vec<u32> = s
         .split(',')
         .map(|t| t.trim().parse::<u32>())
         .collect::<std::result::Result<_, _>>()
-        .map_err(|_| format!("expected x0,y0,x1,y1 (four pixel bounds), got \"{s}\""))?;
-    <[u32; 4]>::try_from(v)
-        .map_err(|_| format!("expected x0,y0,x1,y1 (four pixel bounds), got \"{s}\""))
+        .map_err(|_| refused())?;
+    <[u32; N]>::try_from(v).map_err(|_| refused())
+}
+
+/// `x0,y0,x1,y1` as four pixel bounds.
+fn parse_crop(s: &str) -> std::result::Result<[u32; 4], String> {
+    parse_numbers(s, "x0,y0,x1,y1 (four pixel bounds)")
+}
+
+/// `column,row` as two numbers.
+fn parse_pair(s: &str) -> std::result::Result<[u32; 2], String> {
+    parse_numbers(s, "COLUMN,ROW (two numbers from 1)")
+}
+
+/// `COLUMNSxROWS` as two numbers.
+fn parse_grid(s: &str) -> std::result::Result<[u32; 2], String> {
+    crate::parse_size(s)
+        .map(|(c, r)| [c, r])
+        .map_err(|_| format!("expected COLUMNSxROWS (e.g. 2x2), got \"{s}\""))
 }
 
 /// Render with a progress bar, stopping on Ctrl-C (see [`crate::interrupt`]).
@@ -342,7 +367,10 @@ fn render_frame(
         clusters: a.clusters,
         far_eps: a.far,
         seed: a.seed,
-        crop: a.crop,
+        crop: match (a.tile, a.tile_grid) {
+            (Some(tile), Some(grid)) => Some(grid_crop((camera.width, camera.height), grid, tile)?),
+            _ => a.crop,
+        },
         ..Default::default()
     };
     let reference = a.reference.as_deref().map(read_exr).transpose()?;
@@ -351,7 +379,7 @@ fn render_frame(
             .map_err(|m| anyhow::anyhow!("{}: {m} (set --size)", path.display()))?;
     }
     // A crop is compared with the same part of the reference.
-    let reference = match (reference, a.crop) {
+    let reference = match (reference, settings.crop) {
         (Some(r), Some([x0, y0, x1, y1])) => {
             r.crop(x0, y0, x1.saturating_sub(x0), y1.saturating_sub(y0))
         }
