@@ -356,21 +356,12 @@ fn slurm_renders_what_one_process_does_after_a_killed_task() {
     // Kill one render task's wpbgi once, while it runs (this test's: the other tests render
     // tiles too, from other caches).
     let deadline = Instant::now() + Duration::from_secs(300);
-    let task = format!(
-        "render .*--cache {}.*--tile 2,1",
-        regex_escaped(utf8(&out.join("scene.wpc")))
-    );
+    let cache = out.join("scene.wpc");
     let killed = loop {
-        let pids = Command::new("pgrep")
-            .args(["-f", &task])
-            .output()
-            .expect("pgrep");
-        let pid = String::from_utf8_lossy(&pids.stdout)
-            .lines()
-            .find_map(|l| l.trim().parse::<u32>().ok());
-        if let Some(pid) = pid {
-            let status = Command::new("kill").args(["-9", &pid.to_string()]).status();
-            break status.is_ok_and(|s| s.success());
+        if let Some(pid) = render_task(&cache, "2,1") {
+            // SAFETY: kill(2) on a process id read from /proc just now; at worst the process
+            // has ended and the call fails.
+            break unsafe { libc::kill(pid, libc::SIGKILL) } == 0;
         }
         assert!(
             Instant::now() < deadline,
@@ -408,14 +399,18 @@ fn slurm_renders_what_one_process_does_after_a_killed_task() {
     drop(cluster);
 }
 
-/// `s` matched literally by pgrep's extended regular expressions.
-fn regex_escaped(s: &str) -> String {
-    s.chars()
-        .flat_map(|c| {
-            let special = "\\.^$|?*+()[]{}".contains(c);
-            special.then_some('\\').into_iter().chain([c])
-        })
-        .collect()
+/// The process id of a running `wpbgi render` of tile `tile` from `cache`, read from
+/// /proc (no procps needed).
+fn render_task(cache: &Path, tile: &str) -> Option<i32> {
+    let want = ["render", "--cache", utf8(cache), "--tile", tile];
+    std::fs::read_dir("/proc").ok()?.flatten().find_map(|e| {
+        let pid: i32 = e.file_name().to_str()?.parse().ok()?;
+        let cmdline = std::fs::read(e.path().join("cmdline")).ok()?;
+        let args: Vec<&[u8]> = cmdline.split(|&b| b == 0).collect();
+        let has = |w: &str| args.contains(&w.as_bytes());
+        let is_wpbgi = args.first().is_some_and(|a| a.ends_with(b"wpbgi"));
+        (is_wpbgi && want.iter().all(|w| has(w))).then_some(pid)
+    })
 }
 
 fn which(name: &str) -> Option<PathBuf> {
