@@ -54,8 +54,12 @@ task=$(realpath "$(dirname "$0")/task.sh")
 export WPBGI_BIN="$wpbgi" WPBGI_SCENE="$scene" WPBGI_OUT="$out" WPBGI_FRAMES="$frame_list" \
   WPBGI_COLUMNS="$columns" WPBGI_ROWS="$rows" WPBGI_THREADS="$threads" \
   WPBGI_RETRIES="$retries" WPBGI_BAKE_ARGS="$bake_args" WPBGI_RENDER_ARGS="$render_args"
-# A requeued task appends to its log, so that the failed attempt's lines stay there.
-common=(--parsable --export=ALL --requeue --open-mode=append "$@")
+# A requeued task appends to its log, so that the failed attempt's lines stay there. With
+# --threads N each task asks Slurm for N CPUs; without, it takes Slurm's default and runs as
+# many threads as Slurm gives it (task.sh).
+common=(--parsable --export=ALL --requeue --open-mode=append)
+[ "$threads" != 0 ] && common+=(--cpus-per-task="$threads")
+common+=("$@")
 bake=$(sbatch "${common[@]}" --job-name=wpbgi-bake --output="$out/logs/bake-%j.log" \
   "$task" bake)
 render=$(sbatch "${common[@]}" --job-name=wpbgi-render --dependency="afterok:$bake" \

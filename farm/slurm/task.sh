@@ -6,8 +6,13 @@
 set -uo pipefail
 
 kind=$1
+# As many threads as CPUs Slurm gave the task, not every core of the node: --threads, else
+# --cpus-per-task, else the job's CPUs on this node ("4", or "4(x2)").
 threads=()
-[ "${WPBGI_THREADS:-0}" != 0 ] && threads=(--threads "$WPBGI_THREADS")
+n=${WPBGI_THREADS:-0}
+[ "$n" = 0 ] && n=${SLURM_CPUS_PER_TASK:-0}
+[ "$n" = 0 ] && n=${SLURM_JOB_CPUS_PER_NODE%%[^0-9]*}
+[ "${n:-0}" != 0 ] && threads=(--threads "$n")
 read -r -a frames <<< "$WPBGI_FRAMES"
 index=${SLURM_ARRAY_TASK_ID:-0}
 cache="$WPBGI_OUT/scene.wpc"
