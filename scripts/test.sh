@@ -77,4 +77,30 @@ else
   unset WPBGI_OPENJD
   echo "note: openjd-cli could not be installed; the Open Job Description test is skipped" >&2
 fi
+# Intel Open Image Denoise for `render --denoise` (tests/denoise.rs): the library that PyPI's
+# pyoidn wheel ships, in a virtual environment under target/, named by WPBGI_OIDN_LIBRARY.
+# Without it (no network) that test says so and is skipped.
+oidn_library() {
+  local venv=target/oidn-venv
+  if [ ! -x "$venv/bin/python" ]; then
+    python3 -m venv "$venv" >/dev/null 2>&1 ||
+      { $SUDO apt-get install -y -qq python3-venv >/dev/null 2>&1 && python3 -m venv "$venv"; } ||
+      return
+  fi
+  local lib
+  lib=$(ls "$venv"/lib/python3*/site-packages/pyoidn/oidn/lib/libOpenImageDenoise.so.2 2>/dev/null | head -1)
+  if [ -z "$lib" ] && "$venv/bin/python" -m pip install -q pyoidn >/dev/null 2>&1; then
+    lib=$(ls "$venv"/lib/python3*/site-packages/pyoidn/oidn/lib/libOpenImageDenoise.so.2 2>/dev/null | head -1)
+  fi
+  [ -n "$lib" ] && echo "$PWD/$lib"
+}
+if [ -z "${WPBGI_OIDN_LIBRARY:-}" ]; then
+  WPBGI_OIDN_LIBRARY="$(oidn_library || true)"
+fi
+if [ -n "$WPBGI_OIDN_LIBRARY" ]; then
+  export WPBGI_OIDN_LIBRARY
+else
+  unset WPBGI_OIDN_LIBRARY
+  echo "note: pyoidn could not be installed; the denoiser's test is skipped" >&2
+fi
 cargo test --release --workspace --all-targets "$@"

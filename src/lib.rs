@@ -31,6 +31,7 @@ pub mod bounce;
 pub mod bsdf;
 pub mod cache;
 pub mod compare;
+pub mod denoise;
 pub mod emitters;
 pub mod error;
 #[doc(hidden)]
