@@ -27,17 +27,19 @@ fi
 # Pixar's USD Python modules (usd-core, from PyPI) for the plugin's USD pipeline example, in a
 # virtual environment under target/. Without them (no network, say) that one test is skipped
 # with a message; everything else runs.
+# A Python virtual environment at $1 under target/ (python3-venv installed if missing).
+make_venv() {
+  [ -x "$1/bin/python" ] && return
+  python3 -m venv "$1" >/dev/null 2>&1 ||
+    { $SUDO apt-get install -y -qq python3-venv >/dev/null 2>&1 && python3 -m venv "$1"; }
+}
 usd_python() {
   if python3 -c "import pxr.Sdf" >/dev/null 2>&1; then
     echo python3
     return
   fi
   local venv=target/usd-venv
-  if [ ! -x "$venv/bin/python" ]; then
-    python3 -m venv "$venv" >/dev/null 2>&1 ||
-      { $SUDO apt-get install -y -qq python3-venv >/dev/null 2>&1 && python3 -m venv "$venv"; } ||
-      return
-  fi
+  make_venv "$venv" || return
   if "$venv/bin/python" -c "import pxr.Sdf" >/dev/null 2>&1 ||
     "$venv/bin/python" -m pip install -q usd-core >/dev/null 2>&1; then
     echo "$PWD/$venv/bin/python"
@@ -61,11 +63,7 @@ if [ "$(id -u)" -eq 0 ] && ! dpkg -s $FARM_PACKAGES >/dev/null 2>&1; then
 fi
 openjd_cli() {
   local venv=target/farm-venv
-  if [ ! -x "$venv/bin/python" ]; then
-    python3 -m venv "$venv" >/dev/null 2>&1 ||
-      { $SUDO apt-get install -y -qq python3-venv >/dev/null 2>&1 && python3 -m venv "$venv"; } ||
-      return
-  fi
+  make_venv "$venv" || return
   if [ -x "$venv/bin/openjd" ] || "$venv/bin/python" -m pip install -q openjd-cli >/dev/null 2>&1; then
     echo "$PWD/$venv/bin/openjd"
   fi
@@ -82,11 +80,7 @@ fi
 # Without it (no network) that test says so and is skipped.
 oidn_library() {
   local venv=target/oidn-venv
-  if [ ! -x "$venv/bin/python" ]; then
-    python3 -m venv "$venv" >/dev/null 2>&1 ||
-      { $SUDO apt-get install -y -qq python3-venv >/dev/null 2>&1 && python3 -m venv "$venv"; } ||
-      return
-  fi
+  make_venv "$venv" || return
   local lib
   lib=$(ls "$venv"/lib/python3*/site-packages/pyoidn/oidn/lib/libOpenImageDenoise.so.2 2>/dev/null | head -1)
   if [ -z "$lib" ] && "$venv/bin/python" -m pip install -q pyoidn >/dev/null 2>&1; then
