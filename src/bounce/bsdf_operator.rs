@@ -724,7 +724,12 @@ impl BsdfOperator {
     /// amplify any loss per bounce (a 0.17 % loss left a closed glossy room at ρ = 0.99 3 %
     /// dark), and would diverge on any gain. `tints` as in [`BsdfOperator::apply`].
     pub fn outgoing(&self, radiance: &[Rgb], tau_c: f32, tints: [Rgb; 2]) -> Vec<Rgb> {
-        let (mut out, _) = self.product(radiance, tau_c, tints);
+        // The product without its error bound (whose norm the texel basis would compute for
+        // nothing: this runs for every directional receiver in every bounce).
+        let mut out = match self.basis {
+            Basis::Texels => self.apply(radiance, tints),
+            Basis::Haar => self.product(radiance, tau_c, tints).0,
+        };
         for v in out.iter_mut() {
             *v = v.max(Rgb::ZERO);
         }
