@@ -188,6 +188,19 @@ impl Bsdf {
         }
     }
 
+    /// The surface's colour, as a denoiser's albedo guide takes it: the diffuse reflectance,
+    /// a conductor's reflectance at normal incidence, a dielectric's transmittance.
+    pub fn albedo_estimate(&self) -> Rgb {
+        match self {
+            Bsdf::Diffuse(d) => d.reflectance,
+            Bsdf::Conductor(c) => {
+                fresnel::fresnel_conductor(1.0, c.eta, c.k) * c.specular_reflectance
+            }
+            Bsdf::Dielectric(d) => d.specular_transmittance,
+            Bsdf::ThinDielectric(d) => d.specular_transmittance,
+        }
+    }
+
     /// The smaller microfacet roughness, or `None` for the diffuse BSDF.
     pub fn alpha(&self) -> Option<f32> {
         let d = match self {

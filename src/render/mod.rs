@@ -32,7 +32,7 @@ use crate::sampler::{sobol02, Sampler};
 use crate::scene::{Camera, Scene};
 use crate::spectrum::Rgb;
 use glam::{Vec2, Vec3};
-use primary::{trace_primary, CameraSample, PrimarySample, PrimarySettings, Receiver};
+use primary::{trace_primary, CameraSample, LightShare, PrimarySample, PrimarySettings, Receiver};
 use rayon::prelude::*;
 use sparse::SparsePlan;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
@@ -65,7 +65,8 @@ pub struct FinalSettings {
     pub adaptive_share: f32,
     /// BSDF importance: most splits of a base pixel.
     pub adaptive_levels: u32,
-    /// Emitter samples per rough hit.
+    /// Emitter samples per pixel at each rough hit, spread over a pixel's camera samples (as
+    /// many BSDF samples at glossy hits; see `LightShare`).
     pub light_samples: u32,
     /// Receivers smoother than this follow their specular chain.
     pub specular_below: f32,
@@ -561,6 +562,7 @@ fn primary_tile(
                     weight,
                     gather_weight: gathers.then(|| weight * block as f32),
                     quarter: (side > 1).then_some(quarter as u8),
+                    light: LightShare::of_sample(settings.light_samples, s, count),
                 };
                 let r = trace_primary(ctx, settings, cs, &mut sampler, &mut out.receivers);
                 sum.direct += r.direct;

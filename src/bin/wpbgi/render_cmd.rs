@@ -115,7 +115,8 @@ pub struct RenderArgs {
     /// on one surface, seen directly or through the same mirrors and glass: docs/render.md).
     #[arg(long)]
     pub dense: bool,
-    /// Emitter samples per shading point for direct light.
+    /// Emitter samples per pixel for direct light (at each rough hit; a pixel of many camera
+    /// samples, on an edge or a mirror, shares them out, at least two per sample).
     #[arg(long, default_value_t = 32)]
     pub light_samples: u32,
     /// Longest path in segments, as Mitsuba's max_depth (-1: everything the cache holds).
