@@ -4,6 +4,7 @@ pub mod cut;
 pub mod fpbgi;
 pub mod lookup;
 pub mod microbuffer;
+pub mod nearest;
 pub mod senders;
 
 pub use cut::{splat_cut, CutStats};

@@ -15,6 +15,7 @@
 
 use super::lookup::Lookup;
 use super::microbuffer::Sender;
+use super::nearest::NearestSurfel;
 use crate::bake::pipeline::{intensity_map, SurfelRadiance};
 use crate::bake::surfels::Surfel;
 use crate::bake::tree::NONE;
@@ -31,6 +32,7 @@ use crate::spectrum::Rgb;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::path::Path;
+use std::sync::OnceLock;
 
 /// Nodes whose normals lie within this angle (radians) of their axis are flat enough to
 /// have a plane, which tells the surface they lie on from occluders (30°).
@@ -116,6 +118,8 @@ pub struct Senders {
     /// Whether [`Senders::seen`] evaluates the radiance it looks up (see
     /// [`Senders::geometry_of`]).
     evaluates: bool,
+    /// The surfels by mesh, for [`Senders::lookup_at`]; built on its first call.
+    nearest: OnceLock<NearestSurfel>,
 }
 
 /// What a receiver sees of one node.
@@ -356,6 +360,7 @@ impl Senders {
             emitted,
             maps,
             evaluates: true,
+            nearest: OnceLock::new(),
         }
     }
 
@@ -570,44 +575,16 @@ impl Senders {
         w: Vec3,
         receiver_mesh: u32,
     ) -> Option<Lookup> {
-        let i = self.nearest_surfel(q, |r| r.mesh == mesh && Vec3::from(r.n).dot(ng) > 0.5)?;
+        let nearest = self.nearest.get_or_init(|| {
+            let positions: Vec<Vec3> = self.surfels.iter().map(|s| Vec3::from(s.p)).collect();
+            let meshes: Vec<u32> = self.surfels.iter().map(|s| s.mesh).collect();
+            NearestSurfel::new(&positions, &meshes)
+        });
+        let i = nearest.nearest(q, mesh, |i| {
+            Vec3::from(self.surfels[i as usize].n).dot(ng) > 0.5
+        })?;
         let cos = Vec3::from(self.surfels[i as usize].n).dot(w);
         Some(self.surfel_lookup(i, w, cos, receiver_mesh))
-    }
-
-    /// The surfel nearest `q` among those `accept` takes (branch and bound over the nodes'
-    /// bounding spheres).
-    pub fn nearest_surfel(&self, q: Vec3, accept: impl Fn(&SurfelRecord) -> bool) -> Option<u32> {
-        let mut best = (f32::INFINITY, None);
-        let mut stack = if self.nodes.is_empty() {
-            vec![]
-        } else {
-            vec![0u32]
-        };
-        while let Some(j) = stack.pop() {
-            let node = &self.nodes[j as usize];
-            if ((node.center - q).length() - node.radius).max(0.0) >= best.0 {
-                continue;
-            }
-            if node.is_leaf() {
-                let s = &self.surfels[node.surfel as usize];
-                let d = (Vec3::from(s.p) - q).length();
-                if d < best.0 && accept(s) {
-                    best = (d, Some(node.surfel));
-                }
-                continue;
-            }
-            // The nearer child last, so that it is searched first.
-            let [a, b] = node.children;
-            let d = |c: u32| (self.nodes[c as usize].center - q).length_squared();
-            let (near, far) = if b != NONE && d(b) < d(a) {
-                (b, a)
-            } else {
-                (a, b)
-            };
-            stack.extend([far, near].into_iter().filter(|&c| c != NONE));
-        }
-        best.1
     }
 
     /// Node `j` as a microbuffer records it, at `offset` from the receiver, seen as `seen`.
