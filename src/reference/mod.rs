@@ -30,6 +30,7 @@ use crate::error::{Error, Result};
 use crate::image::Image;
 use crate::sampler::Sampler;
 use crate::scene::{Camera, Scene};
+use crate::spectrum::Rgb;
 use glam::{DVec3, Vec2};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -50,6 +51,8 @@ pub struct RenderSettings {
     pub time_limit: Option<Duration>,
     /// The light transport to estimate.
     pub transport: Transport,
+    /// Also average what each camera sample hits first ([`FirstHits`]), for a denoiser.
+    pub first_hits: bool,
 }
 
 /// Which paths the path tracer sums.
@@ -73,6 +76,7 @@ impl Default for RenderSettings {
             seed: 0,
             time_limit: None,
             transport: Transport::Full,
+            first_hits: false,
         }
     }
 }
@@ -85,6 +89,43 @@ pub struct RenderOutput {
     pub variance: Image,
     pub spp: u32,
     pub seconds: f64,
+    /// With [`RenderSettings::first_hits`]: what the same camera samples hit first.
+    pub first_hits: Option<FirstHits>,
+}
+
+/// What a render's camera samples hit first, averaged per pixel over the same samples as its
+/// mean: the albedo and normal that guide a denoiser, and the emission seen directly (the
+/// environment's where the ray escapes), which a denoiser must not blur (the emitters' edges).
+#[derive(Clone, Debug)]
+pub struct FirstHits {
+    pub albedo: Image,
+    pub normal: Image,
+    pub emission: Image,
+    /// The seconds they took (one more closest-hit ray per camera sample), part of the
+    /// render's.
+    pub seconds: f64,
+}
+
+impl RenderOutput {
+    /// The mean denoised by Intel Open Image Denoise ([`crate::denoise`], on `threads`
+    /// threads): the light after the first hit, guided by the first hit's albedo and
+    /// normal, with the emission seen directly added back as rendered (as `render
+    /// --denoise` keeps emission and direct light). `None` without [`FirstHits`].
+    pub fn denoised(&self, threads: usize) -> Option<Result<Image>> {
+        let hits = self.first_hits.as_ref()?;
+        let mut beyond = self.mean.clone();
+        for (b, e) in beyond.pixels.iter_mut().zip(&hits.emission.pixels) {
+            *b = (*b - *e).max(Rgb::ZERO);
+        }
+        Some(
+            crate::denoise::denoise(&beyond, &hits.albedo, &hits.normal, threads).map(|mut d| {
+                for (p, e) in d.pixels.iter_mut().zip(&hits.emission.pixels) {
+                    *p += *e;
+                }
+                d
+            }),
+        )
+    }
 }
 
 /// Everything the integrator needs, built once per render.
@@ -118,6 +159,77 @@ pub fn render(
     settings: &RenderSettings,
     progress: &(dyn Fn(f32) + Sync),
 ) -> Result<RenderOutput> {
+    check(scene, camera, settings)?;
+    let start = Instant::now();
+    let ctx = RenderContext::new(scene, settings);
+    let mut acc = Accumulation::new(camera, settings.first_hits);
+    // A time-limited render takes passes of `spp` samples until the time is up and reports
+    // progress against the time; otherwise one pass, with progress per finished row.
+    match settings.time_limit {
+        None => acc.pass(&ctx, camera, settings.seed, settings.spp, Some(progress)),
+        Some(limit) => loop {
+            acc.pass(&ctx, camera, settings.seed, settings.spp, None);
+            let elapsed = start.elapsed();
+            progress((elapsed.as_secs_f32() / limit.as_secs_f32()).min(1.0));
+            if elapsed >= limit || acc.taken as u64 + settings.spp as u64 > u32::MAX as u64 {
+                break;
+            }
+        },
+    }
+    Ok(acc.output(start.elapsed().as_secs_f64()))
+}
+
+/// Render progressively for about `budget` of path tracing: passes that double the samples
+/// per pixel (1, 2, 4, …; the last one shortened to end near the budget), handing
+/// `checkpoint` the image after each, as [`render`] would have made it at that many samples.
+/// The budget counts the path tracing; a checkpoint's `seconds` count that and its first hits
+/// (`FirstHits::seconds`), not the time `checkpoint` itself takes. `settings.spp` and
+/// `time_limit` are not read.
+pub fn render_progressive(
+    scene: &Scene,
+    camera: &Camera,
+    settings: &RenderSettings,
+    budget: Duration,
+    progress: &(dyn Fn(f32) + Sync),
+    checkpoint: &mut dyn FnMut(RenderOutput) -> Result<()>,
+) -> Result<()> {
+    check(
+        scene,
+        camera,
+        &RenderSettings {
+            spp: 1,
+            ..settings.clone()
+        },
+    )?;
+    let ctx = RenderContext::new(scene, settings);
+    let mut acc = Accumulation::new(camera, settings.first_hits);
+    // Seconds of path tracing, and of everything (the first hits too).
+    let (mut traced, mut spent) = (0.0f64, 0.0f64);
+    let budget = budget.as_secs_f64();
+    loop {
+        let mut count = acc.taken.max(1);
+        // Seconds per sample per pixel so far: shorten the last pass to end near the budget.
+        if acc.taken > 0 {
+            let rate = traced / f64::from(acc.taken);
+            let left = ((budget - traced) / rate).floor();
+            count = count.min(left.max(1.0) as u32);
+        }
+        let start = Instant::now();
+        let hits_before = acc.hits_seconds;
+        acc.pass(&ctx, camera, settings.seed, count, None);
+        let seconds = start.elapsed().as_secs_f64();
+        spent += seconds;
+        traced += seconds - (acc.hits_seconds - hits_before);
+        progress((traced / budget).min(1.0) as f32);
+        checkpoint(acc.output(spent))?;
+        if traced >= budget || acc.taken as u64 * 2 > u32::MAX as u64 {
+            return Ok(());
+        }
+    }
+}
+
+/// The settings and camera a render refuses.
+fn check(scene: &Scene, camera: &Camera, settings: &RenderSettings) -> Result<()> {
     if settings.spp == 0 {
         return Err(Error::InvalidSetting("spp must be at least 1".into()));
     }
@@ -132,70 +244,144 @@ pub fn render(
             "max depth must be -1 (unlimited) or at least 1".into(),
         ));
     }
-    scene.check_renderable()?;
-    let start = Instant::now();
-    let ctx = RenderContext::new(scene, settings);
-    let (w, h) = (camera.width as usize, camera.height as usize);
-    // Per-pixel running sums in f64: the order of addition is fixed per pixel.
-    let mut sum = vec![DVec3::ZERO; w * h];
-    let mut sum2 = vec![DVec3::ZERO; w * h];
-    let mut taken = 0u32;
-    let done_rows = AtomicU64::new(0);
-    // A time-limited render takes passes of `spp` samples until the time is up and reports
-    // progress against the time; otherwise one pass, with progress per finished row.
-    let row_progress = settings.time_limit.is_none();
-    let pass_spp = settings.spp;
-    loop {
-        let first = taken;
-        sum.par_chunks_mut(w)
-            .zip(sum2.par_chunks_mut(w))
+    scene.check_renderable()
+}
+
+/// Per-pixel sums of the samples taken so far, in f64: the order of addition is fixed per
+/// pixel, so the image is the same for any thread count.
+struct Accumulation {
+    width: u32,
+    height: u32,
+    sum: Vec<DVec3>,
+    sum2: Vec<DVec3>,
+    /// With first hits: per pixel the sums of albedo, normal and emission.
+    hits: Option<Vec<[DVec3; 3]>>,
+    /// Seconds spent on the first hits.
+    hits_seconds: f64,
+    taken: u32,
+}
+
+impl Accumulation {
+    fn new(camera: &Camera, first_hits: bool) -> Self {
+        let n = camera.width as usize * camera.height as usize;
+        Accumulation {
+            width: camera.width,
+            height: camera.height,
+            sum: vec![DVec3::ZERO; n],
+            sum2: vec![DVec3::ZERO; n],
+            hits: first_hits.then(|| vec![[DVec3::ZERO; 3]; n]),
+            hits_seconds: 0.0,
+            taken: 0,
+        }
+    }
+
+    /// Take `count` more samples of every pixel; `row_progress`: report the fraction of rows
+    /// done.
+    fn pass(
+        &mut self,
+        ctx: &RenderContext,
+        camera: &Camera,
+        seed: u64,
+        count: u32,
+        row_progress: Option<&(dyn Fn(f32) + Sync)>,
+    ) {
+        let (w, h) = (self.width as usize, self.height as usize);
+        let first = self.taken;
+        let done_rows = AtomicU64::new(0);
+        self.sum
+            .par_chunks_mut(w)
+            .zip(self.sum2.par_chunks_mut(w))
             .enumerate()
             .for_each(|(y, (row, row2))| {
                 for x in 0..w {
                     let pixel = (y * w + x) as u64;
-                    for s in first..first + pass_spp {
-                        let mut sampler = Sampler::new(settings.seed, pixel, s as u64);
+                    for s in first..first + count {
+                        let mut sampler = Sampler::new(seed, pixel, s as u64);
                         let film = Vec2::new(x as f32, y as f32) + sampler.next_2d();
                         let (o, d) = camera.generate_ray(film);
-                        let l = radiance(&ctx, o, d, &mut sampler).as_dvec3();
+                        let l = radiance(ctx, o, d, &mut sampler).as_dvec3();
                         row[x] += l;
                         row2[x] += l * l;
                     }
                 }
-                if row_progress {
+                if let Some(progress) = row_progress {
                     let n = done_rows.fetch_add(1, Ordering::Relaxed) + 1;
                     progress(n as f32 / h as f32);
                 }
             });
-        taken += pass_spp;
-        match settings.time_limit {
-            Some(limit) => {
-                let elapsed = start.elapsed();
-                progress((elapsed.as_secs_f32() / limit.as_secs_f32()).min(1.0));
-                if elapsed >= limit || taken as u64 + pass_spp as u64 > u32::MAX as u64 {
-                    break;
+        if let Some(hits) = &mut self.hits {
+            let start = Instant::now();
+            hits.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
+                for (x, sums) in row.iter_mut().enumerate() {
+                    let pixel = (y * w + x) as u64;
+                    for s in first..first + count {
+                        add_first_hit(ctx, camera, seed, (x, y, pixel), s, sums);
+                    }
                 }
+            });
+            self.hits_seconds += start.elapsed().as_secs_f64();
+        }
+        self.taken += count;
+    }
+
+    /// The render so far, `seconds` its time.
+    fn output(&self, seconds: f64) -> RenderOutput {
+        let n = f64::from(self.taken.max(1));
+        let image = |f: &dyn Fn(usize) -> DVec3| Image {
+            width: self.width,
+            height: self.height,
+            pixels: (0..self.sum.len()).map(|i| f(i).as_vec3()).collect(),
+        };
+        let mean = image(&|i| self.sum[i] / n);
+        let variance = image(&|i| {
+            if self.taken > 1 {
+                ((self.sum2[i] - self.sum[i] * (self.sum[i] / n)) / (n - 1.0)).max(DVec3::ZERO)
+            } else {
+                DVec3::ZERO
             }
-            None => break,
+        });
+        let first_hits = self.hits.as_ref().map(|hits| FirstHits {
+            albedo: image(&|i| hits[i][0] / n),
+            normal: image(&|i| hits[i][1].normalize_or_zero()),
+            emission: image(&|i| hits[i][2] / n),
+            seconds: self.hits_seconds,
+        });
+        RenderOutput {
+            mean,
+            variance,
+            spp: self.taken,
+            seconds,
+            first_hits,
         }
     }
-    let n = taken as f64;
-    let mut mean = Image::new(camera.width, camera.height);
-    let mut variance = Image::new(camera.width, camera.height);
-    for i in 0..w * h {
-        let m = sum[i] / n;
-        mean.pixels[i] = m.as_vec3();
-        let v = if taken > 1 {
-            ((sum2[i] - sum[i] * m) / (n - 1.0)).max(DVec3::ZERO)
-        } else {
-            DVec3::ZERO
-        };
-        variance.pixels[i] = v.as_vec3();
-    }
-    Ok(RenderOutput {
-        mean,
-        variance,
-        spp: taken,
-        seconds: start.elapsed().as_secs_f64(),
-    })
+}
+
+/// Add what camera sample `s` of pixel (`x`, `y`) (index `pixel`) hits first to `sums`
+/// (albedo, normal, emission), keyed as the render keys its samples.
+fn add_first_hit(
+    ctx: &RenderContext,
+    camera: &Camera,
+    seed: u64,
+    (x, y, pixel): (usize, usize, u64),
+    s: u32,
+    sums: &mut [DVec3; 3],
+) {
+    let mut sampler = Sampler::new(seed, pixel, s as u64);
+    let (o, d) = camera.generate_ray(Vec2::new(x as f32, y as f32) + sampler.next_2d());
+    let Some(hit) = intersect(ctx, o, d) else {
+        if let Some(env) = &ctx.scene.environment {
+            sums[2] += env.radiance(d).as_dvec3();
+        }
+        return;
+    };
+    let material = &ctx.scene.materials[ctx.scene.meshes[hit.mesh as usize].material];
+    let front = hit.frame.to_local(-d).z > 0.0;
+    sums[0] += material
+        .bsdf_at(&ctx.scene.textures, hit.uv)
+        .albedo_estimate()
+        .as_dvec3();
+    sums[1] += hit.frame.n.as_dvec3();
+    sums[2] += material
+        .emission_at(&ctx.scene.textures, hit.uv, front)
+        .as_dvec3();
 }

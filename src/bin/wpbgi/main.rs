@@ -104,9 +104,10 @@ enum Command {
     /// surfaces with radiance cache splatting, a view-dependent cut of the tree per frame.
     /// Headless to a PNG or EXR, or in a window with an orbit camera.
     Preview(preview_cmd::PreviewArgs),
-    /// Measure error against run time: bake and render at each quality preset, path-trace for
-    /// the same wall time, and compare both with a reference (given, or path-traced here).
-    /// Writes report.json, error_vs_time.svg and .png, and summary.md.
+    /// Measure error against run time: bake and render at each quality preset, against the
+    /// path tracer's curve (1, 2, 4, … spp up to the longest bake + render) raw and denoised
+    /// by OIDN, all held to one reference (given, or path-traced here). Writes report.json,
+    /// error_vs_time.svg and .png, and summary.md.
     Compare(compare_cmd::CompareArgs),
     /// Stitch the tiles of one frame (`render --tile` or `--crop`, e.g. from a farm) into the
     /// frame: the tiles' data windows say where each goes; a missing or overlapping tile is
@@ -158,9 +159,17 @@ struct ReferenceArgs {
     /// Seed of the random streams.
     #[arg(long, default_value_t = 0)]
     seed: u64,
-    /// Also write the per-pixel variance of a one-sample estimate (OpenEXR).
+    /// Also write the per-pixel variance of a one-sample estimate (OpenEXR; of the raw
+    /// render with --denoise).
     #[arg(long)]
     variance: Option<PathBuf>,
+    /// Denoise with Intel Open Image Denoise (its RT filter, HDR): the light after the first
+    /// hit, guided by the first hit's albedo and normal; the emission the camera sees
+    /// directly is kept as rendered. The library is loaded at run time: `pip install pyoidn`
+    /// and set WPBGI_OIDN_LIBRARY to its pyoidn/oidn/lib/libOpenImageDenoise.so.2
+    /// (docs/render.md).
+    #[arg(long)]
+    denoise: bool,
     /// Also write an 8-bit sRGB preview: PNG, or JPEG for a name ending in .jpg (see
     /// --exposure and --view).
     #[arg(long)]
@@ -466,9 +475,15 @@ fn reference(a: ReferenceArgs) -> Result<()> {
             rr_depth: a.rr_depth,
             seed: a.seed,
             time_limit,
+            first_hits: a.denoise,
             ..Default::default()
         };
-        let out = run_render(&scene, &camera, &settings)?;
+        let mut out = run_render(&scene, &camera, &settings)?;
+        if let Some(denoised) = out.denoised(rayon::current_num_threads()) {
+            let t = std::time::Instant::now();
+            out.mean = denoised?;
+            out.seconds += t.elapsed().as_secs_f64();
+        }
         write_exr(output, &out.mean)?;
         if let Some(p) = variance(time)? {
             write_exr(&p, &out.variance)?;
@@ -493,6 +508,7 @@ fn reference(a: ReferenceArgs) -> Result<()> {
             "size": [camera.width, camera.height],
             "spp": out.spp,
             "seconds": out.seconds,
+            "denoised": a.denoise,
         }));
     }
     if a.json {
