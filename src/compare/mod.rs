@@ -1,6 +1,9 @@
 //! Error against run time (DESIGN.md §9): the cache's bake and final render at several quality
-//! presets, and the path tracer given the same wall time as each, all measured against one
-//! reference image.
+//! presets, one point each, against the path tracer's whole curve (one progressive render, its
+//! image at 1, 2, 4, … samples per pixel, up to the longest cache run's time) and the same
+//! curve denoised by Intel Open Image Denoise with the guides a user would give it (the
+//! first hit's albedo and normal): what a user would pick instead of baking. All are measured
+//! against one reference image.
 //!
 //! Each run records its bake and render seconds, its peak memory (the process's resident set,
 //! reset before the run where the OS allows, see [`memory`]), and its error against the
@@ -11,6 +14,7 @@
 
 pub mod memory;
 mod plot;
+pub mod shot;
 
 use crate::atomic::write_atomically;
 use crate::bake::{bake, BakeSettings, Quality};
@@ -50,6 +54,10 @@ impl Default for CompareSettings {
     }
 }
 
+/// Mixed into the seed of a reference rendered here, so that its samples are not the path
+/// tracer's under comparison.
+const REFERENCE_SEED: u64 = 0x7265_6665_7265_6e63;
+
 /// The image every run is measured against.
 #[derive(Clone, Debug)]
 pub struct Reference {
@@ -72,7 +80,7 @@ impl Reference {
     ) -> Result<Reference> {
         let settings = RenderSettings {
             spp,
-            seed: seed ^ 0x7265_6665_7265_6e63,
+            seed: seed ^ REFERENCE_SEED,
             ..Default::default()
         };
         let out = render(scene, camera, &settings, progress)?;
@@ -90,8 +98,22 @@ impl Reference {
 pub enum Method {
     /// Bake at a preset, then the final render from the cache.
     Cache { preset: Quality, points: usize },
-    /// The path tracer, given the wall time of the cache run at `matched`.
-    PathTracer { matched: Quality, spp: u32 },
+    /// The path tracer at `spp` samples per pixel (a point of its progressive render).
+    PathTracer { spp: u32 },
+    /// The same image denoised ([`crate::reference::RenderOutput::denoised`]); its seconds
+    /// include the first hits' and the denoiser's.
+    Denoised { spp: u32 },
+}
+
+impl Method {
+    /// The method's name in the report.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Method::Cache { .. } => "wpbgi",
+            Method::PathTracer { .. } => "path tracer",
+            Method::Denoised { .. } => "path tracer + OIDN",
+        }
+    }
 }
 
 /// One measured run.
@@ -115,23 +137,19 @@ impl Run {
     pub fn label(&self) -> String {
         match &self.method {
             Method::Cache { preset, .. } => format!("wpbgi {}", preset.name()),
-            Method::PathTracer { matched, .. } => {
-                format!("path tracer ({} time)", matched.name())
+            Method::PathTracer { spp } | Method::Denoised { spp } => {
+                format!("{}, {spp} spp", self.method.name())
             }
         }
     }
 
     fn to_json(&self) -> Value {
-        let (method, preset, extra) = match &self.method {
-            Method::Cache { preset, points } => {
-                ("wpbgi", preset.name(), json!({ "surfels": points }))
-            }
-            Method::PathTracer { matched, spp } => {
-                ("path tracer", matched.name(), json!({ "spp": spp }))
-            }
+        let (preset, extra) = match &self.method {
+            Method::Cache { preset, points } => (Some(preset.name()), json!({ "surfels": points })),
+            Method::PathTracer { spp } | Method::Denoised { spp } => (None, json!({ "spp": spp })),
         };
         let mut v = json!({
-            "method": method,
+            "method": self.method.name(),
             "preset": preset,
             "bake_s": self.bake_seconds,
             "render_s": self.render_seconds,
@@ -156,7 +174,11 @@ pub struct Report {
     pub height: u32,
     pub threads: usize,
     pub reference: Reference,
+    /// The cache's runs (one per preset), then the path tracer's and the denoised path
+    /// tracer's, each in the order of its samples.
     pub runs: Vec<Run>,
+    /// Why the denoised curve is missing (the denoiser did not load), if it is.
+    pub denoiser_missing: Option<String>,
 }
 
 /// Refuse a reference of another size than the render's (`width` × `height`), before any
@@ -223,17 +245,9 @@ pub fn compare(
         let name = preset.name();
         // The cache: bake in memory, then render from it.
         memory::reset_peak();
-        let bake_settings = BakeSettings {
-            seed: settings.seed,
-            bounces: settings.bounces,
-            ..BakeSettings::from_quality(preset)
-        };
-        let start = Instant::now();
-        let baked = bake(scene, &bake_settings, &|stage, f| {
+        let (cache, points, bake_seconds) = bake_preset(scene, preset, settings, &|stage, f| {
             progress(&format!("{name}: baking ({stage})"), f)
         })?;
-        let cache = BakedCache::in_memory(&scene.path, &baked)?;
-        let bake_seconds = start.elapsed().as_secs_f64();
         let start = Instant::now();
         let final_settings = FinalSettings {
             seed: settings.seed,
@@ -244,13 +258,10 @@ pub fn compare(
         })?;
         let render_seconds = start.elapsed().as_secs_f64();
         let peak_memory = memory::peak();
-        drop((baked, cache));
+        drop(cache);
         let (mse, rel_mse, mssim) = errors(&out.beauty, &reference.image)?;
         let cached = Run {
-            method: Method::Cache {
-                preset,
-                points: bake_settings.points,
-            },
+            method: Method::Cache { preset, points },
             bake_seconds,
             render_seconds,
             peak_memory,
@@ -258,36 +269,60 @@ pub fn compare(
             rel_mse,
             mssim,
         };
-        // The path tracer in the same wall time.
-        memory::reset_peak();
-        let budget = cached.total_seconds();
-        let pt = render(
-            scene,
-            camera,
-            &RenderSettings {
-                spp: 1,
-                seed: settings.seed,
-                time_limit: Some(Duration::from_secs_f64(budget.max(1e-3))),
-                ..Default::default()
-            },
-            &|f| progress(&format!("{name}: path tracing"), f),
-        )?;
-        let (mse, rel_mse, mssim) = errors(&pt.mean, &reference.image)?;
-        let traced = Run {
-            method: Method::PathTracer {
-                matched: preset,
-                spp: pt.spp,
-            },
-            bake_seconds: 0.0,
-            render_seconds: pt.seconds,
-            peak_memory: memory::peak(),
-            mse,
-            rel_mse,
-            mssim,
-        };
         runs.push(cached);
-        runs.push(traced);
     }
+    // The path tracer's curve, up to the longest cache run's time, and the same denoised.
+    let budget = runs.iter().map(Run::total_seconds).fold(1e-3, f64::max);
+    let mut denoised = Vec::new();
+    let mut denoiser_missing = None;
+    memory::reset_peak();
+    crate::reference::render_progressive(
+        scene,
+        camera,
+        &RenderSettings {
+            seed: settings.seed,
+            first_hits: true,
+            ..Default::default()
+        },
+        Duration::from_secs_f64(budget),
+        &|f| progress("path tracing", f),
+        &mut |out| {
+            let peak_memory = memory::peak();
+            let hits_seconds = out.first_hits.as_ref().map_or(0.0, |h| h.seconds);
+            let (mse, rel_mse, mssim) = errors(&out.mean, &reference.image)?;
+            runs.push(Run {
+                method: Method::PathTracer { spp: out.spp },
+                bake_seconds: 0.0,
+                render_seconds: out.seconds - hits_seconds,
+                peak_memory,
+                mse,
+                rel_mse,
+                mssim,
+            });
+            if denoiser_missing.is_some() {
+                return Ok(());
+            }
+            let start = Instant::now();
+            match out.denoised(rayon::current_num_threads()) {
+                Some(Ok(image)) => {
+                    let (mse, rel_mse, mssim) = errors(&image, &reference.image)?;
+                    denoised.push(Run {
+                        method: Method::Denoised { spp: out.spp },
+                        bake_seconds: 0.0,
+                        render_seconds: out.seconds + start.elapsed().as_secs_f64(),
+                        peak_memory: memory::peak(),
+                        mse,
+                        rel_mse,
+                        mssim,
+                    });
+                }
+                Some(Err(e)) => denoiser_missing = Some(e.to_string()),
+                None => denoiser_missing = Some("the render kept no first hits".into()),
+            }
+            Ok(())
+        },
+    )?;
+    runs.extend(denoised);
     Ok(Report {
         scene: scene.path.clone(),
         width: camera.width,
@@ -295,7 +330,35 @@ pub fn compare(
         threads: rayon::current_num_threads(),
         reference,
         runs,
+        denoiser_missing,
     })
+}
+
+/// Bake `scene` at `preset` in memory: the cache, its surfel count and the bake's seconds
+/// (the cache's encoding included, as a file's would be).
+fn bake_preset(
+    scene: &Scene,
+    preset: Quality,
+    settings: &CompareSettings,
+    progress: &(dyn Fn(&str, f32) + Sync),
+) -> Result<(BakedCache, usize, f64)> {
+    let bake_settings = BakeSettings {
+        seed: settings.seed,
+        bounces: settings.bounces,
+        ..BakeSettings::from_quality(preset)
+    };
+    let start = Instant::now();
+    let baked = bake(scene, &bake_settings, progress)?;
+    let cache = BakedCache::in_memory(&scene.path, &baked)?;
+    Ok((cache, bake_settings.points, start.elapsed().as_secs_f64()))
+}
+
+/// A path tracer run's samples per pixel (0 for a cache run).
+fn spp_of(r: &Run) -> u32 {
+    match r.method {
+        Method::PathTracer { spp } | Method::Denoised { spp } => spp,
+        Method::Cache { .. } => 0,
+    }
 }
 
 impl Report {
@@ -313,10 +376,12 @@ impl Report {
                 "seconds": self.reference.seconds,
             },
             "runs": self.runs.iter().map(Run::to_json).collect::<Vec<_>>(),
+            "denoiser_missing": self.denoiser_missing,
         })
     }
 
-    /// A short Markdown summary: the table of runs and how the two methods compare.
+    /// A short Markdown summary: the table of runs and, for each cache run, when the path tracer
+    /// and the denoised path tracer reach its error.
     pub fn summary_markdown(&self) -> String {
         let mut s = format!(
             "# wpbgi compare: {}\n\n{}×{}, {} threads. Reference: {}.\n\n",
@@ -352,23 +417,58 @@ impl Report {
             );
         }
         s += "\n";
-        for pair in self.runs.chunks(2) {
-            if let [cache, traced] = pair {
-                let ratio = traced.rel_mse / cache.rel_mse.max(f64::MIN_POSITIVE);
-                s += &format!(
-                    "- {}: in {:.2} s the cache reaches relMSE {:.3e}; the path tracer, in the \
-                     same time, {:.3e} ({}).\n",
-                    cache.label(),
-                    cache.total_seconds(),
-                    cache.rel_mse,
-                    traced.rel_mse,
-                    if ratio >= 1.0 {
-                        format!("{ratio:.1}× the cache's error")
-                    } else {
-                        format!("{:.1}× less than the cache's", 1.0 / ratio)
+        let curve = |denoised: bool| {
+            self.runs.iter().filter(move |r| match r.method {
+                Method::PathTracer { .. } => !denoised,
+                Method::Denoised { .. } => denoised,
+                Method::Cache { .. } => false,
+            })
+        };
+        for cache in self
+            .runs
+            .iter()
+            .filter(|r| matches!(r.method, Method::Cache { .. }))
+        {
+            s += &format!(
+                "- {} reaches relMSE {:.3e} in {:.2} s.",
+                cache.label(),
+                cache.rel_mse,
+                cache.total_seconds()
+            );
+            for (denoised, name) in [(false, "The path tracer"), (true, "Denoised, it")] {
+                if denoised && self.denoiser_missing.is_some() {
+                    continue;
+                }
+                let first = curve(denoised).find(|r| r.rel_mse <= cache.rel_mse);
+                let best = curve(denoised).min_by(|a, b| a.rel_mse.total_cmp(&b.rel_mse));
+                s += &match (first, best) {
+                    (Some(r), _) => {
+                        let ratio = r.total_seconds() / cache.total_seconds().max(1e-9);
+                        format!(
+                            " {name} reaches it at {} spp in {:.2} s: {}.",
+                            spp_of(r),
+                            r.total_seconds(),
+                            if ratio <= 1.0 {
+                                format!("{:.1}× sooner than the cache", 1.0 / ratio.max(1e-9))
+                            } else {
+                                format!("the cache is {ratio:.1}× sooner")
+                            }
+                        )
                     }
-                );
+                    (None, Some(b)) => format!(
+                        " {name} does not within {:.2} s (its lowest: {:.3e} at {} spp): the \
+                         cache is sooner.",
+                        b.total_seconds(),
+                        b.rel_mse,
+                        spp_of(b)
+                    ),
+                    (None, None) => String::new(),
+                };
             }
+            s += "\n";
+        }
+        if let Some(why) = &self.denoiser_missing {
+            s += &format!("- The denoised path tracer was not run: {why}\n");
         }
         s += "\nThe plot: `error_vs_time.svg` / `.png` (relMSE against total seconds, log-log).\n";
         s
@@ -377,32 +477,38 @@ impl Report {
     /// Write `report.json`, `error_vs_time.svg`, `error_vs_time.png` and `summary.md` into
     /// `dir` (created if needed), each atomically.
     pub fn write(&self, dir: &Path) -> Result<()> {
-        std::fs::create_dir_all(dir).map_err(|e| Error::Output {
-            path: dir.to_path_buf(),
-            reason: e.to_string(),
+        write_text_files(dir, &self.to_json(), self.summary_markdown())?;
+        let svg = plot::svg(self).map_err(|e| Error::Output {
+            path: dir.join("error_vs_time.svg"),
+            reason: e,
         })?;
-        let text = |name: &str, body: String| {
-            write_atomically(&dir.join(name), |tmp| {
-                std::fs::write(tmp, body).map_err(|e| e.to_string())
-            })
-        };
-        let json = serde_json::to_string_pretty(&self.to_json()).map_err(|e| Error::Output {
-            path: dir.join("report.json"),
-            reason: e.to_string(),
-        })?;
-        text("report.json", json + "\n")?;
-        text(
-            "error_vs_time.svg",
-            plot::svg(self).map_err(|e| Error::Output {
-                path: dir.join("error_vs_time.svg"),
-                reason: e,
-            })?,
-        )?;
+        write_text(dir, "error_vs_time.svg", svg)?;
         let (w, h, rgb) = plot::png_pixels(self).map_err(|e| Error::Output {
             path: dir.join("error_vs_time.png"),
             reason: e,
         })?;
-        crate::image::write_png_rgb8(&dir.join("error_vs_time.png"), w, h, &rgb)?;
-        text("summary.md", self.summary_markdown())
+        crate::image::write_png_rgb8(&dir.join("error_vs_time.png"), w, h, &rgb)
     }
+}
+
+/// Write `report.json` (`json`, pretty) and `summary.md` into `dir`, created if needed, each
+/// atomically.
+fn write_text_files(dir: &Path, json: &Value, summary: String) -> Result<()> {
+    std::fs::create_dir_all(dir).map_err(|e| Error::Output {
+        path: dir.to_path_buf(),
+        reason: e.to_string(),
+    })?;
+    let text = serde_json::to_string_pretty(json).map_err(|e| Error::Output {
+        path: dir.join("report.json"),
+        reason: e.to_string(),
+    })?;
+    write_text(dir, "report.json", text + "\n")?;
+    write_text(dir, "summary.md", summary)
+}
+
+/// Write `body` to `dir/name` atomically.
+fn write_text(dir: &Path, name: &str, body: String) -> Result<()> {
+    write_atomically(&dir.join(name), |tmp| {
+        std::fs::write(tmp, body).map_err(|e| e.to_string())
+    })
 }

@@ -1,5 +1,6 @@
 //! The error-against-time plot of a [`Report`]: relative MSE against total seconds, log-log,
-//! one curve per method, as SVG and as PNG pixels (drawn with plotters; the PNG's text with
+//! one curve per method (the cache's presets, the path tracer's and the denoised path
+//! tracer's samples per pixel), as SVG and as PNG pixels (drawn with plotters; the PNG's text with
 //! the DejaVu Sans subset in `assets/fonts`, so it looks the same on a machine without fonts).
 
 use super::{Method, Report};
@@ -61,21 +62,31 @@ where
     let err = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
     root.fill(&WHITE).map_err(err)?;
     let point = |r: &super::Run| (positive(r.total_seconds()), positive(r.rel_mse));
+    type Of = fn(&Method) -> bool;
     let curves: Vec<Curve> = [
-        ("wpbgi (bake + render)", RGBColor(31, 119, 180), true),
-        ("path tracer, same time", RGBColor(214, 39, 40), false),
+        (
+            "wpbgi (bake + render)",
+            RGBColor(31, 119, 180),
+            (|m| matches!(m, Method::Cache { .. })) as Of,
+        ),
+        ("path tracer", RGBColor(214, 39, 40), |m| {
+            matches!(m, Method::PathTracer { .. })
+        }),
+        ("path tracer + OIDN", RGBColor(44, 160, 44), |m| {
+            matches!(m, Method::Denoised { .. })
+        }),
     ]
     .into_iter()
-    .map(|(name, colour, cache)| {
+    .map(|(name, colour, of)| {
         let mut points: Vec<(f64, f64, String)> = report
             .runs
             .iter()
-            .filter(|r| matches!(r.method, Method::Cache { .. }) == cache)
+            .filter(|r| of(&r.method))
             .map(|r| {
                 let (x, y) = point(r);
                 let label = match &r.method {
                     Method::Cache { preset, .. } => preset.name().to_string(),
-                    Method::PathTracer { spp, .. } => format!("{spp} spp"),
+                    Method::PathTracer { spp } | Method::Denoised { spp } => format!("{spp}"),
                 };
                 (x, y, label)
             })
@@ -83,6 +94,7 @@ where
         points.sort_by(|a, b| a.0.total_cmp(&b.0));
         (name, colour, points)
     })
+    .filter(|c| !c.2.is_empty())
     .collect();
     let all = curves.iter().flat_map(|c| c.2.iter());
     let (mut x0, mut x1, mut y0, mut y1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);

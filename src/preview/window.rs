@@ -19,7 +19,7 @@ use super::{Preview, PreviewError, Show};
 use crate::cache::store::BakedCache;
 use crate::scene::{Camera, Scene};
 use ash::vk;
-use glam::{Quat, Vec3};
+use glam::Vec3;
 use std::path::PathBuf;
 use std::sync::Arc;
 use winit::application::ApplicationHandler;
@@ -67,9 +67,7 @@ pub fn run_window(
 ) -> Result<WindowReport, PreviewError> {
     let event_loop = EventLoop::new().map_err(|e| PreviewError::Window(e.to_string()))?;
     let bounds = super::bounds(cache, scene);
-    let centre = 0.5 * (bounds.0 + bounds.1);
-    let reach = camera.forward.dot(centre - camera.position);
-    let target = camera.position + camera.forward * if reach > 0.0 { reach } else { 1.0 };
+    let target = camera.orbit_target(0.5 * (bounds.0 + bounds.1));
     let mut app = App {
         cache,
         scene,
@@ -277,7 +275,7 @@ impl App<'_> {
             self.camera = if done + 2 == total {
                 home
             } else {
-                orbit(&home, target, home.up, angle, 0.0).unwrap_or(home)
+                home.orbit(target, home.up, angle, 0.0).unwrap_or(home)
             };
             self.cut_now = self.settings.cut_pixels * MOVING_COARSENESS;
             return Ok(true);
@@ -409,7 +407,7 @@ impl App<'_> {
         let c = &self.camera;
         if button == MouseButton::Left {
             let up = self.home.0.up;
-            if let Some(moved) = orbit(c, self.target, up, -0.01 * dx, -0.01 * dy) {
+            if let Some(moved) = c.orbit(self.target, up, -0.01 * dx, -0.01 * dy) {
                 self.camera = moved;
             }
         } else {
@@ -427,23 +425,4 @@ impl App<'_> {
         }
         self.moved();
     }
-}
-
-/// `camera` turned around `target` by `yaw` about `up` and `pitch` about its right axis,
-/// still looking at `target` with `up` upwards; none where it would look along `up`.
-fn orbit(camera: &Camera, target: Vec3, up: Vec3, yaw: f32, pitch: f32) -> Option<Camera> {
-    let turn = Quat::from_axis_angle(up, yaw) * Quat::from_axis_angle(camera.right, pitch);
-    let eye = target + turn * (camera.position - target);
-    let forward = (target - eye).try_normalize()?;
-    let right = forward.cross(up).try_normalize()?;
-    if forward.dot(up).abs() > 0.99 {
-        return None;
-    }
-    Some(Camera {
-        position: eye,
-        right,
-        up: right.cross(forward),
-        forward,
-        ..camera.clone()
-    })
 }

@@ -1,7 +1,7 @@
 //! Cameras: glTF conventions (looks down local −Z, +Y up, +X to image right; pixel (0, 0) is the
 //! top-left pixel). A perspective camera's `yfov` is the vertical field of view for any aspect.
 
-use glam::{Vec2, Vec3};
+use glam::{Quat, Vec2, Vec3};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Projection {
@@ -62,6 +62,32 @@ impl Camera {
         let aspect = (width as f32 / height as f32).min(1.0);
         let dist = 1.1 * radius / ((0.5 * yfov).tan() * aspect).atan().sin();
         Camera::look_at("auto", center + Vec3::Z * dist, center, yfov, width, height)
+    }
+
+    /// The point to orbit around: on the view axis, level with `centre` (the scene's), or
+    /// one unit ahead where `centre` is behind the camera.
+    pub fn orbit_target(&self, centre: Vec3) -> Vec3 {
+        let reach = self.forward.dot(centre - self.position);
+        self.position + self.forward * if reach > 0.0 { reach } else { 1.0 }
+    }
+
+    /// This camera turned around `target` by `yaw` about `up` and `pitch` about its right
+    /// axis, still looking at `target` with `up` upwards; none where it would look along `up`.
+    pub fn orbit(&self, target: Vec3, up: Vec3, yaw: f32, pitch: f32) -> Option<Camera> {
+        let turn = Quat::from_axis_angle(up, yaw) * Quat::from_axis_angle(self.right, pitch);
+        let eye = target + turn * (self.position - target);
+        let forward = (target - eye).try_normalize()?;
+        let right = forward.cross(up).try_normalize()?;
+        if forward.dot(up).abs() > 0.99 {
+            return None;
+        }
+        Some(Camera {
+            position: eye,
+            right,
+            up: right.cross(forward),
+            forward,
+            ..self.clone()
+        })
     }
 
     /// The same camera rendering at another resolution.
