@@ -12,13 +12,16 @@
 //!
 //! `cargo run --release --example bench_render -- modes [SCENE_NAME ...]` (issue 20): the
 //! gather modes on the default multi-bounce cache of each of the five reference scenes, at
-//! 256² against Mitsuba's max_depth 8 reference and at 512² against the first mode's image:
-//! every receiver gathering by FPBGI (the previous default), the sparse FPBGI gather (the
-//! default), and the paths gather at 16 and 64 rays, each with its render seconds. At 256²,
-//! this version's default `wpbgi render` of the same cache (`cargo build --release` first)
-//! beside, with `WPBGI_PREVIOUS=/path/to/an/older/wpbgi`, that binary's, and with
-//! `WPBGI_ANCHOR_PYTHON` (see `bench_bounces`) Mitsuba + OIDN at 256 spp, with the ratios.
-//! `WPBGI_SIZES=256` renders 256² only.
+//! 256² and 512² against Mitsuba's max_depth 8 reference (a 512² image averaged 2 × 2 down to
+//! it: the reference's pixel filter is a box): every receiver gathering by FPBGI (the
+//! default issue 20 measured, which the others are held to), the sparse FPBGI gather (the
+//! default), and the paths gather at 16 rays, raw and denoised (`WPBGI_OIDN_LIBRARY`), each
+//! with its render seconds and its ratios to the first. At 256², this version's default
+//! `wpbgi render` of the same cache (`cargo build --release` first) beside, with
+//! `WPBGI_PREVIOUS=/path/to/an/older/wpbgi`, that binary's, and with `WPBGI_ANCHOR_PYTHON`
+//! (see `bench_bounces`) Mitsuba + OIDN at 256 spp, with the ratios; then, for cbox-diffuse,
+//! cbox-rough and cbox-glossy, the whole job (`wpbgi bake` + `wpbgi render`) at Mitsuba +
+//! OIDN's error. `WPBGI_SIZES=256` renders 256² only.
 
 use wpbgi::bake::{BakeSettings, Quality};
 use wpbgi::bounce::BounceSettings;
@@ -82,35 +85,59 @@ fn fpbgi_vs_pbgi(
     Ok(())
 }
 
-/// The gather modes compared by `bench_render modes`, the first being the one the others are
-/// measured against at 512².
-fn modes() -> Vec<(&'static str, FinalSettings)> {
-    let dense = FinalSettings {
-        sparse: false,
-        ..Default::default()
-    };
-    let paths = |spp| FinalSettings {
+/// A gather mode of `bench_render modes`: its settings, and whether its indirect light is
+/// denoised (`render --denoise`).
+struct Mode {
+    name: &'static str,
+    settings: FinalSettings,
+    denoised: bool,
+}
+
+/// The gather modes compared by `bench_render modes`; the first, every receiver gathering by
+/// FPBGI, is the default that issue 20 measured, which the others are held to.
+fn modes() -> Vec<Mode> {
+    let paths = FinalSettings {
         gather: GatherMode::Paths,
-        spp,
+        spp: 16,
         ..Default::default()
     };
     vec![
-        ("fpbgi, every receiver", dense),
-        ("fpbgi, sparse (default)", FinalSettings::default()),
-        ("paths, 16 rays", paths(16)),
-        ("paths, 64 rays", paths(64)),
+        Mode {
+            name: "fpbgi, every receiver (issue 20's)",
+            settings: FinalSettings {
+                sparse: false,
+                ..Default::default()
+            },
+            denoised: false,
+        },
+        Mode {
+            name: "fpbgi, sparse (default)",
+            settings: FinalSettings::default(),
+            denoised: false,
+        },
+        Mode {
+            name: "paths, 16 rays",
+            settings: paths.clone(),
+            denoised: false,
+        },
+        Mode {
+            name: "paths, 16 rays, denoised",
+            settings: paths,
+            denoised: true,
+        },
     ]
 }
 
-/// An anchor's render seconds and relMSE against Mitsuba's max_depth 8 reference at 256².
+/// An anchor's seconds and relMSE against Mitsuba's max_depth 8 reference at 256².
 type Anchor = Option<(f64, f64)>;
 
-/// `wpbgi render` of binary `bin` (its defaults) on `cache` at 256², as a user runs it, from
-/// the error record it writes beside its image: its render seconds and relMSE.
+/// `wpbgi render` of binary `bin` with `args` on `cache` at 256², as a user runs it, from the
+/// error record it writes beside its image: its render seconds and relMSE.
 fn cli_render(
     bin: &std::path::Path,
     name: &str,
-    cache: &BakedCache,
+    cache: &std::path::Path,
+    args: &[&str],
 ) -> Result<(f64, f64), Box<dyn std::error::Error>> {
     let out = std::env::temp_dir().join("wpbgi-bench-cli-render.exr");
     common::run_ok(
@@ -119,16 +146,37 @@ fn cli_render(
             .arg("render")
             .arg(data(&format!("{name}.gltf")))
             .arg("--cache")
-            .arg(&cache.cache.path)
+            .arg(cache)
             .args(["--size", "256x256", "-o"])
             .arg(&out)
             .arg("--reference")
-            .arg(data(&format!("{name}_d8_ref.exr"))),
+            .arg(data(&format!("{name}_d8_ref.exr")))
+            .args(args),
     )?;
     let record: serde_json::Value =
         serde_json::from_slice(&std::fs::read(out.with_extension("error.json"))?)?;
     let field = |k: &str| record[k].as_f64().ok_or("no error record");
     Ok((field("render_s")?, field("rel_mse")?))
+}
+
+/// `wpbgi bake` of binary `bin` (its defaults) on scene `name`, as a user runs it: the
+/// cache's path and the seconds the process took.
+fn cli_bake(
+    bin: &std::path::Path,
+    name: &str,
+) -> Result<(std::path::PathBuf, f64), Box<dyn std::error::Error>> {
+    let cache = std::env::temp_dir().join(format!("wpbgi-bench-cli-{name}.wpc"));
+    let start = std::time::Instant::now();
+    common::run_ok(
+        &bin.display().to_string(),
+        std::process::Command::new(bin)
+            .arg("bake")
+            .arg(data(&format!("{name}.gltf")))
+            .arg("-o")
+            .arg(&cache)
+            .arg("-q"),
+    )?;
+    Ok((cache, start.elapsed().as_secs_f64()))
 }
 
 /// Mitsuba + OIDN at 256 spp on scene `name` (`scripts/anchor`), through `python`.
@@ -139,6 +187,59 @@ fn oidn_anchor(python: &std::path::Path, name: &str) -> Result<Anchor, Box<dyn s
         .iter()
         .find(|(spp, _)| *spp == 256)
         .and_then(|(_, v)| Some((v["oidn_total_s"].as_f64()?, v["oidn"][1].as_f64()?))))
+}
+
+/// The whole job at equal error (issue 20): this version's `wpbgi bake` and `wpbgi render`
+/// (fresh processes, default bake), tried from the cheapest render up, until one reaches
+/// the relMSE of Mitsuba + OIDN at 256 spp (`oidn`). Prints each try's bake + render
+/// seconds and relMSE, and the first that reaches it as a ratio of Mitsuba + OIDN's seconds.
+fn equal_error(
+    bin: &std::path::Path,
+    name: &str,
+    oidn: (f64, f64),
+) -> Result<(), Box<dyn std::error::Error>> {
+    let (cache, bake_s) = cli_bake(bin, name)?;
+    let tries: [(&str, &[&str]); 4] = [
+        ("defaults", &[]),
+        ("paths 16, denoised", &["--gather", "paths", "--denoise"]),
+        (
+            "paths 64, denoised",
+            &["--gather", "paths", "--spp", "64", "--denoise"],
+        ),
+        (
+            "paths 256, denoised",
+            &["--gather", "paths", "--spp", "256", "--denoise"],
+        ),
+    ];
+    let mut reached = None;
+    let mut shown = Vec::new();
+    for (what, args) in tries {
+        let (render_s, rel) = match cli_render(bin, name, &cache, args) {
+            Ok(r) => r,
+            Err(e) => {
+                shown.push(format!("{what}: not run ({e})"));
+                continue;
+            }
+        };
+        let total = bake_s + render_s;
+        shown.push(format!("{what}: {total:.2} s, {rel:.3e}"));
+        if rel <= oidn.1 {
+            reached = Some((what, total));
+            break;
+        }
+    }
+    let _ = std::fs::remove_file(&cache);
+    println!(
+        "| {name} | {:.2} s, {:.3e} | {bake_s:.2} | {} | {} |",
+        oidn.0,
+        oidn.1,
+        shown.join("; "),
+        reached.map_or("not reached".into(), |(what, t)| format!(
+            "{:.2} ({what})",
+            t / oidn.0
+        ))
+    );
+    Ok(())
 }
 
 /// `bench_render modes`: one table row per scene, size and mode, rendered in this process;
@@ -154,8 +255,11 @@ fn compare_modes(names: &[String]) -> Result<(), Box<dyn std::error::Error>> {
         .map(|v| v.split(',').filter_map(|s| s.parse().ok()).collect())
         .unwrap_or_else(|| vec![256, 512]);
     println!("threads: {}", rayon::current_num_threads());
-    println!("| scene | size | mode | render s | gather s | relMSE | interpolated receivers |");
-    println!("|---|---|---|---:|---:|---|---:|");
+    println!(
+        "| scene | size | mode | render s | gather s | relMSE | s / first's | relMSE / first's | \
+         interpolated receivers |"
+    );
+    println!("|---|---|---|---:|---:|---|---:|---:|---:|");
     let mut anchors: Vec<(String, [Anchor; 3])> = Vec::new();
     for name in names {
         let scene = Scene::load(&data(&format!("{name}.gltf")))?;
@@ -168,33 +272,50 @@ fn compare_modes(names: &[String]) -> Result<(), Box<dyn std::error::Error>> {
         let (_, cache, _) = common::bake_cache(&scene, &settings, &format!("{name}-modes"))?;
         for &size in &sizes {
             let camera = scene.default_camera(size, size)?;
-            let mut first: Option<FinalOutput> = None;
-            for (mode, settings) in modes() {
-                let (out, seconds) = common::timed_render(&scene, &cache, &camera, &settings)?;
-                // At 256² against Mitsuba; at 512² (no reference) against the first mode.
-                let (against, image) = if size == 256 {
-                    ("Mitsuba", &reference)
-                } else {
-                    ("first", &first.as_ref().unwrap_or(&out).beauty)
-                };
-                let (_, rel) = error_against(&out.beauty, image).ok_or("size")?;
+            let mut first: Option<(f64, f64)> = None;
+            for mode in modes() {
+                let (mut out, mut seconds) =
+                    common::timed_render(&scene, &cache, &camera, &mode.settings)?;
+                if mode.denoised {
+                    let start = std::time::Instant::now();
+                    if let Err(e) = out.denoise_indirect(rayon::current_num_threads()) {
+                        println!("| {name} | {size}² | {} | not run: {e} |", mode.name);
+                        continue;
+                    }
+                    seconds += start.elapsed().as_secs_f64();
+                }
+                // Against Mitsuba's 256² reference; a larger render averaged down to it by
+                // the reference's own box filter.
+                let image = out
+                    .beauty
+                    .box_downsample(size / reference.width)
+                    .ok_or("size")?;
+                let (_, rel) = error_against(&image, &reference).ok_or("size")?;
+                let (first_s, first_rel) = *first.get_or_insert((seconds, rel));
                 println!(
-                    "| {name} | {size}² | {mode} | {seconds:.2} | {:.2} | {rel:.3e} ({against}) | {} of {} |",
+                    "| {name} | {size}² | {} | {seconds:.2} | {:.2} | {rel:.3e} | {:.3} | {:.3} | {} of {} |",
+                    mode.name,
                     gather_seconds(&out),
+                    seconds / first_s,
+                    rel / first_rel,
                     out.stats.interpolated,
                     out.stats.receivers
                 );
-                first.get_or_insert(out);
             }
         }
         // Fresh processes: a render in this one, after a bake of several GB, ran up to 25 %
         // slower than the same render from the command line on the glass scenes.
         let this = match this_bin.exists() {
-            true => Some(cli_render(&this_bin, name, &cache)?),
+            true => Some(cli_render(&this_bin, name, &cache.cache.path, &[])?),
             false => None,
         };
         let before = match &previous {
-            Some(bin) => Some(cli_render(std::path::Path::new(bin), name, &cache)?),
+            Some(bin) => Some(cli_render(
+                std::path::Path::new(bin),
+                name,
+                &cache.cache.path,
+                &[],
+            )?),
             None => None,
         };
         let oidn = match &python {
@@ -233,6 +354,24 @@ fn compare_modes(names: &[String]) -> Result<(), Box<dyn std::error::Error>> {
     }
     if !this_bin.exists() {
         println!("(this version's binary not found: `cargo build --release` first)");
+        return Ok(());
+    }
+    println!();
+    println!(
+        "The whole job at Mitsuba + OIDN's error (256 spp), same run: this version's `wpbgi \
+         bake` (defaults) and `wpbgi render` from the cheapest render up, bake + render seconds \
+         and relMSE per try, until one reaches it:"
+    );
+    println!("| scene | Mitsuba + OIDN | bake s | tries | time / OIDN's at its error |");
+    println!("|---|---|---:|---|---:|");
+    for (name, [_, _, oidn]) in &anchors {
+        if !["cbox-diffuse", "cbox-rough", "cbox-glossy"].contains(&name.as_str()) {
+            continue;
+        }
+        match oidn {
+            Some(oidn) => equal_error(&this_bin, name, *oidn)?,
+            None => println!("| {name} | not run (`WPBGI_ANCHOR_PYTHON`) | | | |"),
+        }
     }
     Ok(())
 }
