@@ -1,40 +1,77 @@
-//! Reference path tracer speed: seconds per sample per pixel per megapixel on the Cornell scenes
-//! of `tests/data/mitsuba` at 512², max_depth 8 (the setting Mitsuba's figures are quoted for).
+//! The reference path tracer's speed beside Mitsuba 3's (issue 21): the Cornell scenes of
+//! `tests/data/mitsuba` at 256², max_depth 8, the same samples per pixel, from the same run.
+//! Ours: wall seconds of `reference::render` and samples per second (camera paths, all
+//! threads). Mitsuba's: `llvm_ad_rgb`'s `path` integrator through
+//! `scripts/anchor/mitsuba_oidn.py` (wall seconds after an untimed JIT warm-up of the same
+//! count) when `WPBGI_ANCHOR_PYTHON` names a Python with mitsuba, numpy and pyoidn (see
+//! `bench_bounces`); then the ratio of our samples per second to Mitsuba's.
 //!
-//! `cargo run --release --example bench_pathtracer [-- SPP]` (default 16 spp)
+//! `cargo run --release --example bench_pathtracer [-- SPP]` (default 256, one of
+//! `common::ANCHOR_SPP`).
 
 use std::path::Path;
 use std::time::Instant;
 use wpbgi::reference::{render, RenderSettings};
 use wpbgi::scene::Scene;
 
-fn main() -> anyhow::Result<()> {
+#[allow(dead_code)] // the benchmarks' shared helpers, of which this one uses two
+mod common;
+
+const SIZE: u32 = 256;
+
+fn main() -> common::Result<()> {
     let spp: u32 = match std::env::args().nth(1) {
         Some(s) => s.parse()?,
-        None => 16,
+        None => 256,
     };
+    let python = std::env::var_os("WPBGI_ANCHOR_PYTHON");
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mitsuba");
     println!(
-        "512x512, max_depth 8, {spp} spp, {} threads",
+        "{SIZE}², max_depth 8, {spp} spp, {} threads",
         rayon::current_num_threads()
     );
-    println!("{:<14} {:>9} {:>14}", "scene", "seconds", "s/spp/MP");
-    for name in ["cbox-diffuse", "cbox-rough", "cbox-glossy"] {
-        let scene = Scene::load(&dir.join(format!("{name}.gltf")))?;
-        let camera = scene.default_camera(512, 512)?;
+    println!(
+        "| scene | ours s | ours Msamples/s | Mitsuba s | Mitsuba Msamples/s | ours / Mitsuba |"
+    );
+    println!("|---|---:|---:|---:|---:|---:|");
+    let samples = f64::from(SIZE * SIZE) * f64::from(spp);
+    for name in ["cbox-diffuse", "cbox-rough", "cbox-glossy", "cbox-mirror"] {
+        let scene_path = dir.join(format!("{name}.gltf"));
+        let scene = Scene::load(&scene_path)?;
+        let camera = scene.default_camera(SIZE, SIZE)?;
         let settings = RenderSettings {
             spp,
             max_depth: 8,
             ..Default::default()
         };
         let t = Instant::now();
-        let out = render(&scene, &camera, &settings, &|_| {})?;
-        let secs = t.elapsed().as_secs_f64();
-        let mp = 512.0 * 512.0 / 1e6;
-        println!(
-            "{name:<14} {secs:>9.2} {:>14.3}",
-            secs / out.spp as f64 / mp
-        );
+        render(&scene, &camera, &settings, &|_| {})?;
+        let ours = t.elapsed().as_secs_f64();
+        let mitsuba = match &python {
+            Some(py) if common::ANCHOR_SPP.contains(&spp) => common::mitsuba_anchor(
+                Path::new(py),
+                &scene_path,
+                &dir.join(format!("{name}_d8_ref.exr")),
+            )?
+            .into_iter()
+            .find(|(s, _)| *s == spp)
+            .and_then(|(_, v)| v["pt_s"].as_f64()),
+            _ => None,
+        };
+        let rate = |s: f64| samples / s / 1e6;
+        match mitsuba {
+            Some(m) => println!(
+                "| {name} | {ours:.2} | {:.2} | {m:.2} | {:.2} | {:.2} |",
+                rate(ours),
+                rate(m),
+                m / ours
+            ),
+            None => println!(
+                "| {name} | {ours:.2} | {:.2} | not run (`WPBGI_ANCHOR_PYTHON`, spp in {:?}) | | |",
+                rate(ours),
+                common::ANCHOR_SPP
+            ),
+        }
     }
     Ok(())
 }
