@@ -233,12 +233,7 @@ fn check(scene: &Scene, camera: &Camera, settings: &RenderSettings) -> Result<()
     if settings.spp == 0 {
         return Err(Error::InvalidSetting("spp must be at least 1".into()));
     }
-    if camera.width == 0 || camera.height == 0 || camera.width > 16384 || camera.height > 16384 {
-        return Err(Error::InvalidSetting(format!(
-            "image size {}x{} must be between 1 and 16384 on each side",
-            camera.width, camera.height
-        )));
-    }
+    Camera::check_size(camera.width, camera.height).map_err(Error::InvalidSetting)?;
     if settings.max_depth == 0 || settings.max_depth < -1 {
         return Err(Error::InvalidSetting(
             "max depth must be -1 (unlimited) or at least 1".into(),

@@ -252,12 +252,7 @@ pub fn render_final_cancellable(
     cancel: &AtomicBool,
 ) -> Result<FinalOutput> {
     let stop = || crate::error::check_cancel(cancel);
-    if camera.width == 0 || camera.height == 0 || camera.width > 16384 || camera.height > 16384 {
-        return Err(Error::InvalidSetting(format!(
-            "image size {}x{} must be between 1 and 16384 on each side",
-            camera.width, camera.height
-        )));
-    }
+    Camera::check_size(camera.width, camera.height).map_err(Error::InvalidSetting)?;
     if settings.mb_size < 2 || !settings.mb_size.is_multiple_of(2) || settings.mb_size > 256 {
         return Err(Error::InvalidSetting(format!(
             "the microbuffer size must be even and between 2 and 256, got {}",

@@ -25,6 +25,22 @@ pub struct Camera {
 }
 
 impl Camera {
+    /// The largest image side any render takes (pixels).
+    pub const MAX_SIDE: u32 = 16384;
+
+    /// Refuse an image of `width` × `height` unless each side is from 1 to
+    /// [`Camera::MAX_SIDE`], in one sentence.
+    pub fn check_size(width: u32, height: u32) -> Result<(), String> {
+        if (1..=Self::MAX_SIDE).contains(&width) && (1..=Self::MAX_SIDE).contains(&height) {
+            Ok(())
+        } else {
+            Err(format!(
+                "image size {width}x{height} must be between 1 and {} on each side",
+                Self::MAX_SIDE
+            ))
+        }
+    }
+
     /// A camera at `eye` looking at `target`, world +Y up (or +Z when looking along Y).
     pub fn look_at(
         name: &str,

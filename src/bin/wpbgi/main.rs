@@ -240,9 +240,7 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
         .trim()
         .parse()
         .map_err(|_| format!("bad height \"{h}\""))?;
-    if w == 0 || h == 0 || w > 16384 || h > 16384 {
-        return Err("each side must be between 1 and 16384".into());
-    }
+    Camera::check_size(w, h)?;
     Ok((w, h))
 }
 

@@ -460,13 +460,16 @@ impl Importer<'_> {
             {
                 None => Ok(None),
                 Some(sdf::Value::Vec2i(v))
-                    if v.x > 0 && v.y > 0 && v.x <= 16384 && v.y <= 16384 =>
+                    if Camera::check_size(v.x.max(0) as u32, v.y.max(0) as u32).is_ok() =>
                 {
                     Ok(Some((v.x as u32, v.y as u32)))
                 }
                 Some(other) => Err(self.prim_err(
                     p.path(),
-                    format!("resolution {other:?} must be two numbers from 1 to 16384"),
+                    format!(
+                        "resolution {other:?} must be two numbers from 1 to {}",
+                        Camera::MAX_SIDE
+                    ),
                 )),
             }
         };
