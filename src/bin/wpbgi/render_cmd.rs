@@ -105,7 +105,7 @@ pub struct RenderArgs {
     #[arg(long, value_enum, value_delimiter = ',')]
     pub aov: Vec<Aov>,
     /// Microbuffer pixels per side (even).
-    #[arg(long, default_value_t = 16)]
+    #[arg(long, default_value_t = FinalSettings::default().mb_size)]
     pub mb_size: u32,
     /// Uniform microbuffers for glossy receivers too (no BSDF-importance refinement).
     #[arg(long)]
@@ -117,21 +117,21 @@ pub struct RenderArgs {
     pub dense: bool,
     /// Emitter samples per pixel for direct light (at each rough hit; a pixel of many camera
     /// samples, on an edge or a mirror, shares them out, at least two per sample).
-    #[arg(long, default_value_t = 32)]
+    #[arg(long, default_value_t = FinalSettings::default().light_samples)]
     pub light_samples: u32,
     /// Longest path in segments, as Mitsuba's max_depth (-1: everything the cache holds).
-    #[arg(long, default_value_t = -1, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = FinalSettings::default().max_depth, allow_hyphen_values = true)]
     pub max_depth: i32,
     /// FPBGI: clusters per 32×32 tile of gathering receivers (fewer where a tile has fewer
     /// receivers that gather than pixels).
-    #[arg(long, default_value_t = 100)]
+    #[arg(long, default_value_t = FinalSettings::default().clusters)]
     pub clusters: usize,
     /// FPBGI: a node is far (shared by a cluster) when cluster radius / distance is at most
     /// this (the thesis used 0.01 at 1024² in large scenes; see docs/render.md).
-    #[arg(long, default_value_t = 0.1)]
+    #[arg(long, default_value_t = FinalSettings::default().far_eps)]
     pub far: f32,
     /// Paths gather: rays per receiver.
-    #[arg(long, default_value_t = 16)]
+    #[arg(long, default_value_t = FinalSettings::default().spp)]
     pub spp: u32,
     /// Seed of the random streams.
     #[arg(long, default_value_t = 0)]
