@@ -540,6 +540,19 @@ fn crops_assemble_into_the_whole_image() {
     assert!(covered.iter().all(|&c| c == 1));
     let out = render(&d.join("bad.exr"), Some("10,10,81,20"));
     assert_refused(&out, "crop");
+    // A setting out of range is refused in one sentence, not clamped.
+    let out = Command::new(WPBGI)
+        .arg("render")
+        .arg(scene())
+        .arg("--cache")
+        .arg(&cache)
+        .arg("-o")
+        .arg(d.join("bad.exr"))
+        .args(["--light-samples", "0"])
+        .output()
+        .expect("runs");
+    assert_refused(&out, "--light-samples must be at least 1");
+    assert!(!d.join("bad.exr").exists());
 }
 
 /// `render --frames` of a USD stage whose camera moves: one bake, one file per frame named by

@@ -269,6 +269,11 @@ pub fn render_final_cancellable(
             "the paths gather needs at least 1 ray per receiver (spp)".into(),
         ));
     }
+    if settings.light_samples == 0 {
+        return Err(Error::InvalidSetting(
+            "the direct light needs at least 1 light sample per pixel (light samples)".into(),
+        ));
+    }
     if !(settings.far_eps >= 0.0 && settings.far_eps.is_finite()) || settings.clusters == 0 {
         return Err(Error::InvalidSetting(
             "the far threshold must be a non-negative number and clusters at least 1".into(),

@@ -130,10 +130,9 @@ impl LightShare {
     pub const LEAST: u32 = 8;
 
     /// The share of camera sample `sample` of a pixel of `samples`, for `light_samples` per
-    /// pixel: at least [`LightShare::LEAST`] each.
+    /// pixel (at least 1; `render_final` refuses 0): at least [`LightShare::LEAST`] each.
     pub fn of_sample(light_samples: u32, sample: u32, samples: u32) -> Self {
         let count = light_samples
-            .max(1)
             .div_ceil(samples.max(1))
             .max(Self::LEAST.min(light_samples));
         LightShare {
@@ -283,6 +282,9 @@ fn direct_light(
     } = share;
     let stratum =
         |i: u32, shift: f32| (((first + i) as f32 + shift) / total as f32).min(1.0 - f32::EPSILON);
+    if k == 0 {
+        return Rgb::ZERO;
+    }
     let glossy = !matches!(bsdf, Bsdf::Diffuse(_));
     let scramble = sampler.next_scramble();
     let shift = sampler.next_1d();
