@@ -8,7 +8,7 @@
 //! precision, as the paper prescribes. Both faces are hit (no culling).
 
 use super::offset::gamma;
-use glam::Vec3A;
+use glam::{Vec3A, Vec4};
 
 /// Per-ray constants of the shear transform.
 #[derive(Clone, Copy, Debug)]
@@ -146,6 +146,47 @@ impl WatertightRay {
             t,
             b: [u * inv, v * inv, w * inv],
         })
+    }
+
+    /// The first stage of [`intersect`](Self::intersect) on four triangles at once
+    /// (`v[vertex][axis]`, one triangle per lane): bit `i` is set unless lane `i` is certainly
+    /// missed before `tmax`. Every lane it clears, `intersect` rejects too: the same
+    /// operations in the same order give the same bits lane by lane, and a lane whose edge
+    /// functions need the double-precision retry is kept for `intersect` to decide.
+    #[inline]
+    pub fn candidates(&self, v: &[[Vec4; 3]; 3], tmax: f32) -> u32 {
+        let (kx, ky, kz) = (self.kx, self.ky, self.kz);
+        let (ox, oy, oz) = (
+            Vec4::splat(self.origin[kx]),
+            Vec4::splat(self.origin[ky]),
+            Vec4::splat(self.origin[kz]),
+        );
+        let (sx, sy, sz) = (
+            Vec4::splat(self.sx),
+            Vec4::splat(self.sy),
+            Vec4::splat(self.sz),
+        );
+        let shear = |p: &[Vec4; 3]| {
+            let (x, y, z) = (p[kx] - ox, p[ky] - oy, p[kz] - oz);
+            (x - sx * z, y - sy * z, z)
+        };
+        let (ax, ay, az) = shear(&v[0]);
+        let (bx, by, bz) = shear(&v[1]);
+        let (cx, cy, cz) = shear(&v[2]);
+        let u = cx * by - cy * bx;
+        let v = ax * cy - ay * cx;
+        let w = bx * ay - by * ax;
+        let zero = Vec4::ZERO;
+        let retry = u.cmpeq(zero) | v.cmpeq(zero) | w.cmpeq(zero);
+        let outside = (u.cmplt(zero) | v.cmplt(zero) | w.cmplt(zero))
+            & (u.cmpgt(zero) | v.cmpgt(zero) | w.cmpgt(zero));
+        let det = u + v + w;
+        let t_scaled = u * (sz * az) + v * (sz * bz) + w * (sz * cz);
+        let negative = det.cmplt(zero);
+        let ts = Vec4::select(negative, -t_scaled, t_scaled);
+        let d = Vec4::select(negative, -det, det);
+        let near = ts.cmplt(Vec4::splat(tmax) * d);
+        (retry | (!outside & det.cmpne(zero) & near)).bitmask()
     }
 
     /// The hit distance to the plane of `(p0, p1, p2)` computed in double precision, or `None`

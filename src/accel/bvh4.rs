@@ -1,0 +1,392 @@
+//! A 4-wide bounding volume hierarchy traversed one ray at a time with 4-lane SIMD (SSE2 on
+//! x86-64, NEON on AArch64, through glam's `Vec4`), with its triangles stored four to a packet.
+//!
+//! The tree is obvhs's binary PLOC build, collapsed: each node takes its binary children and
+//! keeps opening the largest (by surface area) inner one until it has four, as Embree's BVH4
+//! does. A node stores its four children's boxes as structure-of-arrays (`lo[axis]` holds
+//! the four minima), so one ray meets all four boxes in six subtractions and multiplies. The
+//! leaves hold at most four triangles, laid out as one [`Packet`] (vertex, axis, lane), so
+//! the triangle test's first stage runs on all four at once too.
+//!
+//! The box test is pbrt-v4's conservative slab test (§6.1.2 and §6.8.2 of the 4th edition):
+//! the far distance is scaled up by 1 + 2γ₃ so rounding never culls a box the ray touches. A
+//! direction component that is exactly zero has an infinite inverse, and a ray starting
+//! exactly on such a slab's plane gives 0 × ∞ = NaN there: the test ignores a NaN slab
+//! distance (the ray lies in the slab for all t), so an axis-aligned ray along a box's face
+//! still enters it. The near plane of each axis is chosen from the sign bit of the inverse
+//! direction, the same bit the distances are computed with.
+
+use glam::{Vec3A, Vec4};
+use obvhs::bvh2::Bvh2;
+use std::mem::MaybeUninit;
+
+/// Four triangles side by side: `v[vertex][axis]` holds that coordinate of each lane's vertex.
+/// `id` is each lane's index into the accel's triangle list; `lanes` says how many are used.
+#[derive(Clone, Copy, Debug)]
+pub struct Packet {
+    pub v: [[Vec4; 3]; 3],
+    pub id: [u32; 4],
+    pub lanes: u32,
+}
+
+impl Packet {
+    /// The triangle in lane `lane`.
+    #[inline]
+    pub fn triangle(&self, lane: usize) -> [Vec3A; 3] {
+        self.v
+            .map(|c| Vec3A::new(c[0][lane], c[1][lane], c[2][lane]))
+    }
+
+    /// Bit `i` set for each used lane.
+    #[inline]
+    pub fn used(&self) -> u32 {
+        (1 << self.lanes) - 1
+    }
+}
+
+/// An inner node: the boxes of up to four children and what each child is ([`Child`]).
+/// An unused slot has an empty box (min +∞, max −∞), which no ray enters.
+#[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
+struct Node {
+    lo: [Vec4; 3],
+    hi: [Vec4; 3],
+    child: [u64; 4],
+}
+
+/// A child reference: an inner node's index, or (top bit set) a leaf: its first packet in the
+/// low 32 bits and its packet count above them. 64 bits wide, so no scene outgrows it (the
+/// node is 128 bytes either way).
+struct Child;
+
+impl Child {
+    const LEAF: u64 = 1 << 63;
+    const EMPTY: u64 = u64::MAX;
+
+    fn leaf(first: usize, packets: usize) -> u64 {
+        Self::LEAF | ((packets as u64) << 32) | first as u64
+    }
+
+    /// A leaf's packet range.
+    fn packets(reference: u64) -> std::ops::Range<usize> {
+        let first = (reference & 0xffff_ffff) as usize;
+        let count = ((reference & !Self::LEAF) >> 32) as usize;
+        first..first + count
+    }
+}
+
+/// What a leaf visit tells the traversal: the (possibly shrunk) far bound for the boxes still to
+/// visit, or that the query is over.
+pub enum Visit {
+    Bound(f32),
+    Stop,
+}
+
+/// One query's ray, prepared for the box test.
+pub struct BoxRay {
+    origin: Vec3A,
+    inv: Vec3A,
+    /// Per axis, whether the ray runs towards −axis (the sign bit of `inv`).
+    neg: [bool; 3],
+    tmin: f32,
+}
+
+impl BoxRay {
+    pub fn new(origin: Vec3A, dir: Vec3A, tmin: f32) -> BoxRay {
+        let inv = Vec3A::ONE / dir;
+        BoxRay {
+            origin,
+            inv,
+            neg: [
+                inv.x.is_sign_negative(),
+                inv.y.is_sign_negative(),
+                inv.z.is_sign_negative(),
+            ],
+            tmin,
+        }
+    }
+}
+
+/// 1 + 2γ₃ (pbrt-v4's bound on the rounding of a slab distance).
+const FAR_SCALE: f32 = 1.0 + 2.0 * crate::geometry::offset::gamma(3);
+
+/// The larger of `t` and `acc`, keeping `acc` where `t` is NaN (`acc` never is).
+#[inline(always)]
+fn max_keep(t: Vec4, acc: Vec4) -> Vec4 {
+    #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
+    {
+        // maxps returns its second operand when either is NaN.
+        t.max(acc)
+    }
+    #[cfg(not(any(target_arch = "x86", target_arch = "x86_64")))]
+    {
+        Vec4::select(t.cmpgt(acc), t, acc)
+    }
+}
+
+/// The smaller of `t` and `acc`, keeping `acc` where `t` is NaN.
+#[inline(always)]
+fn min_keep(t: Vec4, acc: Vec4) -> Vec4 {
+    #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
+    {
+        t.min(acc)
+    }
+    #[cfg(not(any(target_arch = "x86", target_arch = "x86_64")))]
+    {
+        Vec4::select(t.cmplt(acc), t, acc)
+    }
+}
+
+impl Node {
+    const EMPTY: Node = Node {
+        lo: [Vec4::INFINITY; 3],
+        hi: [Vec4::NEG_INFINITY; 3],
+        child: [Child::EMPTY; 4],
+    };
+
+    /// The entry distance of the ray into each child box, and the mask of the children it
+    /// enters before `tmax`.
+    #[inline(always)]
+    fn enter(&self, ray: &BoxRay, tmax: f32) -> (Vec4, u32) {
+        let mut near = Vec4::splat(ray.tmin);
+        let mut far = Vec4::splat(tmax);
+        for axis in 0..3 {
+            let (n, f) = if ray.neg[axis] {
+                (self.hi[axis], self.lo[axis])
+            } else {
+                (self.lo[axis], self.hi[axis])
+            };
+            let o = Vec4::splat(ray.origin[axis]);
+            let inv = Vec4::splat(ray.inv[axis]);
+            near = max_keep((n - o) * inv, near);
+            far = min_keep((f - o) * inv * FAR_SCALE, far);
+        }
+        (near, near.cmple(far).bitmask())
+    }
+}
+
+/// The tree: inner nodes, leaf packets and the root reference.
+pub struct Bvh4 {
+    nodes: Vec<Node>,
+    pub packets: Vec<Packet>,
+    root: u64,
+    /// Stack entries a traversal can need (three per level below the root, plus one).
+    stack_size: usize,
+}
+
+/// A binary node still to collapse: where its reference goes (`None` for the root, else the
+/// four-wide node and slot) and its depth in the four-wide tree.
+struct Pending {
+    node: usize,
+    slot: Option<(usize, usize)>,
+    level: usize,
+}
+
+/// A traversal stack entry: a child reference and the distance at which the ray enters it.
+type Entry = (u64, f32);
+
+/// Traversals whose stack fits this many entries keep it on the call stack.
+const INLINE_STACK: usize = 192;
+
+impl Bvh4 {
+    /// Collapse obvhs's binary tree over `triangles` (`[v0, v1, v2]` each) into four-wide
+    /// nodes and packets.
+    pub fn from_bvh2(bvh2: &Bvh2, triangles: &[[Vec3A; 3]]) -> Bvh4 {
+        let mut out = Bvh4 {
+            nodes: Vec::new(),
+            packets: Vec::new(),
+            root: Child::EMPTY,
+            stack_size: 1,
+        };
+        if bvh2.nodes.is_empty() || triangles.is_empty() {
+            return out;
+        }
+        let mut work = vec![Pending {
+            node: 0,
+            slot: None,
+            level: 0,
+        }];
+        let mut depth = 0;
+        while let Some(Pending {
+            node: n,
+            slot,
+            level,
+        }) = work.pop()
+        {
+            depth = depth.max(level);
+            let node = &bvh2.nodes[n];
+            let reference = if node.prim_count > 0 {
+                let first = node.first_index as usize;
+                let ids = &bvh2.primitive_indices[first..first + node.prim_count as usize];
+                out.leaf(ids, triangles)
+            } else {
+                let index = out.nodes.len();
+                out.nodes.push(Node::EMPTY);
+                for (k, c) in Self::open(bvh2, n).into_iter().enumerate() {
+                    let b = &bvh2.nodes[c].aabb;
+                    let node = &mut out.nodes[index];
+                    for axis in 0..3 {
+                        node.lo[axis][k] = b.min[axis];
+                        node.hi[axis][k] = b.max[axis];
+                    }
+                    work.push(Pending {
+                        node: c,
+                        slot: Some((index, k)),
+                        level: level + 1,
+                    });
+                }
+                index as u64
+            };
+            match slot {
+                None => out.root = reference,
+                Some((parent, k)) => out.nodes[parent].child[k] = reference,
+            }
+        }
+        out.stack_size = 3 * depth + 1;
+        out
+    }
+
+    /// Up to four binary-tree nodes below inner node `n`: its two children, then, while there
+    /// is room, the largest inner one replaced by its own two children.
+    fn open(bvh2: &Bvh2, n: usize) -> Vec<usize> {
+        let first = bvh2.nodes[n].first_index as usize;
+        let mut children = vec![first, first + 1];
+        while children.len() < 4 {
+            let largest = children
+                .iter()
+                .enumerate()
+                .filter(|(_, &c)| bvh2.nodes[c].prim_count == 0)
+                .max_by(|a, b| {
+                    let area = |c: usize| bvh2.nodes[c].aabb.half_area();
+                    area(*a.1).total_cmp(&area(*b.1))
+                });
+            let Some((k, &c)) = largest else { break };
+            let first = bvh2.nodes[c].first_index as usize;
+            children[k] = first;
+            children.insert(k + 1, first + 1);
+        }
+        children
+    }
+
+    /// Lay out the triangles `ids` as packets and return the leaf's reference.
+    fn leaf(&mut self, ids: &[u32], triangles: &[[Vec3A; 3]]) -> u64 {
+        let first = self.packets.len();
+        for chunk in ids.chunks(4) {
+            let mut p = Packet {
+                v: [[Vec4::ZERO; 3]; 3],
+                id: [0; 4],
+                lanes: chunk.len() as u32,
+            };
+            for lane in 0..4 {
+                // Unused lanes repeat the first triangle (masked out by `used`).
+                let id = chunk.get(lane).copied().unwrap_or(chunk[0]);
+                let t = triangles[id as usize];
+                p.id[lane] = id;
+                for (vertex, v) in t.iter().enumerate() {
+                    for axis in 0..3 {
+                        p.v[vertex][axis][lane] = v[axis];
+                    }
+                }
+            }
+            self.packets.push(p);
+        }
+        Child::leaf(first, self.packets.len() - first)
+    }
+
+    /// Visit the leaves the ray `(ray, tmin…tmax)` enters, nearest box first when `ordered`.
+    /// `visit` sees a leaf's packets and returns the new far bound (a closest-hit query
+    /// shrinks it) or [`Visit::Stop`]. Returns false when a visit stopped the query.
+    #[inline]
+    pub fn traverse(
+        &self,
+        ray: &BoxRay,
+        tmax: f32,
+        ordered: bool,
+        visit: impl FnMut(&[Packet]) -> Visit,
+    ) -> bool {
+        if self.root == Child::EMPTY {
+            return true;
+        }
+        // Uninitialised: zeroing 3 KiB per ray cost as much as a third of a traversal. One
+        // call of `traverse_with`, so that `visit` is inlined into it.
+        let mut inline = [const { MaybeUninit::uninit() }; INLINE_STACK];
+        let mut heap;
+        let stack: &mut [MaybeUninit<Entry>] = if self.stack_size <= INLINE_STACK {
+            &mut inline
+        } else {
+            heap = vec![MaybeUninit::uninit(); self.stack_size];
+            &mut heap
+        };
+        self.traverse_with(stack, ray, tmax, ordered, visit)
+    }
+
+    #[inline(always)]
+    fn traverse_with(
+        &self,
+        stack: &mut [MaybeUninit<Entry>],
+        ray: &BoxRay,
+        mut tmax: f32,
+        ordered: bool,
+        mut visit: impl FnMut(&[Packet]) -> Visit,
+    ) -> bool {
+        let mut top = 0;
+        let mut current = self.root;
+        loop {
+            if current & Child::LEAF == 0 {
+                let node = &self.nodes[current as usize];
+                let (near, mut mask) = node.enter(ray, tmax);
+                let near = near.to_array();
+                // The entered children, pushed farthest first so the nearest is visited next.
+                let mut hits = [(0u64, 0f32); 4];
+                let mut count = 0;
+                while mask != 0 {
+                    let k = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    let child = node.child[k];
+                    if child != Child::EMPTY {
+                        hits[count] = (child, near[k]);
+                        count += 1;
+                    }
+                }
+                if ordered && count > 1 {
+                    // Insertion sort, farthest first.
+                    for i in 1..count {
+                        let mut j = i;
+                        while j > 0 && hits[j - 1].1 < hits[j].1 {
+                            hits.swap(j - 1, j);
+                            j -= 1;
+                        }
+                    }
+                }
+                if count > 0 {
+                    for &entry in &hits[..count - 1] {
+                        stack[top].write(entry);
+                        top += 1;
+                    }
+                    current = hits[count - 1].0;
+                    continue;
+                }
+            } else {
+                match visit(&self.packets[Child::packets(current)]) {
+                    Visit::Bound(t) => tmax = t,
+                    Visit::Stop => return false,
+                }
+            }
+            // The next entry the ray still enters before the (possibly shrunk) bound.
+            loop {
+                if top == 0 {
+                    return true;
+                }
+                top -= 1;
+                // SAFETY: every entry below `top` was written by the push above before `top`
+                // passed it, and `stack` holds `stack_size` entries, the most a tree of this
+                // depth can push (three per level).
+                let (child, near) = unsafe { stack[top].assume_init() };
+                if near <= tmax {
+                    current = child;
+                    break;
+                }
+            }
+        }
+    }
+}

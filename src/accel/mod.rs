@@ -1,0 +1,420 @@
+//! Ray tracing against all scene triangles: a four-wide BVH ([`bvh4`], built by collapsing
+//! obvhs's binary PLOC tree) traversed with a conservative slab test, and the watertight
+//! triangle test of [`crate::geometry::triangle`] (obvhs's own test is not watertight), whose
+//! first stage runs on a leaf's four triangles at once.
+//!
+//! Watertight triangles are not enough: the node culling must never reject a box the ray
+//! touches. The slab test rounds outwards as pbrt-v4's does and treats a ray lying in a slab's
+//! plane as inside it (see [`bvh4`]), so the boxes are the triangles' own, undilated.
+//!
+//! Alpha cut-outs (glTF `MASK`) are tested at each candidate hit: a hit where the material's
+//! alpha is below its cutoff is no hit, so every ray (camera, shadow, bounce) passes through
+//! the holes.
+
+mod bvh4;
+
+use crate::geometry::triangle::{TriangleHit, WatertightRay};
+use crate::scene::{interpolate_uv, Cutout, Scene, Texture};
+use bvh4::{BoxRay, Bvh4, Packet, Visit};
+use glam::{Vec2, Vec3, Vec3A};
+use obvhs::bvh2::builder::build_bvh2;
+use obvhs::triangle::Triangle;
+use obvhs::BvhBuildParams;
+use std::time::Duration;
+
+/// A closest hit: which triangle, where along the ray, and its barycentrics.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    pub t: f32,
+    pub mesh: u32,
+    pub triangle: u32,
+    /// Weights of the triangle's three vertices.
+    pub b: [f32; 3],
+}
+
+/// The unit direction of `dir` and the factor that converts t along it back to t along `dir`
+/// (the triangle test runs on the unit direction, so its rounding does not depend on the
+/// length a caller happens to pass).
+#[inline]
+fn unit(dir: Vec3) -> Option<(Vec3A, f32)> {
+    let len = dir.length();
+    (len > 0.0 && len.is_finite()).then(|| (Vec3A::from(dir / len), len))
+}
+
+/// The acceleration structure over every triangle of a scene.
+pub struct Accel {
+    bvh: Bvh4,
+    /// `(mesh, triangle within mesh)` of each triangle, by the packets' `id`.
+    ids: Vec<(u32, u32)>,
+    /// Per mesh, its alpha cut-out where its material has one that varies (empty where no
+    /// mesh has one): a hit in a hole is no hit.
+    masks: Vec<Option<Mask>>,
+}
+
+/// A mesh's alpha cut-out, with what its test reads: the texture (alone, as texture 0), the
+/// vertices' texture coordinates and the triangles (the accel owns no scene).
+struct Mask {
+    cutout: Cutout,
+    textures: Vec<Texture>,
+    uvs: Option<Vec<Vec2>>,
+    triangles: Vec<[u32; 3]>,
+}
+
+impl Mask {
+    fn of(scene: &Scene, mesh: &crate::scene::Mesh) -> Option<Mask> {
+        let mut cutout = scene.materials.get(mesh.material)?.cutout?;
+        if cutout.constant().is_some() {
+            // Constant: kept whole (or left out of the scene whole).
+            return None;
+        }
+        let textures = match &mut cutout.texture {
+            Some(c) => {
+                let t = scene.textures.get(c.texture.texture)?.clone();
+                c.texture.texture = 0;
+                vec![t]
+            }
+            None => Vec::new(),
+        };
+        Some(Mask {
+            cutout,
+            textures,
+            uvs: mesh.uvs.clone(),
+            triangles: mesh.triangles.clone(),
+        })
+    }
+
+    /// Whether the surface is there at barycentrics `b` of triangle `triangle`.
+    fn keeps(&self, triangle: u32, b: [f32; 3]) -> bool {
+        let t = self.triangles[triangle as usize];
+        let uv = interpolate_uv(self.uvs.as_deref(), t, b);
+        self.cutout.keeps(&self.textures, uv)
+    }
+}
+
+impl Accel {
+    /// Build over all triangles of `scene` (PLOC, obvhs's "medium" preset).
+    pub fn build(scene: &Scene) -> Accel {
+        let mut tris = Vec::with_capacity(scene.triangle_count());
+        let mut ids = Vec::with_capacity(scene.triangle_count());
+        for (mi, m) in scene.meshes.iter().enumerate() {
+            for (ti, t) in m.triangles.iter().enumerate() {
+                let p = |i: u32| Vec3A::from(m.positions[i as usize]);
+                tris.push(Triangle {
+                    v0: p(t[0]),
+                    v1: p(t[1]),
+                    v2: p(t[2]),
+                });
+                ids.push((mi as u32, ti as u32));
+            }
+        }
+        let mut accel = Self::from_triangles(tris, ids);
+        let masks: Vec<Option<Mask>> = scene.meshes.iter().map(|m| Mask::of(scene, m)).collect();
+        if masks.iter().any(Option::is_some) {
+            accel.masks = masks;
+        }
+        accel
+    }
+
+    /// Whether the hit `h` on entry `id` is on the surface (not in a cut-out's hole).
+    #[inline]
+    fn solid(&self, id: usize, h: &TriangleHit) -> bool {
+        if self.masks.is_empty() {
+            return true;
+        }
+        let (mesh, triangle) = self.ids[id];
+        self.masks[mesh as usize]
+            .as_ref()
+            .is_none_or(|m| m.keeps(triangle, h.b))
+    }
+
+    fn from_triangles(tris: Vec<Triangle>, ids: Vec<(u32, u32)>) -> Accel {
+        let bvh = if tris.is_empty() {
+            Bvh4::from_bvh2(&Default::default(), &[])
+        } else {
+            let bvh2 = build_bvh2(&tris, BUILD, &mut Duration::default());
+            let vertices: Vec<[Vec3A; 3]> = tris.iter().map(|t| [t.v0, t.v1, t.v2]).collect();
+            Bvh4::from_bvh2(&bvh2, &vertices)
+        };
+        Accel {
+            bvh,
+            ids,
+            masks: Vec::new(),
+        }
+    }
+
+    /// Number of triangles.
+    pub fn len(&self) -> usize {
+        self.ids.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.ids.is_empty()
+    }
+
+    /// The traversal set-up shared by every query, or `None` when nothing can be hit.
+    fn query(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<Query> {
+        if self.ids.is_empty() {
+            return None;
+        }
+        let (d, len) = unit(dir)?;
+        let o = Vec3A::from(origin);
+        Some(Query {
+            wt: WatertightRay::new(o, d),
+            boxes: BoxRay::new(o, d, tmin * len),
+            len,
+            tmin: tmin * len,
+            tmax: tmax * len,
+        })
+    }
+
+    /// The lanes of `packet` that `q` hits in `(q.tmin, tmax)`, in lane order, with their hits.
+    #[inline]
+    fn packet_hits<'a>(
+        &'a self,
+        q: &'a Query,
+        packet: &'a Packet,
+        tmax: f32,
+    ) -> impl Iterator<Item = (u32, TriangleHit)> + 'a {
+        let mut lanes = q.wt.candidates(&packet.v, tmax) & packet.used();
+        let (wt, tmin) = (&q.wt, q.tmin);
+        std::iter::from_fn(move || {
+            while lanes != 0 {
+                let lane = lanes.trailing_zeros() as usize;
+                lanes &= lanes - 1;
+                let [p0, p1, p2] = packet.triangle(lane);
+                let id = packet.id[lane];
+                if let Some(h) = wt.intersect(p0, p1, p2, tmin, tmax) {
+                    if self.solid(id as usize, &h) {
+                        return Some((id, h));
+                    }
+                }
+            }
+            None
+        })
+    }
+
+    fn hit(&self, q: &Query, id: u32, h: TriangleHit) -> Hit {
+        let (mesh, triangle) = self.ids[id as usize];
+        Hit {
+            t: h.t / q.len,
+            mesh,
+            triangle,
+            b: h.b,
+        }
+    }
+
+    /// Closest intersection in `(tmin, tmax)` along `origin + t·dir` (`dir` need not be unit).
+    pub fn closest_hit(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<Hit> {
+        let q = self.query(origin, dir, tmin, tmax)?;
+        let mut best: Option<(u32, TriangleHit)> = None;
+        let mut closest = q.tmax;
+        self.bvh.traverse(&q.boxes, q.tmax, true, |packets| {
+            for packet in packets {
+                // Each lane's hit is closer than the ones before it (it is tested against the
+                // shrinking `closest`), so the last one is the packet's closest.
+                let mut lanes = q.wt.candidates(&packet.v, closest) & packet.used();
+                while lanes != 0 {
+                    let lane = lanes.trailing_zeros() as usize;
+                    lanes &= lanes - 1;
+                    let [p0, p1, p2] = packet.triangle(lane);
+                    let id = packet.id[lane];
+                    if let Some(h) = q.wt.intersect(p0, p1, p2, q.tmin, closest) {
+                        if self.solid(id as usize, &h) {
+                            best = Some((id, h));
+                            closest = h.t;
+                        }
+                    }
+                }
+            }
+            Visit::Bound(rounded_up(closest))
+        });
+        best.map(|(id, h)| self.hit(&q, id, h))
+    }
+
+    /// True when anything lies in `(tmin, tmax)` along the ray.
+    pub fn occluded(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> bool {
+        let Some(q) = self.query(origin, dir, tmin, tmax) else {
+            return false;
+        };
+        !self.bvh.traverse(&q.boxes, q.tmax, false, |packets| {
+            for packet in packets {
+                if self.packet_hits(&q, packet, q.tmax).next().is_some() {
+                    return Visit::Stop;
+                }
+            }
+            Visit::Bound(q.tmax)
+        })
+    }
+
+    /// Every intersection along the ray in `(tmin, tmax)`, unsorted (for tests and diagnostics).
+    pub fn all_hits(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Vec<Hit> {
+        let mut out = Vec::new();
+        let Some(q) = self.query(origin, dir, tmin, tmax) else {
+            return out;
+        };
+        self.bvh.traverse(&q.boxes, q.tmax, false, |packets| {
+            for packet in packets {
+                out.extend(
+                    self.packet_hits(&q, packet, q.tmax)
+                        .map(|(id, h)| self.hit(&q, id, h)),
+                );
+            }
+            Visit::Bound(q.tmax)
+        });
+        out
+    }
+}
+
+/// obvhs's "medium" build with leaves of at most four triangles (one [`Packet`]).
+const BUILD: BvhBuildParams = BvhBuildParams {
+    max_prims_per_leaf: 4,
+    ..BvhBuildParams::medium_build()
+};
+
+/// One query's rays along the unit direction: `wt` for the triangle tests, `boxes` for the
+/// node tests; `tmin` and `tmax` are along the unit direction and `len` converts back.
+struct Query {
+    wt: WatertightRay,
+    boxes: BoxRay,
+    len: f32,
+    tmin: f32,
+    tmax: f32,
+}
+
+/// A hit distance rounded up, as the far bound of the boxes still to visit: a box whose entry
+/// rounds to just past the closest hit may still hold an equally close one.
+#[inline]
+fn rounded_up(t: f32) -> f32 {
+    t * (1.0 + 4.0 * f32::EPSILON)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sampler::Sampler;
+
+    /// The closest of every triangle's own watertight test: what the tree must reproduce.
+    fn brute_force(tris: &[Triangle], o: Vec3, d: Vec3, tmax: f32) -> Option<(usize, f32)> {
+        let (u, len) = unit(d)?;
+        let wt = WatertightRay::new(Vec3A::from(o), u);
+        let mut best: Option<(usize, f32)> = None;
+        for (i, t) in tris.iter().enumerate() {
+            let limit = best.map_or(tmax * len, |b| b.1);
+            if let Some(h) = wt.intersect(t.v0, t.v1, t.v2, 0.0, limit) {
+                best = Some((i, h.t));
+            }
+        }
+        best.map(|(i, t)| (i, t / len))
+    }
+
+    fn accel_over(tris: &[Triangle]) -> Accel {
+        let ids = (0..tris.len() as u32).map(|i| (0, i)).collect();
+        Accel::from_triangles(tris.to_vec(), ids)
+    }
+
+    /// Random triangles in a cube and random rays: the tree finds exactly the brute-force
+    /// closest hit (same triangle, same distance) and agrees on occlusion, with and without
+    /// a far limit.
+    #[test]
+    fn closest_hit_and_occlusion_match_brute_force() {
+        let mut s = Sampler::new(7, 0, 0);
+        let mut point = |scale: f32| {
+            let (a, b) = (s.next_2d(), s.next_1d());
+            Vec3A::new(a.x - 0.5, a.y - 0.5, b - 0.5) * scale
+        };
+        let tris: Vec<Triangle> = (0..3000)
+            .map(|_| {
+                let c = point(10.0);
+                Triangle {
+                    v0: c + point(1.0),
+                    v1: c + point(1.0),
+                    v2: c + point(1.0),
+                }
+            })
+            .collect();
+        let accel = accel_over(&tris);
+        let mut hits = 0;
+        for _ in 0..4000 {
+            let o = Vec3::from(point(12.0));
+            let d = Vec3::from(point(2.0));
+            for tmax in [f32::INFINITY, 3.0] {
+                let expected = brute_force(&tris, o, d, tmax);
+                let got = accel.closest_hit(o, d, 0.0, tmax);
+                assert_eq!(
+                    got.map(|h| (h.triangle as usize, h.t)),
+                    expected,
+                    "ray {o} {d} tmax {tmax}"
+                );
+                assert_eq!(accel.occluded(o, d, 0.0, tmax), expected.is_some());
+                hits += usize::from(expected.is_some());
+            }
+        }
+        assert!(hits > 1000, "{hits} hits: the test must exercise hits");
+    }
+
+    /// Axis-aligned rays lying exactly in the plane of a box face (a zero direction component
+    /// and an origin on the slab's plane: 0 × ∞ in the slab test) are not culled: a grid of
+    /// unit squares in z = 0 and z = 1 and a wall at x = 20 spanning y in [0, 8] and z in
+    /// [0, 1], and rays along x in the planes y = k and z = 0 or 1, which are the planes of
+    /// the wall's own box faces.
+    #[test]
+    fn rays_in_a_box_face_plane_are_not_culled() {
+        let mut tris = Vec::new();
+        for j in 0..8 {
+            for i in 0..8 {
+                for z in [0.0, 1.0] {
+                    let p = |x: f32, y: f32| Vec3A::new(i as f32 + x, j as f32 + y, z);
+                    tris.push(Triangle {
+                        v0: p(0.0, 0.0),
+                        v1: p(1.0, 0.0),
+                        v2: p(1.0, 1.0),
+                    });
+                    tris.push(Triangle {
+                        v0: p(0.0, 0.0),
+                        v1: p(1.0, 1.0),
+                        v2: p(0.0, 1.0),
+                    });
+                }
+            }
+        }
+        let w = |y: f32, z: f32| Vec3A::new(20.0, y, z);
+        tris.push(Triangle {
+            v0: w(0.0, 0.0),
+            v1: w(8.0, 0.0),
+            v2: w(8.0, 1.0),
+        });
+        tris.push(Triangle {
+            v0: w(0.0, 0.0),
+            v1: w(8.0, 1.0),
+            v2: w(0.0, 1.0),
+        });
+        let wall = tris.len() - 2..tris.len();
+        let accel = accel_over(&tris);
+        let mut hits = 0;
+        for j in 0..=8 {
+            for z in [0.0, 1.0, 0.5] {
+                for dir in [
+                    Vec3::X,
+                    Vec3::new(1.0, -0.0, 0.0),
+                    Vec3::new(1.0, 0.0, -0.0),
+                ] {
+                    let o = Vec3::new(-5.0, j as f32, z);
+                    let hit = accel.closest_hit(o, dir, 0.0, f32::INFINITY);
+                    let expected = brute_force(&tris, o, dir, f32::INFINITY);
+                    assert_eq!(hit.map(|h| h.t), expected.map(|e| e.1), "ray from {o}");
+                    assert_eq!(
+                        accel.occluded(o, dir, 0.0, f32::INFINITY),
+                        expected.is_some()
+                    );
+                    if let Some(h) = hit {
+                        assert!(wall.contains(&(h.triangle as usize)), "ray from {o}: {h:?}");
+                        hits += 1;
+                    }
+                }
+            }
+        }
+        // Every ray meets the wall, those along its edges too: the watertight test counts a
+        // point on an edge (edge function exactly 0) as inside.
+        assert_eq!(hits, 81, "{hits} of 81 rays hit the wall");
+    }
+}
