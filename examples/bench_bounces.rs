@@ -134,7 +134,14 @@ fn main() -> common::Result<()> {
                 .transpose()?;
             let mitsuba = python
                 .as_ref()
-                .map(|py| common::mitsuba_anchor(Path::new(py), &scene_path, &reference_path))
+                .map(|py| {
+                    common::mitsuba_anchor(
+                        Path::new(py),
+                        &scene_path,
+                        &reference_path,
+                        &common::ANCHOR_SPP,
+                    )
+                })
                 .transpose()?
                 .unwrap_or_default();
             anchors.push(Anchors {

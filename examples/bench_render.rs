@@ -182,7 +182,12 @@ fn cli_bake(
 /// Mitsuba + OIDN at 256 spp on scene `name` (`scripts/anchor`), through `python`.
 fn oidn_anchor(python: &std::path::Path, name: &str) -> Result<Anchor, Box<dyn std::error::Error>> {
     let scene = data(&format!("{name}.gltf"));
-    let runs = common::mitsuba_anchor(python, &scene, &data(&format!("{name}_d8_ref.exr")))?;
+    let runs = common::mitsuba_anchor(
+        python,
+        &scene,
+        &data(&format!("{name}_d8_ref.exr")),
+        &common::ANCHOR_SPP,
+    )?;
     Ok(runs
         .iter()
         .find(|(spp, _)| *spp == 256)

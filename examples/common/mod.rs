@@ -79,8 +79,13 @@ pub fn path_tracer_for(
 /// The sample counts the Mitsuba anchor runs at.
 pub const ANCHOR_SPP: [u32; 2] = [16, 256];
 
-/// `scripts/anchor/mitsuba_oidn.py` on one scene: one JSON object per spp of [`ANCHOR_SPP`].
-pub fn mitsuba_anchor(python: &Path, scene: &Path, reference: &Path) -> Result<Vec<(u32, Value)>> {
+/// `scripts/anchor/mitsuba_oidn.py` on one scene: one JSON object per spp of `spps`.
+pub fn mitsuba_anchor(
+    python: &Path,
+    scene: &Path,
+    reference: &Path,
+    spps: &[u32],
+) -> Result<Vec<(u32, Value)>> {
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/anchor/mitsuba_oidn.py");
     let run = run_ok(
         "the Mitsuba anchor",
@@ -89,7 +94,7 @@ pub fn mitsuba_anchor(python: &Path, scene: &Path, reference: &Path) -> Result<V
             .arg(scene)
             .arg(reference)
             .arg("8")
-            .args(ANCHOR_SPP.map(|s| s.to_string())),
+            .args(spps.iter().map(|s| s.to_string())),
     )?;
     Ok(String::from_utf8_lossy(&run.stdout)
         .lines()

@@ -1,11 +1,11 @@
-//! Ray tracing against all scene triangles: a four-wide BVH ([`bvh4`], built by collapsing
+//! Ray tracing against all scene triangles: a four-wide BVH (`bvh4`, built by collapsing
 //! obvhs's binary PLOC tree) traversed with a conservative slab test, and the watertight
 //! triangle test of [`crate::geometry::triangle`] (obvhs's own test is not watertight), whose
 //! first stage runs on a leaf's four triangles at once.
 //!
 //! Watertight triangles are not enough: the node culling must never reject a box the ray
 //! touches. The slab test rounds outwards as pbrt-v4's does and treats a ray lying in a slab's
-//! plane as inside it (see [`bvh4`]), so the boxes are the triangles' own, undilated.
+//! plane as inside it (see `bvh4`), so the boxes are the triangles' own, undilated.
 //!
 //! Alpha cut-outs (glTF `MASK`) are tested at each candidate hit: a hit where the material's
 //! alpha is below its cutoff is no hit, so every ray (camera, shadow, bounce) passes through

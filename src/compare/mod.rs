@@ -22,7 +22,7 @@ use crate::bounce::BounceSettings;
 use crate::cache::store::BakedCache;
 use crate::error::{Error, Result};
 use crate::image::{error_against, srgb8, Image};
-use crate::reference::{render, RenderSettings};
+use crate::reference::{render, RenderOutput, RenderSettings};
 use crate::render::{render_final, FinalSettings};
 use crate::scene::{Camera, Scene};
 use serde_json::{json, Value};
@@ -114,6 +114,43 @@ impl Method {
             Method::Denoised { .. } => "path tracer + OIDN",
         }
     }
+
+    /// The method as tables and plots label it: the cache with its preset, the path tracer
+    /// with its samples per pixel.
+    pub fn label(&self) -> String {
+        match self {
+            Method::Cache { preset, .. } => format!("wpbgi {}", preset.name()),
+            Method::PathTracer { spp } | Method::Denoised { spp } => {
+                format!("{}, {spp} spp", self.name())
+            }
+        }
+    }
+}
+
+/// A path-traced render's seconds without those spent keeping its first hits (which only the
+/// denoiser needs).
+fn traced_seconds(out: &RenderOutput) -> f64 {
+    out.seconds - out.first_hits.as_ref().map_or(0.0, |h| h.seconds)
+}
+
+/// `out` denoised, with the seconds of the render and the denoiser together; `None`, with
+/// `missing` saying why, when the denoiser fails (and from then on, without trying again).
+fn denoise(out: &RenderOutput, missing: &mut Option<String>) -> Option<(Image, f64)> {
+    if missing.is_some() {
+        return None;
+    }
+    let start = Instant::now();
+    match out.denoised(rayon::current_num_threads()) {
+        Some(Ok(image)) => Some((image, out.seconds + start.elapsed().as_secs_f64())),
+        Some(Err(e)) => {
+            *missing = Some(e.to_string());
+            None
+        }
+        None => {
+            *missing = Some("the render kept no first hits".into());
+            None
+        }
+    }
 }
 
 /// One measured run.
@@ -135,12 +172,7 @@ impl Run {
     }
 
     pub fn label(&self) -> String {
-        match &self.method {
-            Method::Cache { preset, .. } => format!("wpbgi {}", preset.name()),
-            Method::PathTracer { spp } | Method::Denoised { spp } => {
-                format!("{}, {spp} spp", self.method.name())
-            }
-        }
+        self.method.label()
     }
 
     fn to_json(&self) -> Value {
@@ -288,36 +320,27 @@ pub fn compare(
         &|f| progress("path tracing", f),
         &mut |out| {
             let peak_memory = memory::peak();
-            let hits_seconds = out.first_hits.as_ref().map_or(0.0, |h| h.seconds);
             let (mse, rel_mse, mssim) = errors(&out.mean, &reference.image)?;
             runs.push(Run {
                 method: Method::PathTracer { spp: out.spp },
                 bake_seconds: 0.0,
-                render_seconds: out.seconds - hits_seconds,
+                render_seconds: traced_seconds(&out),
                 peak_memory,
                 mse,
                 rel_mse,
                 mssim,
             });
-            if denoiser_missing.is_some() {
-                return Ok(());
-            }
-            let start = Instant::now();
-            match out.denoised(rayon::current_num_threads()) {
-                Some(Ok(image)) => {
-                    let (mse, rel_mse, mssim) = errors(&image, &reference.image)?;
-                    denoised.push(Run {
-                        method: Method::Denoised { spp: out.spp },
-                        bake_seconds: 0.0,
-                        render_seconds: out.seconds + start.elapsed().as_secs_f64(),
-                        peak_memory: memory::peak(),
-                        mse,
-                        rel_mse,
-                        mssim,
-                    });
-                }
-                Some(Err(e)) => denoiser_missing = Some(e.to_string()),
-                None => denoiser_missing = Some("the render kept no first hits".into()),
+            if let Some((image, seconds)) = denoise(&out, &mut denoiser_missing) {
+                let (mse, rel_mse, mssim) = errors(&image, &reference.image)?;
+                denoised.push(Run {
+                    method: Method::Denoised { spp: out.spp },
+                    bake_seconds: 0.0,
+                    render_seconds: seconds,
+                    peak_memory: memory::peak(),
+                    mse,
+                    rel_mse,
+                    mssim,
+                });
             }
             Ok(())
         },

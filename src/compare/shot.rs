@@ -10,7 +10,7 @@
 //! the same bytes), while the path tracer draws new samples each frame (its seed is the
 //! frame's, as production renderers animate their noise by default), so its noise counts.
 
-use super::{bake_preset, errors, CompareSettings, Method};
+use super::{bake_preset, denoise, errors, traced_seconds, CompareSettings, Method, Reference};
 use crate::error::{Error, Result};
 use crate::image::Image;
 use crate::reference::{render_progressive, RenderOutput, RenderSettings};
@@ -91,13 +91,6 @@ impl ShotRun {
         self.frames.iter().map(|f| f.rel_mse).sum::<f64>() / self.frames.len().max(1) as f64
     }
 
-    fn label(&self) -> String {
-        match &self.method {
-            Method::Cache { preset, .. } => format!("wpbgi {}", preset.name()),
-            m => m.name().to_string(),
-        }
-    }
-
     fn to_json(&self) -> Value {
         json!({
             "method": self.method.name(),
@@ -116,42 +109,6 @@ impl ShotRun {
                 "mse": f.mse,
                 "rel_mse": f.rel_mse,
             })).collect::<Vec<_>>(),
-        })
-    }
-}
-
-/// Each frame's reference.
-#[derive(Clone, Debug)]
-pub struct ShotReferences {
-    pub images: Vec<Image>,
-    /// For references rendered here: their samples per pixel and total seconds.
-    pub spp: Option<u32>,
-    pub seconds: Option<f64>,
-}
-
-impl ShotReferences {
-    /// Path-trace each camera's reference at `spp`, with the same seed every frame (so that
-    /// a still camera's references are identical).
-    pub fn render(
-        scene: &Scene,
-        cameras: &[Camera],
-        spp: u32,
-        seed: u64,
-        progress: &(dyn Fn(f32) + Sync),
-    ) -> Result<ShotReferences> {
-        let n = cameras.len() as f32;
-        let mut seconds = 0.0;
-        let mut images = Vec::with_capacity(cameras.len());
-        for (i, cam) in cameras.iter().enumerate() {
-            let r =
-                super::Reference::render(scene, cam, spp, seed, &|f| progress((i as f32 + f) / n))?;
-            seconds += r.seconds.unwrap_or(0.0);
-            images.push(r.image);
-        }
-        Ok(ShotReferences {
-            images,
-            spp: Some(spp),
-            seconds: Some(seconds),
         })
     }
 }
@@ -236,7 +193,7 @@ impl Errors {
 pub fn shot(
     scene: &Scene,
     cameras: &[Camera],
-    references: &ShotReferences,
+    references: &[Reference],
     settings: &CompareSettings,
     orbit_degrees: f32,
     progress: &(dyn Fn(&str, f32) + Sync),
@@ -246,18 +203,21 @@ pub fn shot(
             "compare needs at least one preset".into(),
         ));
     }
-    let (Some(first), true) = (cameras.first(), cameras.len() == references.images.len()) else {
+    let (Some(first), Some(first_reference), true) = (
+        cameras.first(),
+        references.first(),
+        cameras.len() == references.len(),
+    ) else {
         return Err(Error::InvalidSetting(format!(
             "a shot of {} frames needs as many references, not {}",
             cameras.len(),
-            references.images.len()
+            references.len()
         )));
     };
-    for (i, (cam, r)) in cameras.iter().zip(&references.images).enumerate() {
-        super::check_size(r, cam.width, cam.height)
+    for (i, (cam, r)) in cameras.iter().zip(references).enumerate() {
+        super::check_size(&r.image, cam.width, cam.height)
             .map_err(|m| Error::InvalidSetting(format!("frame {}: {m}", i + 1)))?;
     }
-    let refs = &references.images;
     let n = cameras.len() as f32;
     let mut runs = Vec::new();
     for &preset in &settings.presets {
@@ -270,7 +230,7 @@ pub fn shot(
             ..settings.final_settings.clone()
         };
         let mut errs = Errors::new();
-        for (i, (cam, reference)) in cameras.iter().zip(refs).enumerate() {
+        for (i, (cam, reference)) in cameras.iter().zip(references).enumerate() {
             let start = Instant::now();
             let out = render_final(scene, &cache, cam, &final_settings, &|stage, f| {
                 progress(
@@ -278,7 +238,12 @@ pub fn shot(
                     (i as f32 + f) / n,
                 )
             })?;
-            errs.add(&out.beauty, reference, None, start.elapsed().as_secs_f64())?;
+            errs.add(
+                &out.beauty,
+                &reference.image,
+                None,
+                start.elapsed().as_secs_f64(),
+            )?;
         }
         runs.push(errs.finish(Method::Cache { preset, points }, bake_seconds));
     }
@@ -289,14 +254,15 @@ pub fn shot(
         .fold(1e-3, f64::max);
     let (mut raw, mut denoised) = (Errors::new(), Errors::new());
     let mut denoiser_missing = None;
-    for (i, (cam, reference)) in cameras.iter().zip(refs).enumerate() {
+    for (i, (cam, reference)) in cameras.iter().zip(references).enumerate() {
         let mut last: Option<RenderOutput> = None;
         render_progressive(
             scene,
             cam,
             &RenderSettings {
                 seed: settings.seed.wrapping_add(i as u64),
-                first_hits: true,
+                // The denoiser's guides, while it works.
+                first_hits: denoiser_missing.is_none(),
                 ..Default::default()
             },
             Duration::from_secs_f64(budget),
@@ -313,26 +279,14 @@ pub fn shot(
         )?;
         let out =
             last.ok_or_else(|| Error::InvalidSetting("the path tracer made no image".into()))?;
-        let hits_seconds = out.first_hits.as_ref().map_or(0.0, |h| h.seconds);
         raw.add(
             &out.mean,
-            reference,
+            &reference.image,
             Some(out.spp),
-            out.seconds - hits_seconds,
+            traced_seconds(&out),
         )?;
-        if denoiser_missing.is_some() {
-            continue;
-        }
-        let start = Instant::now();
-        match out.denoised(rayon::current_num_threads()) {
-            Some(Ok(image)) => denoised.add(
-                &image,
-                reference,
-                Some(out.spp),
-                out.seconds + start.elapsed().as_secs_f64(),
-            )?,
-            Some(Err(e)) => denoiser_missing = Some(e.to_string()),
-            None => denoiser_missing = Some("the render kept no first hits".into()),
+        if let Some((image, seconds)) = denoise(&out, &mut denoiser_missing) {
+            denoised.add(&image, &reference.image, Some(out.spp), seconds)?;
         }
     }
     let first_spp = |e: &Errors| e.frames.first().and_then(|f| f.spp).unwrap_or(0);
@@ -349,8 +303,10 @@ pub fn shot(
         threads: rayon::current_num_threads(),
         frames: cameras.len(),
         orbit_degrees,
-        reference_spp: references.spp,
-        reference_seconds: references.seconds,
+        reference_spp: first_reference.spp,
+        reference_seconds: first_reference
+            .seconds
+            .map(|_| references.iter().filter_map(|r| r.seconds).sum()),
         runs,
         denoiser_missing,
     })
@@ -400,7 +356,7 @@ impl ShotReport {
         for r in &self.runs {
             s += &format!(
                 "| {} | {:.2} | {:.2} | {:.3e} | {:.3e} |\n",
-                r.label(),
+                r.method.label(),
                 r.bake_seconds,
                 r.seconds_per_frame(),
                 r.mean_rel_mse(),
@@ -409,7 +365,7 @@ impl ShotReport {
         }
         s += "\nrelMSE per frame:\n\n| frame |";
         for r in &self.runs {
-            s += &format!(" {} |", r.label());
+            s += &format!(" {} |", r.method.label());
         }
         s += "\n|---:|";
         s += &"---:|".repeat(self.runs.len());

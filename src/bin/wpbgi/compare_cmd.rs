@@ -6,7 +6,7 @@ use crate::{CameraArgs, StagedBar};
 use anyhow::{anyhow, bail, Result};
 use clap::Args;
 use std::path::PathBuf;
-use wpbgi::compare::shot::{self, ShotReferences};
+use wpbgi::compare::shot;
 use wpbgi::compare::{check_size, compare, CompareSettings, Reference};
 use wpbgi::image::{read_exr, write_exr};
 use wpbgi::scene::{Camera, Scene};
@@ -135,37 +135,47 @@ fn shot_command(
     let cameras = shot::cameras(scene, camera, frames, a.orbit)?;
     let references = match &a.reference {
         Some(pattern) => {
-            let mut images = Vec::with_capacity(cameras.len());
+            let mut references = Vec::with_capacity(cameras.len());
             for frame in 1..=i64::from(frames) {
                 let path = crate::frames::named(pattern, frame)?;
                 let image = read_exr(&path)?;
                 check_size(&image, camera.width, camera.height)
                     .map_err(|m| anyhow!("{}: {m} (set --size)", path.display()))?;
-                images.push(image);
+                references.push(Reference {
+                    image,
+                    path: Some(path),
+                    spp: None,
+                    seconds: None,
+                });
             }
-            ShotReferences {
-                images,
-                spp: None,
-                seconds: None,
-            }
+            references
         }
         None => {
             let bar = crate::progress_bar("path tracing the references");
-            let r = ShotReferences::render(scene, &cameras, a.reference_spp, a.seed, &|f| {
-                bar.set_position((f * 1000.0) as u64)
-            })?;
+            let n = cameras.len() as f32;
+            let mut references = Vec::with_capacity(cameras.len());
+            for (i, cam) in cameras.iter().enumerate() {
+                // The same seed every frame, so that a still camera's references are identical.
+                references.push(Reference::render(
+                    scene,
+                    cam,
+                    a.reference_spp,
+                    a.seed,
+                    &|f| bar.set_position(((i as f32 + f) / n * 1000.0) as u64),
+                )?);
+            }
             bar.finish_and_clear();
             say!(
                 "rendered {frames} references: {} spp in {:.1} s",
                 a.reference_spp,
-                r.seconds.unwrap_or(0.0)
+                references.iter().filter_map(|r| r.seconds).sum::<f64>()
             );
             std::fs::create_dir_all(&a.output)?;
-            for (i, image) in r.images.iter().enumerate() {
+            for (i, r) in references.iter().enumerate() {
                 let name = format!("reference.{:04}.exr", i + 1);
-                write_exr(&a.output.join(name), image)?;
+                write_exr(&a.output.join(name), &r.image)?;
             }
-            r
+            references
         }
     };
     let bar = StagedBar::new("comparing a shot");
