@@ -47,5 +47,6 @@ pub mod render;
 pub mod sampler;
 pub mod scene;
 pub mod spectrum;
+pub mod trace;
 
 pub use error::Error;

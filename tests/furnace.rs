@@ -274,7 +274,7 @@ fn open_room_gathers_what_its_rays_hit() {
             })
         })
     };
-    let ctx = wpbgi::reference::RenderContext::new(&scene, &Default::default());
+    let ctx = wpbgi::trace::Tracer::new(&scene);
     let mut per_mesh = vec![(0.0f64, 0.0f64); scene.meshes.len()];
     for (i, (s, e)) in baked.surfels.iter().zip(&gathered).enumerate().step_by(10) {
         if inside(s.p, s.mesh) {
@@ -286,7 +286,7 @@ fn open_room_gathers_what_its_rays_hit() {
             .filter(|_| {
                 let u = sampler.next_2d();
                 let w = frame.to_world(wpbgi::geometry::warp::square_to_cosine_hemisphere(u));
-                wpbgi::reference::intersect(&ctx, s.p + s.n * 1e-4, w).is_some()
+                wpbgi::trace::intersect(&ctx, s.p + s.n * 1e-4, w).is_some()
             })
             .count();
         let m = &mut per_mesh[s.mesh as usize];

@@ -2,86 +2,18 @@
 
 use super::{RenderContext, Transport};
 use crate::bsdf::TransportMode;
-use crate::geometry::frame::Frame;
-use crate::geometry::offset::{interpolate_with_error, offset_origin};
 use crate::sampler::Sampler;
 use crate::spectrum::{max_component, Rgb};
-use glam::{Vec2, Vec3, Vec3A};
-
-/// A ray–surface intersection with what shading needs.
-pub struct SurfaceHit {
-    pub p: Vec3,
-    /// Rounding bound of `p`.
-    pub err: Vec3,
-    /// Unit geometric normal of the front face (counter-clockwise winding).
-    pub ng: Vec3,
-    /// Shading frame around the interpolated normal (or `ng` for flat meshes), tilted by the
-    /// material's normal map.
-    pub frame: Frame,
-    pub uv: Vec2,
-    pub mesh: u32,
-    pub triangle: u32,
-    pub t: f32,
-}
-
-impl SurfaceHit {
-    /// A ray leaving this point along `w`, offset to the side `w` points to.
-    pub fn spawn(&self, w: Vec3) -> Vec3 {
-        Vec3::from(offset_origin(
-            Vec3A::from(self.p),
-            Vec3A::from(self.err),
-            Vec3A::from(self.ng),
-            Vec3A::from(w),
-        ))
-    }
-}
-
-/// Trace a ray and describe the closest hit.
-pub fn intersect(ctx: &RenderContext, o: Vec3, d: Vec3) -> Option<SurfaceHit> {
-    let hit = ctx.accel.closest_hit(o, d, 0.0, f32::INFINITY)?;
-    let m = &ctx.scene.meshes[hit.mesh as usize];
-    let t = m.triangles[hit.triangle as usize];
-    let v = [t[0], t[1], t[2]].map(|k| Vec3A::from(m.positions[k as usize]));
-    let (p, err) = interpolate_with_error(v, hit.b);
-    let ng = Vec3::from((v[1] - v[0]).cross(v[2] - v[0])).normalize();
-    let ns = m.normal_at(hit.triangle, hit.b).unwrap_or(ng);
-    let uv = m.uv_at(hit.triangle, hit.b);
-    let ns = match &ctx.scene.materials[m.material].normal_map {
-        Some(map) => map.shading_normal(&ctx.scene.textures, m, hit.triangle, uv, ns),
-        None => ns,
-    };
-    Some(SurfaceHit {
-        p: Vec3::from(p),
-        err: Vec3::from(err),
-        ng,
-        frame: Frame::from_normal(ns),
-        uv,
-        mesh: hit.mesh,
-        triangle: hit.triangle,
-        t: hit.t,
-    })
-}
+use crate::trace::{intersect, mis};
+use glam::Vec3;
 
 /// The largest probability with which Russian roulette continues a path (see the module docs
 /// of [`crate::reference`] for why not Mitsuba's 0.95).
 pub const RR_MAX: f32 = 0.999;
 
-/// Power heuristic with exponent 2.
-#[inline]
-pub(crate) fn mis(a: f32, b: f32) -> f32 {
-    let (a2, b2) = (a * a, b * b);
-    if a2 + b2 > 0.0 && a2.is_finite() {
-        a2 / (a2 + b2)
-    } else if a.is_infinite() {
-        1.0
-    } else {
-        0.0
-    }
-}
-
 /// Radiance arriving at the camera along the unit ray `(o, d)`.
 pub fn radiance(ctx: &RenderContext, mut o: Vec3, mut d: Vec3, sampler: &mut Sampler) -> Rgb {
-    let scene = ctx.scene;
+    let scene = ctx.tracer.scene;
     let mut result = Rgb::ZERO;
     let mut throughput = Rgb::ONE;
     let mut eta = 1.0_f32;
@@ -92,13 +24,13 @@ pub fn radiance(ctx: &RenderContext, mut o: Vec3, mut d: Vec3, sampler: &mut Sam
     // For `Transport::CacheOneBounce`: rough vertices and chain vertices so far.
     let (mut rough, mut chain) = (0u32, 0u32);
     loop {
-        let Some(si) = intersect(ctx, o, d) else {
+        let Some(si) = intersect(&ctx.tracer, o, d) else {
             // Escaped: the environment, weighted as emission is.
             if let Some(env) = &scene.environment {
                 let w = if prev_delta {
                     1.0
                 } else {
-                    mis(prev_bsdf_pdf, ctx.emitters.pdf_environment(scene, d))
+                    mis(prev_bsdf_pdf, ctx.tracer.emitters.pdf_environment(scene, d))
                 };
                 result += throughput * env.radiance(d) * w;
             }
@@ -115,7 +47,9 @@ pub fn radiance(ctx: &RenderContext, mut o: Vec3, mut d: Vec3, sampler: &mut Sam
                 } else {
                     mis(
                         prev_bsdf_pdf,
-                        ctx.emitters.pdf_hit(si.mesh, si.triangle, si.t, d, si.ng),
+                        ctx.tracer
+                            .emitters
+                            .pdf_hit(si.mesh, si.triangle, si.t, d, si.ng),
                     )
                 };
                 result += throughput * le * w;
@@ -151,10 +85,10 @@ pub fn radiance(ctx: &RenderContext, mut o: Vec3, mut d: Vec3, sampler: &mut Sam
         let u_em = sampler.next_2d();
         if !nee {
             // A chain vertex: the emission found next counts fully (the render's chains).
-        } else if let Some(es) = ctx.emitters.sample(scene, si.p, u_sel, u_em) {
+        } else if let Some(es) = ctx.tracer.emitters.sample(scene, si.p, u_sel, u_em) {
             let wo = si.frame.to_local(es.wi);
             let f = bsdf.eval(wi, wo, TransportMode::Radiance);
-            if f != Rgb::ZERO && es.visible_from(&ctx.accel, si.spawn(es.wi)) {
+            if f != Rgb::ZERO && es.visible_from(&ctx.tracer.accel, si.spawn(es.wi)) {
                 let w = if es.delta {
                     1.0
                 } else {

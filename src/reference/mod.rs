@@ -21,16 +21,14 @@
 
 mod integrator;
 
-pub(crate) use integrator::mis;
-pub use integrator::{intersect, radiance, SurfaceHit};
+pub use integrator::radiance;
 
-use crate::accel::Accel;
-use crate::emitters::EmitterSampler;
 use crate::error::{Error, Result};
 use crate::image::Image;
 use crate::sampler::Sampler;
 use crate::scene::{Camera, Scene};
 use crate::spectrum::Rgb;
+use crate::trace::{intersect, Tracer};
 use glam::{DVec3, Vec2};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -130,9 +128,7 @@ impl RenderOutput {
 
 /// Everything the integrator needs, built once per render.
 pub struct RenderContext<'a> {
-    pub scene: &'a Scene,
-    pub accel: Accel,
-    pub emitters: EmitterSampler,
+    pub tracer: Tracer<'a>,
     pub max_depth: i32,
     pub rr_depth: u32,
     pub transport: Transport,
@@ -141,9 +137,7 @@ pub struct RenderContext<'a> {
 impl<'a> RenderContext<'a> {
     pub fn new(scene: &'a Scene, settings: &RenderSettings) -> Self {
         RenderContext {
-            scene,
-            accel: Accel::build(scene),
-            emitters: EmitterSampler::new(scene),
+            tracer: Tracer::new(scene),
             max_depth: settings.max_depth,
             rr_depth: settings.rr_depth,
             transport: settings.transport,
@@ -363,20 +357,20 @@ fn add_first_hit(
 ) {
     let mut sampler = Sampler::new(seed, pixel, s as u64);
     let (o, d) = camera.generate_ray(Vec2::new(x as f32, y as f32) + sampler.next_2d());
-    let Some(hit) = intersect(ctx, o, d) else {
-        if let Some(env) = &ctx.scene.environment {
+    let Some(hit) = intersect(&ctx.tracer, o, d) else {
+        if let Some(env) = &ctx.tracer.scene.environment {
             sums[2] += env.radiance(d).as_dvec3();
         }
         return;
     };
-    let material = &ctx.scene.materials[ctx.scene.meshes[hit.mesh as usize].material];
+    let material = &ctx.tracer.scene.materials[ctx.tracer.scene.meshes[hit.mesh as usize].material];
     let front = hit.frame.to_local(-d).z > 0.0;
     sums[0] += material
-        .bsdf_at(&ctx.scene.textures, hit.uv)
+        .bsdf_at(&ctx.tracer.scene.textures, hit.uv)
         .albedo_estimate()
         .as_dvec3();
     sums[1] += hit.frame.n.as_dvec3();
     sums[2] += material
-        .emission_at(&ctx.scene.textures, hit.uv, front)
+        .emission_at(&ctx.tracer.scene.textures, hit.uv, front)
         .as_dvec3();
 }

@@ -27,10 +27,10 @@ use crate::gather::fpbgi::{cluster, cluster_cut, member_buffer, ClusterReceivers
 use crate::gather::{splat_cut, CutStats, Microbuffer, Senders};
 use crate::geometry::frame::Frame;
 use crate::image::Image;
-use crate::reference::{intersect, RenderContext, RenderSettings};
 use crate::sampler::{sobol02, Sampler};
 use crate::scene::{Camera, Scene};
 use crate::spectrum::Rgb;
+use crate::trace::{intersect, Tracer};
 use glam::{Vec2, Vec3};
 use primary::{trace_primary, CameraSample, LightShare, PrimarySample, PrimarySettings, Receiver};
 use rayon::prelude::*;
@@ -290,13 +290,7 @@ pub fn render_final_cancellable(
     scene.check_renderable()?;
     let mut timings = Vec::new();
     let t = Instant::now();
-    let ctx = RenderContext::new(
-        scene,
-        &RenderSettings {
-            max_depth: settings.max_depth,
-            ..Default::default()
-        },
-    );
+    let ctx = Tracer::new(scene);
     let senders = Senders::from_cache(cache).map_err(Error::Cache)?;
     timings.push(("load", t.elapsed().as_secs_f64()));
 
@@ -447,11 +441,7 @@ struct CentreHit {
     smooth: bool,
 }
 
-fn centre_hits(
-    ctx: &RenderContext,
-    camera: &Camera,
-    specular_below: f32,
-) -> Vec<Option<CentreHit>> {
+fn centre_hits(ctx: &Tracer, camera: &Camera, specular_below: f32) -> Vec<Option<CentreHit>> {
     let (w, h) = (camera.width, camera.height);
     (0..w * h)
         .into_par_iter()
@@ -509,7 +499,7 @@ struct TilePrimary {
 }
 
 fn primary_tile(
-    ctx: &RenderContext,
+    ctx: &Tracer,
     camera: &Camera,
     centre: &[Option<CentreHit>],
     settings: &PrimarySettings,
@@ -603,7 +593,7 @@ fn is_glossy(r: &Receiver, settings: &FinalSettings) -> bool {
 /// Gather every receiver of a tile (at `origin`, `size` pixels, in an image `width` wide);
 /// returns (pixel, weighted indirect radiance, whether it came by a glossy first hit).
 fn gather_tile(
-    ctx: &RenderContext,
+    ctx: &Tracer,
     senders: &Senders,
     receivers: &[Receiver],
     (origin, size, width): ((u32, u32), (u32, u32), u32),

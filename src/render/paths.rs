@@ -17,9 +17,9 @@ use super::primary::Receiver;
 use crate::bsdf::TransportMode;
 use crate::gather::Senders;
 use crate::geometry::offset::offset_origin;
-use crate::reference::{intersect, RenderContext};
 use crate::sampler::{sobol02, Sampler};
 use crate::spectrum::Rgb;
+use crate::trace::{intersect, Tracer};
 use glam::{Vec3, Vec3A};
 
 /// Sample indices of the path-traced gather's streams start here, above any camera sample's
@@ -30,7 +30,7 @@ const GATHER_STREAMS: u64 = 1 << 40;
 /// rays into the cache. `index` tells the receiver apart from the others of its pixel (its
 /// place in its tile), which keys its random numbers.
 pub fn path_gather(
-    ctx: &RenderContext,
+    ctx: &Tracer,
     senders: &Senders,
     r: &Receiver,
     spp: u32,

@@ -12,9 +12,9 @@
 use crate::bsdf::fresnel::fresnel_dielectric;
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::geometry::frame::Frame;
-use crate::reference::{intersect, mis, RenderContext, SurfaceHit};
 use crate::sampler::{mix64, sobol02, Sampler, GOLDEN_GAMMA};
 use crate::spectrum::{max_component, Rgb};
+use crate::trace::{intersect, mis, SurfaceHit, Tracer};
 use glam::Vec3;
 
 /// A rough surface point that gathers indirect light from the cache.
@@ -145,7 +145,7 @@ impl LightShare {
 
 /// Trace camera sample `cs`, pushing its receivers.
 pub fn trace_primary(
-    ctx: &RenderContext,
+    ctx: &Tracer,
     settings: &PrimarySettings,
     cs: CameraSample,
     sampler: &mut Sampler,
@@ -268,7 +268,7 @@ fn specular_branches(bsdf: &Bsdf, view: Vec3, sampler: &mut Sampler) -> Vec<(usi
 /// and over each emitter's surface; for glossy BSDFs as many BSDF samples, combined by the
 /// power heuristic. Returns the outgoing radiance towards `view`.
 fn direct_light(
-    ctx: &RenderContext,
+    ctx: &Tracer,
     share: LightShare,
     hit: &SurfaceHit,
     bsdf: &Bsdf,

@@ -1,0 +1,97 @@
+//! What both path tracers share (the reference one in [`crate::reference`] and the final
+//! render's in [`crate::render`]): the scene with its acceleration structure and emitter
+//! sampler ([`Tracer`]), the description of a ray's closest hit that shading reads
+//! ([`SurfaceHit`]), and the multiple-importance weight ([`mis`]). Neither path tracer knows
+//! the other; both build on this.
+
+use crate::accel::Accel;
+use crate::emitters::EmitterSampler;
+use crate::geometry::frame::Frame;
+use crate::geometry::offset::{interpolate_with_error, offset_origin};
+use crate::scene::Scene;
+use glam::{Vec2, Vec3, Vec3A};
+
+/// A scene ready to trace: its triangles' acceleration structure and its emitters' sampler,
+/// built once per render.
+pub struct Tracer<'a> {
+    pub scene: &'a Scene,
+    pub accel: Accel,
+    pub emitters: EmitterSampler,
+}
+
+impl<'a> Tracer<'a> {
+    pub fn new(scene: &'a Scene) -> Self {
+        Tracer {
+            scene,
+            accel: Accel::build(scene),
+            emitters: EmitterSampler::new(scene),
+        }
+    }
+}
+
+/// A ray–surface intersection with what shading needs.
+pub struct SurfaceHit {
+    pub p: Vec3,
+    /// Rounding bound of `p`.
+    pub err: Vec3,
+    /// Unit geometric normal of the front face (counter-clockwise winding).
+    pub ng: Vec3,
+    /// Shading frame around the interpolated normal (or `ng` for flat meshes), tilted by the
+    /// material's normal map.
+    pub frame: Frame,
+    pub uv: Vec2,
+    pub mesh: u32,
+    pub triangle: u32,
+    pub t: f32,
+}
+
+impl SurfaceHit {
+    /// A ray leaving this point along `w`, offset to the side `w` points to.
+    pub fn spawn(&self, w: Vec3) -> Vec3 {
+        Vec3::from(offset_origin(
+            Vec3A::from(self.p),
+            Vec3A::from(self.err),
+            Vec3A::from(self.ng),
+            Vec3A::from(w),
+        ))
+    }
+}
+
+/// Trace a ray and describe the closest hit.
+pub fn intersect(ctx: &Tracer, o: Vec3, d: Vec3) -> Option<SurfaceHit> {
+    let hit = ctx.accel.closest_hit(o, d, 0.0, f32::INFINITY)?;
+    let m = &ctx.scene.meshes[hit.mesh as usize];
+    let t = m.triangles[hit.triangle as usize];
+    let v = [t[0], t[1], t[2]].map(|k| Vec3A::from(m.positions[k as usize]));
+    let (p, err) = interpolate_with_error(v, hit.b);
+    let ng = Vec3::from((v[1] - v[0]).cross(v[2] - v[0])).normalize();
+    let ns = m.normal_at(hit.triangle, hit.b).unwrap_or(ng);
+    let uv = m.uv_at(hit.triangle, hit.b);
+    let ns = match &ctx.scene.materials[m.material].normal_map {
+        Some(map) => map.shading_normal(&ctx.scene.textures, m, hit.triangle, uv, ns),
+        None => ns,
+    };
+    Some(SurfaceHit {
+        p: Vec3::from(p),
+        err: Vec3::from(err),
+        ng,
+        frame: Frame::from_normal(ns),
+        uv,
+        mesh: hit.mesh,
+        triangle: hit.triangle,
+        t: hit.t,
+    })
+}
+
+/// Power heuristic with exponent 2.
+#[inline]
+pub fn mis(a: f32, b: f32) -> f32 {
+    let (a2, b2) = (a * a, b * b);
+    if a2 + b2 > 0.0 && a2.is_finite() {
+        a2 / (a2 + b2)
+    } else if a.is_infinite() {
+        1.0
+    } else {
+        0.0
+    }
+}
