@@ -10,7 +10,6 @@
 use std::sync::Arc;
 use std::time::Instant;
 use wpbgi::bake::{bake, BakeSettings, Quality};
-use wpbgi::cache::store::BakedCache;
 use wpbgi::preview::device::Gpu;
 use wpbgi::preview::window::MOVING_COARSENESS;
 use wpbgi::preview::{Preview, Show, DEFAULT_CUT_PIXELS};
@@ -48,7 +47,7 @@ fn main() -> Result<()> {
         };
         let t = Instant::now();
         let baked = bake(&scene, &settings, &|_, _| {})?;
-        let cache = BakedCache::in_memory(std::path::Path::new("bench.wpc"), &baked)?;
+        let cache = wpbgi::bake::store::in_memory(std::path::Path::new("bench.wpc"), &baked)?;
         println!(
             "\n{} surfels, {} tree nodes (direct-only bake {:.1} s)",
             baked.surfels.len(),

@@ -5,8 +5,8 @@
 
 use std::path::Path;
 use std::time::Instant;
-use wpbgi::bake::{sample_surfels, Surfel};
 use wpbgi::scene::Scene;
+use wpbgi::surfels::{sample_surfels, Surfel};
 
 fn main() -> anyhow::Result<()> {
     let n: usize = match std::env::args().nth(1) {

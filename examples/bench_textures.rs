@@ -15,7 +15,6 @@ use std::path::Path;
 use std::time::Instant;
 use wpbgi::bake::{bake, BakeSettings, Quality};
 use wpbgi::bounce::BounceSettings;
-use wpbgi::cache::store::BakedCache;
 use wpbgi::compare::errors;
 use wpbgi::compare::memory::{peak, reset_peak};
 use wpbgi::reference::{render, RenderSettings};
@@ -49,7 +48,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let baked = bake(&scene, &settings, &|_, _| {})?;
         let bake_s = t.elapsed().as_secs_f64();
         let peak_mb = peak().map_or(0, |b| b / 1_000_000);
-        let cache = BakedCache::in_memory(&path, &baked)?;
+        let cache = wpbgi::bake::store::in_memory(&path, &baked)?;
         let (image, render_s) =
             common::timed_render(&scene, &cache, &camera, &FinalSettings::default())?;
         let reference = render(

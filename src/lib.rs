@@ -47,6 +47,7 @@ pub mod render;
 pub mod sampler;
 pub mod scene;
 pub mod spectrum;
+pub mod surfels;
 pub mod trace;
 
 pub use error::Error;

@@ -2,11 +2,13 @@
 //! the cache written from it read back.
 
 use std::path::Path;
-use wpbgi::bake::{bake, BakeSettings, Baked, SurfelRadiance};
-use wpbgi::cache::store::{bake_hash, write, BakedCache, NO_MAP};
+use wpbgi::bake::store::write;
+use wpbgi::bake::{bake, BakeSettings, Baked};
+use wpbgi::cache::store::{bake_hash, BakedCache, NO_MAP};
 use wpbgi::haar::Haar2d;
 use wpbgi::scene::Scene;
 use wpbgi::spectrum::Rgb;
+use wpbgi::surfels::radiance::SurfelRadiance;
 
 fn cbox() -> Scene {
     let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mitsuba/cbox-rough.gltf");

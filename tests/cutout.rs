@@ -199,7 +199,7 @@ fn masked_occluders_let_light_through_their_holes() {
         .iter()
         .position(|m| m.name.contains("occluder"))
         .expect("occluder") as u32;
-    let surfels = wpbgi::bake::sample_surfels(&scene, 20_000, 0);
+    let surfels = wpbgi::surfels::sample_surfels(&scene, 20_000, 0);
     let on: Vec<_> = surfels.iter().filter(|s| s.mesh == occluder).collect();
     assert!(on.len() > 100);
     assert!(on.iter().all(|s| s.p.x <= 1e-3), "a surfel in the hole");

@@ -4,7 +4,7 @@
 
 use glam::{Vec2, Vec3};
 use wpbgi::accel::Accel;
-use wpbgi::bake::{DirectLight, Surfel};
+use wpbgi::bake::DirectLight;
 use wpbgi::bsdf::{Bsdf, Diffuse, Distribution, Microfacet, RoughConductor, TransportMode};
 use wpbgi::emitters::EmitterSampler;
 use wpbgi::geometry::frame::Frame;
@@ -13,6 +13,7 @@ use wpbgi::haar::{
 };
 use wpbgi::scene::{Emission, Material, Mesh, Scattering, Scene};
 use wpbgi::spectrum::Rgb;
+use wpbgi::surfels::Surfel;
 
 const LE: f32 = 3.0;
 

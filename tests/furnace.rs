@@ -13,12 +13,13 @@
 mod common;
 
 use glam::Vec3;
-use wpbgi::bake::{bake, BakeSettings, Baked, SurfelRadiance};
+use wpbgi::bake::{bake, BakeSettings, Baked};
 use wpbgi::bounce::BounceSettings;
 use wpbgi::bsdf::{Bsdf, Diffuse, Distribution, Microfacet, RoughConductor};
 use wpbgi::haar::direction_to_square;
 use wpbgi::scene::{Emission, Material, Mesh, Scattering, Scene};
 use wpbgi::spectrum::Rgb;
+use wpbgi::surfels::radiance::SurfelRadiance;
 
 /// The unit cube's six faces as one mesh, wound so that the geometric normals point inwards.
 fn inward_box() -> Mesh {
@@ -310,14 +311,13 @@ fn open_room_gathers_what_its_rays_hit() {
 /// gather, for every `step`-th surfel (0 for the others), the irradiance / π that its
 /// microbuffer collects as a bounce builds it.
 fn uniform_gather(scene: &Scene, settings: &BakeSettings, step: usize) -> (Baked, Vec<f64>) {
-    use wpbgi::bake::pipeline::intensity_map;
     use wpbgi::bounce::iterate::close_buffer;
-    use wpbgi::cache::store::BakedCache;
     use wpbgi::gather::cut::splat_cut;
     use wpbgi::gather::microbuffer::Microbuffer;
     use wpbgi::gather::senders::Senders;
     use wpbgi::geometry::frame::Frame;
     use wpbgi::haar::{texel_directions, Haar2d, SparseHaar};
+    use wpbgi::surfels::radiance::intensity_map;
     let settings = BakeSettings {
         light_samples: 4,
         bounces: BounceSettings::exactly(0),
@@ -343,14 +343,14 @@ fn uniform_gather(scene: &Scene, settings: &BakeSettings, step: usize) -> (Baked
         let s = &baked.surfels[i as usize];
         intensity_map(s, &baked.radiance[i as usize], true)
     };
-    baked.coded = wpbgi::bake::encode(
+    baked.coded = wpbgi::surfels::coding::encode(
         &baked.tree,
         &leaf,
         levels,
         baked.coded.split_level,
         settings.tau,
     );
-    let cache = BakedCache::in_memory("furnace".as_ref(), &baked).expect("cache");
+    let cache = wpbgi::bake::store::in_memory("furnace".as_ref(), &baked).expect("cache");
     let senders = Senders::from_cache(&cache).expect("senders");
     let accel = wpbgi::accel::Accel::build(scene);
     let mut stack = Vec::new();

@@ -17,9 +17,10 @@ mod common;
 use common::b64;
 use glam::Vec3;
 use std::path::Path;
+use wpbgi::bake::store::write;
 use wpbgi::bake::{bake, BakeSettings, Baked};
 use wpbgi::bsdf::{Bsdf, Diffuse};
-use wpbgi::cache::store::{bake_hash, write, BakedCache};
+use wpbgi::cache::store::{bake_hash, BakedCache};
 use wpbgi::gather::{splat_cut, Microbuffer, Senders};
 use wpbgi::geometry::frame::Frame;
 use wpbgi::scene::Scene;
@@ -87,7 +88,7 @@ fn senders() -> Senders {
     // Every surfel reflects exactly ρE/π = 0.5 (a directional light has no noise).
     for r in &baked.radiance {
         match r {
-            wpbgi::bake::SurfelRadiance::Rgb(c) => {
+            wpbgi::surfels::radiance::SurfelRadiance::Rgb(c) => {
                 assert!((*c - Rgb::splat(0.5)).abs().max_element() < 1e-5, "{c}")
             }
             _ => panic!("diffuse surfels store RGB"),

@@ -115,8 +115,9 @@ fn lightcuts_match_the_brute_force_sum() {
 #[test]
 fn direct_light_uses_the_light_tree() {
     use glam::Vec2;
-    use wpbgi::bake::{DirectLight, Surfel};
+    use wpbgi::bake::DirectLight;
     use wpbgi::emitters::EmitterSampler;
+    use wpbgi::surfels::Surfel;
     let all = lights(300);
     let scene = scene_with(all.clone());
     let accel = Accel::build(&scene);

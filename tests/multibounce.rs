@@ -110,7 +110,7 @@ fn bounce_difference(
     a: &wpbgi::bake::Baked,
     b: &wpbgi::bake::Baked,
 ) -> (f64, f64) {
-    use wpbgi::bake::SurfelRadiance;
+    use wpbgi::surfels::radiance::SurfelRadiance;
     let luminance = |r: &SurfelRadiance| {
         f64::from(wpbgi::spectrum::luminance(match r {
             SurfelRadiance::Rgb(c) => *c,

@@ -15,9 +15,9 @@ use glam::Vec3;
 mod common;
 
 use std::path::{Path, PathBuf};
-use wpbgi::bake::{bake, BakeSettings, Quality, SurfelRadiance};
-use wpbgi::cache::store::BakedCache;
+use wpbgi::bake::{bake, BakeSettings, Quality};
 use wpbgi::reference::{render, RenderSettings};
+use wpbgi::surfels::radiance::SurfelRadiance;
 
 use wpbgi::scene::Scene;
 
@@ -185,7 +185,7 @@ fn a_normal_map_tilts_the_cosine_as_analytic() {
                 "{name}: surfel {i} holds {v}, expected {expected}"
             );
         }
-        let cache = BakedCache::in_memory(&path, &baked).expect("cache");
+        let cache = wpbgi::bake::store::in_memory(&path, &baked).expect("cache");
         let out = common::final_render(&scene, &cache, &camera);
         let m = mean(&out.beauty.pixels);
         eprintln!("{name}: final render {m}");

@@ -30,7 +30,7 @@ fn cache(scene: &Scene, points: usize) -> BakedCache {
         ..BakeSettings::from_quality(Quality::Draft)
     };
     let baked = wpbgi::bake::bake(scene, &settings, &|_, _| {}).expect("bake");
-    BakedCache::in_memory(std::path::Path::new("preview-test.wpc"), &baked).expect("cache")
+    wpbgi::bake::store::in_memory(std::path::Path::new("preview-test.wpc"), &baked).expect("cache")
 }
 
 /// The device under the validation layer.

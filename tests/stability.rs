@@ -25,7 +25,6 @@ use wpbgi::bsdf::{
     Bsdf, Diffuse, Distribution, Lobe, Microfacet, RoughConductor, RoughDielectric, ThinDielectric,
     TransportMode,
 };
-use wpbgi::cache::store::BakedCache;
 use wpbgi::image::{error_against, Image};
 use wpbgi::reference::{render, RenderSettings};
 
@@ -331,7 +330,7 @@ fn bake_settings() -> BakeSettings {
 /// Bake in memory and render the final image.
 fn final_render(scene: &Scene, camera: &Camera) -> Image {
     let baked = bake(scene, &bake_settings(), &|_, _| {}).expect("bake");
-    let cache = BakedCache::in_memory(Path::new("memory"), &baked).expect("cache");
+    let cache = wpbgi::bake::store::in_memory(Path::new("memory"), &baked).expect("cache");
     let out = common::final_render(scene, &cache, camera);
     assert!(out.beauty.pixels.iter().all(|p| p.is_finite()));
     out.beauty

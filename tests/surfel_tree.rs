@@ -1,10 +1,12 @@
 //! The surfel tree and its hierarchical wavelet coding (spec §6, DESIGN.md §5.5–§5.6).
 
 use glam::{Vec2, Vec3};
-use wpbgi::bake::{encode, Surfel, SurfelTree};
 use wpbgi::haar::{texel_directions, Haar2d, SparseHaar};
 use wpbgi::sampler::Sampler;
 use wpbgi::spectrum::Rgb;
+use wpbgi::surfels::coding::encode;
+use wpbgi::surfels::tree::SurfelTree;
+use wpbgi::surfels::Surfel;
 
 /// Surfels on a wavy patch plus a few on a second, facing patch: normals vary.
 fn surfels(n: usize) -> Vec<Surfel> {

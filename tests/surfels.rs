@@ -3,8 +3,8 @@
 mod common;
 
 use glam::Vec3;
-use wpbgi::bake::{sample_surfels, sample_surfels_with_density, Surfel};
 use wpbgi::scene::{Mesh, Scene};
+use wpbgi::surfels::{sample_surfels, sample_surfels_with_density, Surfel};
 
 /// A square of side `s` in the plane z = `z`, facing +z (or −z when `up` is false).
 fn square(s: f32, offset: Vec3, up: bool) -> Mesh {

@@ -15,7 +15,6 @@ use std::path::{Path, PathBuf};
 use wpbgi::bake::{bake, BakeSettings, Quality};
 use wpbgi::bounce::bsdf_operator::{quantised_alpha, ROUGHNESS_LEVELS_PER_OCTAVE};
 use wpbgi::bounce::BounceSettings;
-use wpbgi::cache::store::BakedCache;
 use wpbgi::reference::{render, RenderSettings};
 
 use wpbgi::scene::Scene;
@@ -41,7 +40,7 @@ fn settings() -> BakeSettings {
 /// the path tracer's standard error of that mean per channel (its per-pixel variance is of
 /// one sample).
 fn plate_means(scene: &Scene, baked: &wpbgi::bake::Baked) -> (Vec3, Vec3, Vec3) {
-    let cache = BakedCache::in_memory(Path::new("plate"), baked).expect("cache");
+    let cache = wpbgi::bake::store::in_memory(Path::new("plate"), baked).expect("cache");
     let size = 48usize;
     let camera = scene
         .camera(None, size as u32, size as u32)

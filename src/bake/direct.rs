@@ -23,7 +23,6 @@
 //! each surfel its lightcut instead (see [`super::lightcuts`]); its clusters join the samples.
 
 use super::lightcuts::LightTree;
-use super::surfels::Surfel;
 use crate::accel::Accel;
 use crate::bounce::bsdf_operator::SurfelOperator;
 use crate::bsdf::{Bsdf, TransportMode};
@@ -34,6 +33,7 @@ use crate::haar::texel_directions;
 use crate::sampler::{sobol02, Sampler};
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
+use crate::surfels::Surfel;
 use glam::{Vec3, Vec3A};
 
 /// What direct lighting needs of a scene.

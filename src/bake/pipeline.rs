@@ -5,22 +5,24 @@
 //! coded post-order, each leaf's radiant-intensity map A |n·ω| L(ω) being built on the fly
 //! from that compact form, so the uncompressed set never exists.
 
-use super::coding::{encode, CodedTree};
 use super::direct::{DirectLight, NEAR_SPECULAR_ALPHA};
 use super::lightcuts::LightTree;
 use super::plan::{map_levels, Plan};
-use super::surfels::{sample_surfels_with_density, Surfel};
-use super::tree::SurfelTree;
 use crate::accel::Accel;
 use crate::bounce::bsdf_operator::{quantised_alpha, Operators, SurfelOperator};
 use crate::bounce::{add_bounces, BounceReport, BounceSettings};
 use crate::bsdf::Bsdf;
-use crate::cache::store::{BACK_SIDED, CLOSED, SOLID};
 use crate::emitters::EmitterSampler;
 use crate::error::{Error, Result};
 use crate::haar::{texel_directions, Haar2d, SparseHaar};
 use crate::scene::{LightKind, Scene};
 use crate::spectrum::Rgb;
+use crate::surfels::coding::{encode, CodedTree};
+use crate::surfels::radiance::{
+    intensity_of, mesh_flags, projected_area_map, SurfelRadiance, PROJECTED_AREA_LEVELS,
+};
+use crate::surfels::tree::SurfelTree;
+use crate::surfels::{sample_surfels_with_density, Surfel};
 use glam::Vec3;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -194,9 +196,9 @@ fn check_fits(settings: &BakeSettings, map_levels: u32) -> Result<()> {
     let per_surfel = size_of::<Surfel>()
         + size_of::<SurfelRadiance>()
         + size_of::<Rgb>()
-        + 2 * (size_of::<super::tree::Node>()
-            + size_of::<super::coding::NodeCoding<Rgb>>()
-            + size_of::<super::coding::NodeCoding<f32>>()
+        + 2 * (size_of::<crate::surfels::tree::Node>()
+            + size_of::<crate::surfels::coding::NodeCoding<Rgb>>()
+            + size_of::<crate::surfels::coding::NodeCoding<f32>>()
             + size_of::<crate::cache::store::NodeRecord>())
         + size_of::<crate::cache::store::SurfelRecord>();
     let floor = points
@@ -215,15 +217,6 @@ fn check_fits(settings: &BakeSettings, map_levels: u32) -> Result<()> {
         ))),
         _ => Ok(()),
     }
-}
-
-/// A surfel's direct-lit outgoing radiance.
-#[derive(Clone, Debug, PartialEq)]
-pub enum SurfelRadiance {
-    /// Diffuse: the same radiance towards every direction of the front hemisphere.
-    Rgb(Rgb),
-    /// Directional: a thresholded map over the whole sphere.
-    Map(SparseHaar<Rgb>),
 }
 
 /// The result of a bake.
@@ -495,111 +488,4 @@ fn surfel_radiance(
         }
     };
     (radiance, emitted)
-}
-
-/// Per mesh, the flags of its surfels' records ([`crate::cache::store::SurfelRecord::flags`]), from
-/// its BSDF at texture coordinate (0, 0) and its geometry:
-/// - [`SOLID`]: it bounds a solid (a `roughdielectric`: Mitsuba's dielectric is the interface
-///   of a solid). Light a surfel of a solid sends into it can reach only the solid's own
-///   surface before it crosses the surface again, so the tree, which everyone sees, holds
-///   only what such surfels send outwards (their maps keep both sides for their own solid).
-/// - [`BACK_SIDED`]: its surfels send light from their back as well as their front into the
-///   tree's intensity (thin sheets: two-sided BSDFs that bound no solid; see
-///   [`intensity_map`]). The other surfels' intensity is front-only, so a node of them has
-///   radiance I/P⁺ with P⁺ its front projected area.
-/// - [`CLOSED`]: the mesh is closed ([`crate::scene::Mesh::is_closed`]).
-pub fn mesh_flags(scene: &Scene) -> Vec<u32> {
-    scene
-        .meshes
-        .iter()
-        .map(|m| {
-            let bsdf = scene.materials[m.material].bsdf_at(&scene.textures, glam::Vec2::ZERO);
-            let solid = matches!(bsdf, Bsdf::Dielectric(_));
-            let back_sided = !solid && bsdf.is_two_sided();
-            [
-                (solid, SOLID),
-                (back_sided, BACK_SIDED),
-                (m.is_closed(), CLOSED),
-            ]
-            .iter()
-            .filter(|(set, _)| *set)
-            .fold(0, |flags, (_, bit)| flags | bit)
-        })
-        .collect()
-}
-
-/// Surfel `i`'s [`intensity_map`] in the light `radiance` (one per surfel), the lower half
-/// of a map kept where its mesh is not a closed solid (`mesh_flags`): the tree's leaf
-/// functions, for the cache's coding and the bounces' node sums alike.
-pub fn intensity_of<'a>(
-    surfels: &'a [Surfel],
-    mesh_flags: &'a [u32],
-    radiance: &'a [SurfelRadiance],
-) -> impl Fn(u32) -> SparseHaar<Rgb> + Sync + 'a {
-    move |i| {
-        let s = &surfels[i as usize];
-        let back = mesh_flags[s.mesh as usize] & SOLID == 0;
-        intensity_map(s, &radiance[i as usize], back)
-    }
-}
-
-/// A surfel's radiant intensity A |n·ω| L(ω) as a map at its own resolution (the diffuse
-/// cosine lobe's [`PROJECTED_AREA_LEVELS`], or its radiance map's); with `back` false, only
-/// towards the front hemisphere (see [`mesh_flags`]).
-///
-/// The cosine is taken at the centre of the projected-area map's texel
-/// ([`PROJECTED_AREA_LEVELS`]) that holds each texel, L at the texel's own centre. A node's
-/// radiance is I/P texel by texel, and with both on one cosine grid it is a mean of its
-/// surfels' radiance, exactly: a 16² glossy I over the 8² P strayed by 3 % in a closed room,
-/// and sampling P as finely as I tripled a glossy cache (P and the cosine lobes of diffuse
-/// nodes at 64²).
-///
-/// The result is exact and sparse (every non-zero coefficient, no dense transform of a map):
-/// the cosine being constant on the 8² cells, L's finer details are scaled by it, and only
-/// the 8² means go through a transform ([`SparseHaar::scaled_by_cells`]).
-pub fn intensity_map(s: &Surfel, r: &SurfelRadiance, back: bool) -> SparseHaar<Rgb> {
-    let coarse = match r {
-        SurfelRadiance::Rgb(_) => PROJECTED_AREA_LEVELS,
-        SurfelRadiance::Map(m) => m.levels().min(PROJECTED_AREA_LEVELS),
-    };
-    let factors: Vec<f32> = texel_directions(coarse)
-        .iter()
-        .map(|w| {
-            let cos = w.dot(s.n);
-            // Diffuse surfels radiate from the front only; maps carry their own lower half.
-            let projected = match r {
-                SurfelRadiance::Map(_) if back => cos.abs(),
-                _ => cos.max(0.0),
-            };
-            s.area * projected
-        })
-        .collect();
-    match r {
-        // Diffuse radiance is constant, so its intensity is a cosine lobe on P's grid.
-        SurfelRadiance::Rgb(c) => {
-            let texels: Vec<Rgb> = factors.iter().map(|f| *c * *f).collect();
-            SparseHaar::compress_below(&Haar2d::forward(&texels, 1 << coarse), 0.0)
-        }
-        // The cosine is constant on the cells of level `coarse`: L's finer details scale by
-        // it, its coarser ones are the transform of the cells' means times it.
-        SurfelRadiance::Map(m) => m.scaled_by_cells(coarse, &factors),
-    }
-}
-
-/// The resolution of projected-area maps, and of the cosine in intensity maps: P(ω) is a sum
-/// of clamped cosines, smooth enough for 8 × 8. Finer costs memory for little: at 16² the
-/// glossy box's depth-3 relMSE is 5.9e-4 instead of 7.1e-4 (a glossy node's surfels are
-/// weighted by the cosine at the 8² texel's centre, up to 13° off), but cbox-rough's cache
-/// doubles (cosine lobes of every diffuse node at 16²), and at the maps' own 64² cbox-glossy's
-/// tripled.
-pub const PROJECTED_AREA_LEVELS: u32 = 3;
-
-/// A surfel's projected area A |n·ω| on the 8 × 8 map. Both sides count: a disc occludes from
-/// behind as from the front (its radiance there, I/P, is simply what it emits backwards).
-pub fn projected_area_map(s: &Surfel) -> Haar2d<f32> {
-    let texels: Vec<f32> = texel_directions(PROJECTED_AREA_LEVELS)
-        .iter()
-        .map(|w| s.area * w.dot(s.n).abs())
-        .collect();
-    Haar2d::forward(&texels, 1 << PROJECTED_AREA_LEVELS)
 }

@@ -39,12 +39,11 @@ use super::receivers::Receivers;
 use super::transport::{read_nodes, slot_values, LinkScratch, ReceiverLinks, SlotIndex, Slots};
 use super::view_tree::{receiver_groups, GROUP_SURFELS, VIEW_EPS};
 use crate::accel::Accel;
-use crate::bake::coding::{encode, node_sums, CodedTree};
-use crate::bake::pipeline::{intensity_of, Baked, Progress, SurfelRadiance};
+use crate::bake::pipeline::{Baked, Progress};
 use crate::bake::plan::map_levels;
-use crate::bake::surfels::Surfel;
+use crate::bake::store::records_of;
 use crate::bsdf::Bsdf;
-use crate::cache::store::{records_of, NodeRecord, SurfelRecord};
+use crate::cache::store::{NodeRecord, SurfelRecord};
 use crate::error::{Error, Result};
 use crate::gather::cut::splat_cut;
 use crate::gather::fpbgi::{cluster_cut, member_buffer, Cluster, ClusterReceivers};
@@ -55,6 +54,9 @@ use crate::geometry::offset::offset_origin;
 use crate::haar::{texel_directions, Haar2d, SparseHaar};
 use crate::scene::Scene;
 use crate::spectrum::{luminance, Rgb};
+use crate::surfels::coding::{encode, node_sums, CodedTree};
+use crate::surfels::radiance::{intensity_of, SurfelRadiance};
+use crate::surfels::Surfel;
 use glam::{Vec3, Vec3A};
 use rayon::prelude::*;
 use std::path::Path;
@@ -958,7 +960,6 @@ mod tests {
     use super::super::bsdf_operator::Operators;
     use super::*;
     use crate::bake::{bake, BakeSettings};
-    use crate::cache::store::BakedCache;
 
     /// The bundled cbox-rough (diffuse walls, a rough conductor, a glass sphere) and its bake
     /// of `points` surfels with `light_samples` each, threshold `tau`, direct light only.
@@ -982,9 +983,10 @@ mod tests {
     #[test]
     fn senders_in_memory_are_the_cache_senders() {
         let (_, baked) = rough_box(2000, 4, 2e-3);
-        let from_file =
-            Senders::from_cache(&BakedCache::in_memory(Path::new("test"), &baked).expect("cache"))
-                .expect("senders");
+        let from_file = Senders::from_cache(
+            &crate::bake::store::in_memory(Path::new("test"), &baked).expect("cache"),
+        )
+        .expect("senders");
         let in_memory = geometry_senders(&baked).expect("senders");
         assert_eq!(from_file.nodes.len(), in_memory.nodes.len());
         let directions = crate::haar::texel_directions(3);
@@ -1017,7 +1019,7 @@ mod tests {
         let accel = Accel::build(&scene);
         let bsdfs = &baked.bsdfs;
         let ops = Operators::default().of_each(bsdfs, 1e-2, |b| !matches!(b, Bsdf::Diffuse(_)));
-        let cache = BakedCache::in_memory(Path::new("test"), &baked).expect("cache");
+        let cache = crate::bake::store::in_memory(Path::new("test"), &baked).expect("cache");
         let senders = Senders::from_cache(&cache).expect("senders");
         let slots = Slots::new(&baked.tree, &baked.radiance, baked.plan.map_levels).expect("slots");
         let gather = Gather {

@@ -22,12 +22,12 @@
 //! does not depend on the thread count.
 
 use super::view_tree::{cells, group_of};
-use crate::bake::pipeline::SurfelRadiance;
-use crate::bake::surfels::Surfel;
-use crate::bake::tree::SurfelTree;
 use crate::gather::fpbgi::Cluster;
 use crate::haar::SparseHaar;
 use crate::spectrum::Rgb;
+use crate::surfels::radiance::SurfelRadiance;
+use crate::surfels::tree::SurfelTree;
+use crate::surfels::Surfel;
 use glam::Vec3;
 use rayon::prelude::*;
 use std::collections::HashMap;

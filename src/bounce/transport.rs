@@ -29,13 +29,13 @@
 //! - **Determinism.** Terms are sorted by slot (and pixel) and summed in that order; which
 //!   groups are kept depends on their sizes alone, never on threads.
 
-use crate::bake::pipeline::SurfelRadiance;
-use crate::bake::tree::{SurfelTree, NONE};
 use crate::bsdf::Diffuse;
 use crate::gather::lookup::Lookup;
 use crate::gather::microbuffer::{group_by_pixel, Microbuffer};
 use crate::haar::{texel_at, SparseHaar};
 use crate::spectrum::Rgb;
+use crate::surfels::radiance::SurfelRadiance;
+use crate::surfels::tree::{SurfelTree, NONE};
 use glam::Vec3;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -424,7 +424,7 @@ impl ReceiverLinks {
 }
 
 /// Per node of `tree`, whether a receiver reads some texel of its intensity: the inner
-/// nodes whose exact intensity a bounce sums ([`crate::bake::coding::node_sums`]; a fifth of
+/// nodes whose exact intensity a bounce sums ([`crate::surfels::coding::node_sums`]; a fifth of
 /// the inner nodes in the Cornell-class scenes).
 pub fn read_nodes(slots: &Slots, index: &SlotIndex, tree: &SurfelTree) -> Vec<bool> {
     let side = 1u32 << slots.tree_levels;
@@ -448,7 +448,7 @@ pub fn slot_values(
     slots: &Slots,
     index: &SlotIndex,
     (tree, sums): (&SurfelTree, &[Option<SparseHaar<Rgb>>]),
-    surfels: &[crate::bake::surfels::Surfel],
+    surfels: &[crate::surfels::Surfel],
     sent: &[SurfelRadiance],
     values: &mut Vec<Rgb>,
 ) {
@@ -535,7 +535,7 @@ fn read_texels(read: &[u32], levels: u32, (texels, texel_levels): (&[Rgb], u32))
 /// Per node, S = Σ A L n over the diffuse surfels below, per axis (RGB).
 fn normal_sums(
     tree: &SurfelTree,
-    surfels: &[crate::bake::surfels::Surfel],
+    surfels: &[crate::surfels::Surfel],
     sent: &[SurfelRadiance],
 ) -> Vec<[Rgb; 3]> {
     let mut sums = vec![[Rgb::ZERO; 3]; tree.nodes.len()];

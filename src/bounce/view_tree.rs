@@ -30,9 +30,9 @@
 //! [`member_buffer`]: crate::gather::fpbgi::member_buffer
 //! [`splat_cut`]: crate::gather::cut::splat_cut
 
-use crate::bake::surfels::Surfel;
-use crate::bake::tree::{SurfelTree, NONE};
 use crate::gather::fpbgi::Cluster;
+use crate::surfels::tree::{SurfelTree, NONE};
+use crate::surfels::Surfel;
 
 /// The most surfels in one receiver group.
 pub const GROUP_SURFELS: u32 = 32;

@@ -45,38 +45,7 @@ pub const ALIGNMENT: usize = 64;
 /// Longest section name.
 pub const NAME_LEN: usize = 16;
 
-/// Why a cache file was refused.
-#[derive(Debug, thiserror::Error)]
-pub enum CacheError {
-    #[error("cannot read the cache {path}: {source}")]
-    Io {
-        path: PathBuf,
-        #[source]
-        source: std::io::Error,
-    },
-    #[error("{path} is not a wpbgi cache (wrong magic bytes)")]
-    Foreign { path: PathBuf },
-    #[error("{path} was written by a newer wpbgi (cache format {found}, this build reads up to {supported}); rebake or upgrade")]
-    NewerVersion {
-        path: PathBuf,
-        found: u32,
-        supported: u32,
-    },
-    #[error("{path} was written with the other byte order and cannot be read here")]
-    ByteOrder { path: PathBuf },
-    #[error("{path} is truncated: {what}")]
-    Truncated { path: PathBuf, what: String },
-    #[error("{path} is corrupted: {what} fails its checksum")]
-    Corrupted { path: PathBuf, what: String },
-    #[error("{path} is malformed: {what}")]
-    Malformed { path: PathBuf, what: String },
-    #[error("{path} is stale: the scene or the bake settings changed since it was baked; rebake")]
-    Stale { path: PathBuf },
-    #[error("{path} has no \"{name}\" section")]
-    MissingSection { path: PathBuf, name: String },
-    #[error("cannot write the cache {path}: {reason}")]
-    Write { path: PathBuf, reason: String },
-}
+pub use crate::error::CacheError;
 
 /// The content hash of a cache: XXH3-128 over everything that determines its contents.
 pub fn content_hash(parts: &[&[u8]]) -> [u8; 16] {

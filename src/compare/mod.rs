@@ -372,7 +372,7 @@ fn bake_preset(
     };
     let start = Instant::now();
     let baked = bake(scene, &bake_settings, progress)?;
-    let cache = BakedCache::in_memory(&scene.path, &baked)?;
+    let cache = crate::bake::store::in_memory(&scene.path, &baked)?;
     Ok((cache, bake_settings.points, start.elapsed().as_secs_f64()))
 }
 

@@ -16,9 +16,6 @@
 use super::lookup::Lookup;
 use super::microbuffer::Sender;
 use super::nearest::NearestSurfel;
-use crate::bake::pipeline::{intensity_map, SurfelRadiance};
-use crate::bake::surfels::Surfel;
-use crate::bake::tree::NONE;
 use crate::cache::store::{
     BakedCache, NodeRecord, SurfelRecord, BACK_SIDED, CLOSED, NO_MAP, SOLID,
 };
@@ -29,6 +26,9 @@ use crate::haar::{
     SparseHaar,
 };
 use crate::spectrum::Rgb;
+use crate::surfels::radiance::{intensity_map, SurfelRadiance};
+use crate::surfels::tree::NONE;
+use crate::surfels::Surfel;
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::path::Path;
@@ -254,7 +254,7 @@ impl Senders {
     /// The geometry of a bake still in memory, for a gather that only records where radiance
     /// is read (the bake's transport, which evaluates the lookups against each bounce's light
     /// itself: [`Senders::seen`] and the splats it feeds carry zero radiance): its records
-    /// ([`crate::cache::store::records_of`]), the stored projected-area maps of each node (G,
+    /// ([`crate::bake::store::records_of`]), the stored projected-area maps of each node (G,
     /// H) and its surfels' maps (their resolution says where a lookup reads). `path` names
     /// the bake in errors.
     pub fn geometry_of(

@@ -103,7 +103,7 @@ pub fn bake_to_cache(
 ) -> wpbgi::cache::store::BakedCache {
     let baked = wpbgi::bake::bake(scene, settings, &|_, _| {}).expect("bake");
     let hash = wpbgi::cache::store::bake_hash(scene, &settings.to_json());
-    wpbgi::cache::store::write(path, hash, &baked, serde_json::json!({})).expect("write");
+    wpbgi::bake::store::write(path, hash, &baked, serde_json::json!({})).expect("write");
     wpbgi::cache::store::BakedCache::read(path, None).expect("read")
 }
 

@@ -47,7 +47,7 @@ pub fn rust_api_result(points: u64, bounces: i32, size: u32) -> (Vec<u8>, Vec<f3
     let baked = bake(&scene, &library_settings(points, bounces), &|_, _| {}).expect("bake");
     let dir = scratch(&format!("rust-api-{points}-{bounces}-{size}"));
     let path = dir.join("rust.wpc");
-    wpbgi::cache::store::save(&path, &scene, &baked).expect("save");
+    wpbgi::bake::store::save(&path, &scene, &baked).expect("save");
     let cache = wpbgi::cache::store::BakedCache::open_fresh(&scene, &path).expect("open");
     let camera = scene.camera(None, size, size).expect("camera");
     let out = render_final(

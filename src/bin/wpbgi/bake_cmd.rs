@@ -206,9 +206,9 @@ pub fn bake_command(a: BakeArgs) -> Result<()> {
     bar.as_ref().map(crate::StagedBar::finish);
     let coefficients = baked.coded.stored_counts().1;
     let t = Instant::now();
-    wpbgi::cache::store::save(&a.output, &scene, &baked)?;
+    wpbgi::bake::store::save(&a.output, &scene, &baked)?;
     // The cache holds what the inputs determine; times and memory are reported here.
-    let mut stats = wpbgi::cache::store::cache_stats(&baked);
+    let mut stats = wpbgi::bake::store::cache_stats(&baked);
     let bytes = std::fs::metadata(&a.output).map(|m| m.len()).unwrap_or(0);
     stats["seconds"] = baked
         .timings

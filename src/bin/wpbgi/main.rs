@@ -530,7 +530,7 @@ fn demo(a: DemoArgs) -> Result<()> {
     let baked = wpbgi::bake::bake(&scene, &settings, &|stage, f| bar.update(stage, f))?;
     bar.finish();
     let cache_path = a.output.join("demo.wpc");
-    wpbgi::cache::store::save(&cache_path, &scene, &baked)?;
+    wpbgi::bake::store::save(&cache_path, &scene, &baked)?;
     let bake_seconds = start.elapsed().as_secs_f64();
     // Render from the cache.
     let cache = wpbgi::cache::store::BakedCache::open_fresh(&scene, &cache_path)?;

@@ -6,7 +6,7 @@
 //! the areas. Nodes are stored breadth-first, so the array runs coarse to fine: a reader of the
 //! cache can load the top levels alone.
 
-use super::surfels::Surfel;
+use super::Surfel;
 use glam::Vec3;
 
 /// No child / no parent.

@@ -19,6 +19,10 @@
 //! Neighbours count only when they face the same way (n·n' > 0). The two sides of a thin wall
 //! then do not thin each other out, and the area of one side is never credited to the other.
 
+pub mod coding;
+pub mod radiance;
+pub mod tree;
+
 use crate::geometry::offset::interpolate_with_error;
 use crate::geometry::warp::square_to_uniform_triangle;
 use crate::sampler::Sampler;
