@@ -210,19 +210,11 @@ impl Accel {
         let mut closest = q.tmax;
         self.bvh.traverse(&q.boxes, q.tmax, true, |packets| {
             for packet in packets {
-                // Each lane's hit is closer than the ones before it (it is tested against the
-                // shrinking `closest`), so the last one is the packet's closest.
-                let mut lanes = q.wt.candidates(&packet.v, closest) & packet.used();
-                while lanes != 0 {
-                    let lane = lanes.trailing_zeros() as usize;
-                    lanes &= lanes - 1;
-                    let [p0, p1, p2] = packet.triangle(lane);
-                    let id = packet.id[lane];
-                    if let Some(h) = q.wt.intersect(p0, p1, p2, q.tmin, closest) {
-                        if self.solid(id as usize, &h) {
-                            best = Some((id, h));
-                            closest = h.t;
-                        }
+                // The first of equally close hits wins, as in lane-by-lane order.
+                for (id, h) in self.packet_hits(&q, packet, closest) {
+                    if h.t < closest {
+                        best = Some((id, h));
+                        closest = h.t;
                     }
                 }
             }
