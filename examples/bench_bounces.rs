@@ -21,8 +21,8 @@
 use serde_json::Value;
 use std::path::Path;
 use std::process::Command;
+use wpbgi::bake::bounce::BounceSettings;
 use wpbgi::bake::{BakeSettings, Quality};
-use wpbgi::bounce::BounceSettings;
 use wpbgi::compare::memory;
 use wpbgi::image::{error_against, read_exr};
 use wpbgi::render::FinalSettings;

@@ -23,8 +23,8 @@
 //! cbox-rough and cbox-glossy, the whole job (`wpbgi bake` + `wpbgi render`) at Mitsuba +
 //! OIDN's error. `WPBGI_SIZES=256` renders 256² only.
 
+use wpbgi::bake::bounce::BounceSettings;
 use wpbgi::bake::{BakeSettings, Quality};
-use wpbgi::bounce::BounceSettings;
 use wpbgi::cache::store::BakedCache;
 use wpbgi::image::{error_against, read_exr};
 use wpbgi::render::{render_final, FinalOutput, FinalSettings, GatherMode, GatherStats};

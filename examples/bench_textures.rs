@@ -13,8 +13,8 @@ mod common;
 
 use std::path::Path;
 use std::time::Instant;
+use wpbgi::bake::bounce::BounceSettings;
 use wpbgi::bake::{bake, BakeSettings, Quality};
-use wpbgi::bounce::BounceSettings;
 use wpbgi::compare::errors;
 use wpbgi::compare::memory::{peak, reset_peak};
 use wpbgi::reference::{render, RenderSettings};

@@ -27,7 +27,6 @@ pub mod accel;
 pub mod assemble;
 pub mod atomic;
 pub mod bake;
-pub mod bounce;
 pub mod bsdf;
 pub mod cache;
 pub mod compare;

@@ -23,7 +23,7 @@ fn settings() -> BakeSettings {
         split_level: None,
         seed: 1,
         max_cut: 1000,
-        bounces: wpbgi::bounce::BounceSettings::exactly(0),
+        bounces: wpbgi::bake::bounce::BounceSettings::exactly(0),
         surfel_density: Vec::new(),
     }
 }
@@ -246,7 +246,7 @@ fn a_cancelled_bake_stops_in_the_stage_that_sees_the_flag() {
     use wpbgi::bake::bake_cancellable;
     let scene = cbox();
     let mut s = settings();
-    s.bounces = wpbgi::bounce::BounceSettings::exactly(2);
+    s.bounces = wpbgi::bake::bounce::BounceSettings::exactly(2);
 
     let set = AtomicBool::new(true);
     let r = bake_cancellable(&scene, &s, &|_, _| {}, &set);
@@ -297,7 +297,7 @@ fn a_bake_that_cannot_fit_is_refused_before_any_work() {
     ] {
         let s = BakeSettings {
             points,
-            bounces: wpbgi::bounce::BounceSettings::exactly(bounces),
+            bounces: wpbgi::bake::bounce::BounceSettings::exactly(bounces),
             ..settings()
         };
         let seen = Mutex::new(Vec::new());
@@ -375,7 +375,7 @@ fn surfel_density_refines_the_named_material() {
 /// about half kept, all kept).
 #[test]
 fn multi_bounce_cache_is_identical_for_any_thread_count_and_transport_budget() {
-    use wpbgi::bounce::BounceSettings;
+    use wpbgi::bake::bounce::BounceSettings;
     let scene = cbox();
     let dir = std::env::temp_dir().join(format!("wpbgi-transport-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");

@@ -3,8 +3,8 @@
 //! and the error of the roughness levels a textured roughness snaps to.
 
 use glam::Vec3;
-use wpbgi::bounce::bsdf_operator::operator_side;
-use wpbgi::bounce::bsdf_operator::{
+use wpbgi::bake::bounce::bsdf_operator::operator_side;
+use wpbgi::bake::bounce::bsdf_operator::{
     forward, inverse, kernel, mean_cosines, quantised_alpha, Basis, BsdfOperator, Operators,
     INCOMING_TAU, QUANTISATION_ERROR, ROUGHNESS_LEVELS_PER_OCTAVE, UNTINTED,
 };

@@ -13,8 +13,8 @@
 mod common;
 
 use glam::Vec3;
+use wpbgi::bake::bounce::BounceSettings;
 use wpbgi::bake::{bake, BakeSettings, Baked};
-use wpbgi::bounce::BounceSettings;
 use wpbgi::bsdf::{Bsdf, Diffuse, Distribution, Microfacet, RoughConductor};
 use wpbgi::haar::direction_to_square;
 use wpbgi::scene::{Emission, Material, Mesh, Scattering, Scene};
@@ -177,7 +177,7 @@ fn conductor_furnace_matches_the_path_tracer() {
             max_depth: -1,
             ..Default::default()
         };
-        let ctx = wpbgi::reference::RenderContext::new(&scene, &settings);
+        let ctx = settings.context(&scene);
         let (mut ours, mut sum, mut sum2, mut count) = (0.0f64, 0.0f64, 0.0f64, 0u32);
         for (i, s) in baked.surfels.iter().enumerate() {
             ours += towards_centre(&baked, i);
@@ -311,7 +311,7 @@ fn open_room_gathers_what_its_rays_hit() {
 /// gather, for every `step`-th surfel (0 for the others), the irradiance / π that its
 /// microbuffer collects as a bounce builds it.
 fn uniform_gather(scene: &Scene, settings: &BakeSettings, step: usize) -> (Baked, Vec<f64>) {
-    use wpbgi::bounce::iterate::close_buffer;
+    use wpbgi::bake::bounce::iterate::close_buffer;
     use wpbgi::gather::cut::splat_cut;
     use wpbgi::gather::microbuffer::Microbuffer;
     use wpbgi::gather::senders::Senders;

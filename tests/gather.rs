@@ -184,7 +184,7 @@ fn a_solid_reaches_only_its_own_solid_as_leaves() {
     let settings = BakeSettings {
         points: 3000,
         light_samples: 4,
-        bounces: wpbgi::bounce::BounceSettings::exactly(0),
+        bounces: wpbgi::bake::bounce::BounceSettings::exactly(0),
         ..BakeSettings::from_quality(wpbgi::bake::Quality::Draft)
     };
     let baked = bake(&scene, &settings, &|_, _| {}).unwrap();

@@ -193,7 +193,7 @@ fn sparse_tree_without_threshold_is_the_full_decomposition() {
 /// A thresholded map decodes the same, bit for bit, through the dense decomposition, through
 /// its trimmed decomposition (coarser where the finer details were all dropped) and straight
 /// from the sparse tree; and combining a trimmed map with a full one is combining the full
-/// ones. The bounces read maps these shorter ways (src/bounce/transport.rs, bake/coding.rs).
+/// ones. The bounces read maps these shorter ways (src/bake/bounce/transport.rs, src/surfels/coding.rs).
 #[test]
 fn sparse_decodes_agree_bit_for_bit() {
     for (n, tau) in [

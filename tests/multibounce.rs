@@ -10,8 +10,8 @@
 
 mod common;
 
+use wpbgi::bake::bounce::BounceSettings;
 use wpbgi::bake::{BakeSettings, Quality};
-use wpbgi::bounce::BounceSettings;
 use wpbgi::image::error_against;
 
 use wpbgi::scene::Scene;

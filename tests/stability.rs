@@ -19,8 +19,8 @@ mod common;
 
 use glam::{Vec2, Vec3};
 use std::path::{Path, PathBuf};
+use wpbgi::bake::bounce::BounceSettings;
 use wpbgi::bake::{bake, BakeSettings, Quality};
-use wpbgi::bounce::BounceSettings;
 use wpbgi::bsdf::{
     Bsdf, Diffuse, Distribution, Lobe, Microfacet, RoughConductor, RoughDielectric, ThinDielectric,
     TransportMode,

@@ -12,9 +12,9 @@ mod common;
 use glam::Vec3;
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
+use wpbgi::bake::bounce::bsdf_operator::{quantised_alpha, ROUGHNESS_LEVELS_PER_OCTAVE};
+use wpbgi::bake::bounce::BounceSettings;
 use wpbgi::bake::{bake, BakeSettings, Quality};
-use wpbgi::bounce::bsdf_operator::{quantised_alpha, ROUGHNESS_LEVELS_PER_OCTAVE};
-use wpbgi::bounce::BounceSettings;
 use wpbgi::reference::{render, RenderSettings};
 
 use wpbgi::scene::Scene;

@@ -3,8 +3,8 @@
 
 use crate::guard::{call, checked_mut, checked_str, Failure};
 use std::ffi::c_char;
+use wpbgi::bake::bounce::BounceSettings;
 use wpbgi::bake::{BakeSettings, Quality};
-use wpbgi::bounce::BounceSettings;
 use wpbgi::render::FinalSettings;
 
 /// How to bake. Initialise it with `wpbgi_bake_settings_init`, then change fields.

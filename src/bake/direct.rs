@@ -24,7 +24,7 @@
 
 use super::lightcuts::LightTree;
 use crate::accel::Accel;
-use crate::bounce::bsdf_operator::SurfelOperator;
+use crate::bake::bounce::bsdf_operator::SurfelOperator;
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::emitters::{EmitterSample, EmitterSampler};
 use crate::geometry::frame::Frame;

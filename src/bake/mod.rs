@@ -1,11 +1,16 @@
 //! The bake (DESIGN.md §5): surfels, their direct light, the surfel tree and its wavelet coding.
 
+pub mod baked;
+pub mod bounce;
 pub mod direct;
 pub mod lightcuts;
 pub mod pipeline;
 pub mod plan;
+pub mod settings;
 pub mod store;
 
+pub use baked::{Baked, Progress};
 pub use direct::DirectLight;
-pub use pipeline::{bake, bake_cancellable, BakeSettings, Baked, Quality};
+pub use pipeline::{bake, bake_cancellable};
 pub use plan::Plan;
+pub use settings::{BakeSettings, Quality};

@@ -5,21 +5,23 @@
 //! coded post-order, each leaf's radiant-intensity map A |n·ω| L(ω) being built on the fly
 //! from that compact form, so the uncompressed set never exists.
 
+use super::baked::{Baked, Progress};
 use super::direct::{DirectLight, NEAR_SPECULAR_ALPHA};
 use super::lightcuts::LightTree;
-use super::plan::{map_levels, Plan};
+use super::plan::Plan;
+use super::settings::BakeSettings;
 use crate::accel::Accel;
-use crate::bounce::bsdf_operator::{quantised_alpha, Operators, SurfelOperator};
-use crate::bounce::{add_bounces, BounceReport, BounceSettings};
+use crate::bake::bounce::add_bounces;
+use crate::bake::bounce::bsdf_operator::{quantised_alpha, Operators, SurfelOperator};
 use crate::bsdf::Bsdf;
 use crate::emitters::EmitterSampler;
 use crate::error::{Error, Result};
 use crate::haar::{texel_directions, Haar2d, SparseHaar};
 use crate::scene::{LightKind, Scene};
 use crate::spectrum::Rgb;
-use crate::surfels::coding::{encode, CodedTree};
+use crate::surfels::coding::encode;
 use crate::surfels::radiance::{
-    intensity_of, mesh_flags, projected_area_map, SurfelRadiance, PROJECTED_AREA_LEVELS,
+    intensity_of, map_levels, mesh_flags, projected_area_map, SurfelRadiance, PROJECTED_AREA_LEVELS,
 };
 use crate::surfels::tree::SurfelTree;
 use crate::surfels::{sample_surfels_with_density, Surfel};
@@ -30,117 +32,6 @@ use std::time::Instant;
 
 /// Scenes with more point and spot lights than this use a light tree (Lightcuts).
 pub const LIGHT_TREE_FROM: usize = 16;
-
-/// Quality presets: surfels and emitter samples per surfel.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Quality {
-    Draft,
-    Preview,
-    Final,
-    Ultra,
-}
-
-impl Quality {
-    /// The preset's name on the command line and in reports.
-    pub fn name(self) -> &'static str {
-        match self {
-            Quality::Draft => "draft",
-            Quality::Preview => "preview",
-            Quality::Final => "final",
-            Quality::Ultra => "ultra",
-        }
-    }
-
-    /// Surfels. The preview preset (the default) takes 50 000: on the five Cornell-class
-    /// scenes its relMSE is that of 100 000 within 6 % (higher on three, lower on two) in half
-    /// the bake and two thirds of the render (docs/bounces.md, "The preview preset").
-    pub fn points(self) -> usize {
-        match self {
-            Quality::Draft => 20_000,
-            Quality::Preview => 50_000,
-            Quality::Final => 500_000,
-            Quality::Ultra => 2_000_000,
-        }
-    }
-
-    /// Emitter samples per surfel. Fewer per surfel as surfels grow denser: the render's
-    /// gather averages many neighbours, and the error follows the spacing (measured at
-    /// 100 000 surfels: 32 samples give the relMSE of 128 on the five Cornell-class scenes,
-    /// within 1 %; at 20 000, 32 instead of 64 cost the caustic 8 %; at 50 000, 64 gave
-    /// cbox-glossy and cbox-mirror no lower error than 32).
-    pub fn light_samples(self) -> u32 {
-        match self {
-            Quality::Draft => 64,
-            Quality::Preview => 32,
-            Quality::Final => 256,
-            Quality::Ultra => 512,
-        }
-    }
-}
-
-/// Everything that determines a bake's result (and so goes into the cache's content hash).
-#[derive(Clone, Debug, PartialEq)]
-pub struct BakeSettings {
-    pub points: usize,
-    pub light_samples: u32,
-    /// Relative wavelet threshold (dimensionless).
-    pub tau: f32,
-    /// Hierarchical coding split level; `None`: three levels above the deepest leaves, as the
-    /// thesis's 20 of about 23 levels.
-    pub split_level: Option<u32>,
-    pub seed: u64,
-    /// Largest lightcut (clusters) when a light tree is used.
-    pub max_cut: usize,
-    /// Indirect bounces after the direct light (none: a direct-only cache).
-    pub bounces: BounceSettings,
-    /// Surfels per unit area of the named materials' meshes relative to the others (1), in
-    /// the order given; a material named twice takes its last factor. Finer glass sharpens
-    /// the caustics it casts (docs/bounces.md measures it), at the cost of its surfels.
-    pub surfel_density: Vec<(String, f32)>,
-}
-
-impl BakeSettings {
-    pub fn from_quality(q: Quality) -> Self {
-        BakeSettings {
-            points: q.points(),
-            light_samples: q.light_samples(),
-            tau: 2e-3,
-            split_level: None,
-            seed: 0,
-            max_cut: 1000,
-            bounces: BounceSettings::exactly(0),
-            surfel_density: Vec::new(),
-        }
-    }
-
-    /// A canonical text of the settings, for the content hash and the cache's plan.
-    pub fn to_json(&self) -> serde_json::Value {
-        let mut json = serde_json::json!({
-            "points": self.points,
-            "light_samples": self.light_samples,
-            "tau": self.tau,
-            "split_level": self.split_level,
-            "seed": self.seed,
-            "max_cut": self.max_cut,
-            "bounces": {
-                "max": self.bounces.max,
-                "tolerance": self.bounces.tolerance,
-                "operator_tau": self.bounces.operator_tau,
-                "view_tree": self.bounces.view_tree,
-                "receiver_stride": self.bounces.receiver_stride,
-            },
-        });
-        // Left out when uniform, so that the caches of earlier versions keep their hash.
-        if !self.surfel_density.is_empty() {
-            json["surfel_density"] = self
-                .surfel_density
-                .iter()
-                .map(|(name, w)| serde_json::json!([name, w]))
-                .collect();
-        }
-        json
-    }
-}
 
 /// Each mesh's relative surfel density from the per-material factors of `densities`
 /// (material name, factor): an unknown name or a factor that is not a positive finite number
@@ -191,7 +82,7 @@ fn check_fits(settings: &BakeSettings, map_levels: u32) -> Result<()> {
     let points = settings.points as u64;
     let bounces = settings.bounces.max > 0;
     if bounces {
-        crate::bounce::iterate::check_slots(points, map_levels)?;
+        super::bounce::settings::check_slots(points, map_levels)?;
     }
     let per_surfel = size_of::<Surfel>()
         + size_of::<SurfelRadiance>()
@@ -204,7 +95,7 @@ fn check_fits(settings: &BakeSettings, map_levels: u32) -> Result<()> {
     let floor = points
         .saturating_mul(per_surfel as u64)
         .saturating_add(if bounces {
-            crate::bounce::iterate::memory_floor(points, map_levels)
+            super::bounce::settings::memory_floor(points, map_levels)
         } else {
             0
         });
@@ -218,37 +109,6 @@ fn check_fits(settings: &BakeSettings, map_levels: u32) -> Result<()> {
         _ => Ok(()),
     }
 }
-
-/// The result of a bake.
-pub struct Baked {
-    pub plan: Plan,
-    pub settings: BakeSettings,
-    pub surfels: Vec<Surfel>,
-    pub radiance: Vec<SurfelRadiance>,
-    /// The emitted radiance (front face) included in each surfel's `radiance`.
-    pub emitted: Vec<Rgb>,
-    /// Per mesh: its surfels' flags ([`mesh_flags`]).
-    pub mesh_flags: Vec<u32>,
-    /// Per surfel: its BSDF (textures looked up).
-    pub bsdfs: Vec<Bsdf>,
-    /// Per surfel: the normal its BSDF's frame is around ([`surfel_shading_normal`]).
-    pub shading_normals: Vec<Vec3>,
-    /// The BSDF operators built so far (the direct light's, for the bounces to reuse).
-    pub operators: Operators,
-    pub tree: SurfelTree,
-    /// Radiant intensity I(ω) of every node (RGB).
-    pub coded: CodedTree<Rgb>,
-    /// Projected area P(ω) of every node, on an 8 × 8 map: a node seen from afar subtends
-    /// P/d² and has radiance I/P (DESIGN.md §5.5).
-    pub projected: CodedTree<f32>,
-    /// Seconds per stage, in order.
-    pub timings: Vec<(&'static str, f64)>,
-    /// What the indirect bounces did, if any ran.
-    pub bounces: Option<BounceReport>,
-}
-
-/// Which stage is running and how far it is (from 0 to 1), for progress display.
-pub type Progress<'a> = &'a (dyn Fn(&str, f32) + Sync);
 
 /// Bake `scene`: direct light, then the indirect bounces `settings` asks for.
 pub fn bake(scene: &Scene, settings: &BakeSettings, progress: Progress) -> Result<Baked> {

@@ -3,24 +3,9 @@
 
 use crate::bsdf::Bsdf;
 use crate::scene::{LightKind, Scene};
+use crate::surfels::radiance::map_levels;
 use glam::Vec2;
 use serde_json::{json, Value};
-
-/// Directional resolution (log2 of the octahedral map side) a BSDF needs, from its roughness:
-/// α ≥ 0.5 → 8², ≥ 0.1 → 16², ≥ 0.03 → 32², smaller → 64² (DESIGN.md §5.4). `None` for a
-/// diffuse BSDF, whose surfels store RGB only.
-pub fn map_levels(bsdf: &Bsdf) -> Option<u32> {
-    let alpha = bsdf.alpha()?;
-    Some(if alpha >= 0.5 {
-        3
-    } else if alpha >= 0.1 {
-        4
-    } else if alpha >= 0.03 {
-        5
-    } else {
-        6
-    })
-}
 
 fn model(bsdf: &Bsdf) -> &'static str {
     match bsdf {
@@ -42,7 +27,7 @@ pub struct Plan {
 
 impl Plan {
     /// Record the bounce settings: `bounces` 0 leaves indirect light out.
-    pub fn note_bounces(&mut self, bounces: &crate::bounce::BounceSettings) {
+    pub fn note_bounces(&mut self, bounces: &crate::bake::bounce::BounceSettings) {
         if bounces.max == 0 {
             if let Some(l) = self.json["left_out"].as_array_mut() {
                 l.push("indirect bounces: this bake computes direct light only".into());

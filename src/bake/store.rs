@@ -2,7 +2,7 @@
 //! sections, encoded and written atomically (the layout and the reader are
 //! [`crate::cache::store`]'s).
 
-use super::pipeline::Baked;
+use super::baked::Baked;
 use crate::cache::store::{bake_hash, BakedCache, NodeRecord, SurfelRecord, BAKE_FORMAT, NO_MAP};
 use crate::cache::{self, CacheError};
 use crate::haar::{Coefficient, SparseHaar};

@@ -2,7 +2,7 @@
 
 use super::fresnel::fresnel_conductor;
 use super::microfacet::{Distribution, Microfacet};
-use super::{BsdfSample, Lobe};
+use super::sample::{BsdfSample, Lobe};
 use crate::geometry::frame::reflect;
 use crate::spectrum::Rgb;
 use glam::{Vec2, Vec3};

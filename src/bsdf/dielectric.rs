@@ -3,7 +3,7 @@
 
 use super::fresnel::fresnel_dielectric;
 use super::microfacet::{Distribution, Microfacet};
-use super::{BsdfSample, Lobe, TransportMode};
+use super::sample::{BsdfSample, Lobe, TransportMode};
 use crate::geometry::frame::{reflect, refract};
 use crate::spectrum::Rgb;
 use glam::{Vec2, Vec3};

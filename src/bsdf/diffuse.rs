@@ -1,6 +1,6 @@
 //! Mitsuba's `diffuse`: a one-sided Lambertian reflector.
 
-use super::{BsdfSample, Lobe};
+use super::sample::{BsdfSample, Lobe};
 use crate::geometry::warp::{square_to_cosine_hemisphere, square_to_cosine_hemisphere_pdf};
 use crate::spectrum::Rgb;
 use glam::{Vec2, Vec3};

@@ -20,46 +20,18 @@ pub mod fresnel;
 pub mod ior;
 pub mod microfacet;
 pub mod mitsuba;
+pub mod sample;
 pub mod thin;
 
 pub use conductor::RoughConductor;
 pub use dielectric::RoughDielectric;
 pub use diffuse::Diffuse;
 pub use microfacet::{Distribution, Microfacet};
+pub use sample::{BsdfSample, Lobe, TransportMode};
 pub use thin::ThinDielectric;
 
 use crate::spectrum::Rgb;
 use glam::{Vec2, Vec3};
-
-/// What is being transported along the path (affects refraction only).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
-pub enum TransportMode {
-    /// Paths traced from the camera (the usual case).
-    #[default]
-    Radiance,
-    /// Paths traced from the lights.
-    Importance,
-}
-
-/// Which lobe a sample came from.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Lobe {
-    Reflection,
-    Transmission,
-}
-
-/// A sampled direction.
-#[derive(Clone, Copy, Debug)]
-pub struct BsdfSample {
-    pub wo: Vec3,
-    /// Solid-angle density, lobe selection included.
-    pub pdf: f32,
-    /// Relative index of refraction crossed (1 for reflection).
-    pub eta: f32,
-    pub lobe: Lobe,
-    /// `eval / pdf`.
-    pub weight: Rgb,
-}
 
 /// A BSDF with every parameter resolved at one shading point (textures already looked up).
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -138,7 +110,7 @@ impl Bsdf {
     /// `[reflected, transmitted]`. The BSDF's value and the flux it sends to each side are
     /// those of the untinted BSDF times the tint of that side (the tints scale the lobes; the
     /// Fresnel term, not they, splits reflection from transmission). So one operator serves
-    /// every tint of a textured colour ([`crate::bounce::bsdf_operator::Operators`]).
+    /// every tint of a textured colour ([`crate::bake::bounce::bsdf_operator::Operators`]).
     pub fn untinted(&self) -> (Bsdf, [Rgb; 2]) {
         match *self {
             Bsdf::Diffuse(d) => (Bsdf::Diffuse(d), [Rgb::ONE; 2]),

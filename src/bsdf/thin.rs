@@ -13,7 +13,7 @@
 
 use super::fresnel::fresnel_dielectric;
 use super::microfacet::Microfacet;
-use super::{BsdfSample, Lobe};
+use super::sample::{BsdfSample, Lobe};
 use crate::geometry::frame::reflect;
 use crate::spectrum::Rgb;
 use glam::{Vec2, Vec3};

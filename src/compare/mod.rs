@@ -14,11 +14,14 @@
 
 pub mod memory;
 mod plot;
+pub mod report;
 pub mod shot;
 
+pub use report::{Method, Reference, Report, Run};
+
 use crate::atomic::write_atomically;
+use crate::bake::bounce::BounceSettings;
 use crate::bake::{bake, BakeSettings, Quality};
-use crate::bounce::BounceSettings;
 use crate::cache::store::BakedCache;
 use crate::error::{Error, Result};
 use crate::image::{error_against, srgb8, Image};
@@ -26,7 +29,7 @@ use crate::reference::{render, RenderOutput, RenderSettings};
 use crate::render::{render_final, FinalSettings};
 use crate::scene::{Camera, Scene};
 use serde_json::{json, Value};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::{Duration, Instant};
 
 /// What to compare.
@@ -58,17 +61,6 @@ impl Default for CompareSettings {
 /// tracer's under comparison.
 const REFERENCE_SEED: u64 = 0x7265_6665_7265_6e63;
 
-/// The image every run is measured against.
-#[derive(Clone, Debug)]
-pub struct Reference {
-    pub image: Image,
-    /// The file it was read from, or `None` when it was rendered here.
-    pub path: Option<PathBuf>,
-    /// For a rendered reference: its samples per pixel and seconds.
-    pub spp: Option<u32>,
-    pub seconds: Option<f64>,
-}
-
 impl Reference {
     /// Path-trace the reference at `spp` samples per pixel.
     pub fn render(
@@ -90,40 +82,6 @@ impl Reference {
             spp: Some(out.spp),
             seconds: Some(out.seconds),
         })
-    }
-}
-
-/// Which method made a run's image.
-#[derive(Clone, Debug, PartialEq)]
-pub enum Method {
-    /// Bake at a preset, then the final render from the cache.
-    Cache { preset: Quality, points: usize },
-    /// The path tracer at `spp` samples per pixel (a point of its progressive render).
-    PathTracer { spp: u32 },
-    /// The same image denoised ([`crate::reference::RenderOutput::denoised`]); its seconds
-    /// include the first hits' and the denoiser's.
-    Denoised { spp: u32 },
-}
-
-impl Method {
-    /// The method's name in the report.
-    pub fn name(&self) -> &'static str {
-        match self {
-            Method::Cache { .. } => "wpbgi",
-            Method::PathTracer { .. } => "path tracer",
-            Method::Denoised { .. } => "path tracer + OIDN",
-        }
-    }
-
-    /// The method as tables and plots label it: the cache with its preset, the path tracer
-    /// with its samples per pixel.
-    pub fn label(&self) -> String {
-        match self {
-            Method::Cache { preset, .. } => format!("wpbgi {}", preset.name()),
-            Method::PathTracer { spp } | Method::Denoised { spp } => {
-                format!("{}, {spp} spp", self.name())
-            }
-        }
     }
 }
 
@@ -151,66 +109,6 @@ fn denoise(out: &RenderOutput, missing: &mut Option<String>) -> Option<(Image, f
             None
         }
     }
-}
-
-/// One measured run.
-#[derive(Clone, Debug)]
-pub struct Run {
-    pub method: Method,
-    pub bake_seconds: f64,
-    pub render_seconds: f64,
-    /// Peak resident memory during the run (bytes), where the OS tells it.
-    pub peak_memory: Option<u64>,
-    pub mse: f64,
-    pub rel_mse: f64,
-    pub mssim: f64,
-}
-
-impl Run {
-    pub fn total_seconds(&self) -> f64 {
-        self.bake_seconds + self.render_seconds
-    }
-
-    pub fn label(&self) -> String {
-        self.method.label()
-    }
-
-    fn to_json(&self) -> Value {
-        let (preset, extra) = match &self.method {
-            Method::Cache { preset, points } => (Some(preset.name()), json!({ "surfels": points })),
-            Method::PathTracer { spp } | Method::Denoised { spp } => (None, json!({ "spp": spp })),
-        };
-        let mut v = json!({
-            "method": self.method.name(),
-            "preset": preset,
-            "bake_s": self.bake_seconds,
-            "render_s": self.render_seconds,
-            "total_s": self.total_seconds(),
-            "peak_memory_bytes": self.peak_memory,
-            "mse": self.mse,
-            "rel_mse": self.rel_mse,
-            "mssim": self.mssim,
-        });
-        if let (Some(o), Some(e)) = (v.as_object_mut(), extra.as_object()) {
-            o.extend(e.clone());
-        }
-        v
-    }
-}
-
-/// Every run of a comparison and what they were compared against.
-#[derive(Clone, Debug)]
-pub struct Report {
-    pub scene: PathBuf,
-    pub width: u32,
-    pub height: u32,
-    pub threads: usize,
-    pub reference: Reference,
-    /// The cache's runs (one per preset), then the path tracer's and the denoised path
-    /// tracer's, each in the order of its samples.
-    pub runs: Vec<Run>,
-    /// Why the denoised curve is missing (the denoiser did not load), if it is.
-    pub denoiser_missing: Option<String>,
 }
 
 /// Refuse a reference of another size than the render's (`width` × `height`), before any

@@ -3,7 +3,7 @@
 //! tracer's samples per pixel), as SVG and as PNG pixels (drawn with plotters; the PNG's text with
 //! the DejaVu Sans subset in `assets/fonts`, so it looks the same on a machine without fonts).
 
-use super::{Method, Report};
+use super::report::{Method, Report, Run};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
@@ -61,7 +61,7 @@ where
 {
     let err = |e: DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
     root.fill(&WHITE).map_err(err)?;
-    let point = |r: &super::Run| (positive(r.total_seconds()), positive(r.rel_mse));
+    let point = |r: &Run| (positive(r.total_seconds()), positive(r.rel_mse));
     type Of = fn(&Method) -> bool;
     let curves: Vec<Curve> = [
         (

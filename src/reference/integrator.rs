@@ -1,11 +1,30 @@
 //! The path-tracing loop for one camera sample (Mitsuba's `path` integrator).
 
-use super::{RenderContext, Transport};
 use crate::bsdf::TransportMode;
 use crate::sampler::Sampler;
 use crate::spectrum::{max_component, Rgb};
-use crate::trace::{intersect, mis};
+use crate::trace::{intersect, mis, Tracer};
 use glam::Vec3;
+
+/// Which paths the path tracer sums.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Transport {
+    /// Every path (within `max_depth`): the ground truth.
+    Full,
+    /// The paths the final render from a direct-only cache sums (`crate::render`), for
+    /// testing it: up to `chain` vertices smoother than `smooth_below` (no next-event
+    /// estimation there), then a rough vertex lit directly and by one more vertex that is
+    /// itself lit directly.
+    CacheOneBounce { smooth_below: f32, chain: u32 },
+}
+
+/// Everything the integrator needs, built once per render.
+pub struct RenderContext<'a> {
+    pub tracer: Tracer<'a>,
+    pub max_depth: i32,
+    pub rr_depth: u32,
+    pub transport: Transport,
+}
 
 /// The largest probability with which Russian roulette continues a path (see the module docs
 /// of [`crate::reference`] for why not Mitsuba's 0.95).

@@ -21,7 +21,7 @@
 
 mod integrator;
 
-pub use integrator::radiance;
+pub use integrator::{radiance, RenderContext, Transport};
 
 use crate::error::{Error, Result};
 use crate::image::Image;
@@ -53,16 +53,17 @@ pub struct RenderSettings {
     pub first_hits: bool,
 }
 
-/// Which paths the path tracer sums.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum Transport {
-    /// Every path (within `max_depth`): the ground truth.
-    Full,
-    /// The paths the final render from a direct-only cache sums (`crate::render`), for
-    /// testing it: up to `chain` vertices smoother than `smooth_below` (no next-event
-    /// estimation there), then a rough vertex lit directly and by one more vertex that is
-    /// itself lit directly.
-    CacheOneBounce { smooth_below: f32, chain: u32 },
+impl RenderSettings {
+    /// The integrator's context for these settings: what [`radiance`] needs, built once per
+    /// render.
+    pub fn context<'a>(&self, scene: &'a Scene) -> RenderContext<'a> {
+        RenderContext {
+            tracer: Tracer::new(scene),
+            max_depth: self.max_depth,
+            rr_depth: self.rr_depth,
+            transport: self.transport,
+        }
+    }
 }
 
 impl Default for RenderSettings {
@@ -126,25 +127,6 @@ impl RenderOutput {
     }
 }
 
-/// Everything the integrator needs, built once per render.
-pub struct RenderContext<'a> {
-    pub tracer: Tracer<'a>,
-    pub max_depth: i32,
-    pub rr_depth: u32,
-    pub transport: Transport,
-}
-
-impl<'a> RenderContext<'a> {
-    pub fn new(scene: &'a Scene, settings: &RenderSettings) -> Self {
-        RenderContext {
-            tracer: Tracer::new(scene),
-            max_depth: settings.max_depth,
-            rr_depth: settings.rr_depth,
-            transport: settings.transport,
-        }
-    }
-}
-
 /// Render `camera`'s view of `scene`. `progress` receives the fraction done (0..1) from any
 /// thread; the library prints nothing.
 pub fn render(
@@ -155,7 +137,7 @@ pub fn render(
 ) -> Result<RenderOutput> {
     check(scene, camera, settings)?;
     let start = Instant::now();
-    let ctx = RenderContext::new(scene, settings);
+    let ctx = settings.context(scene);
     let mut acc = Accumulation::new(camera, settings.first_hits);
     // A time-limited render takes passes of `spp` samples until the time is up and reports
     // progress against the time; otherwise one pass, with progress per finished row.
@@ -195,7 +177,7 @@ pub fn render_progressive(
             ..settings.clone()
         },
     )?;
-    let ctx = RenderContext::new(scene, settings);
+    let ctx = settings.context(scene);
     let mut acc = Accumulation::new(camera, settings.first_hits);
     // Seconds of path tracing, and of everything (the first hits too).
     let (mut traced, mut spent) = (0.0f64, 0.0f64);

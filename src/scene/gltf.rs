@@ -8,9 +8,10 @@
 use super::camera::{Camera, Projection};
 use super::light::{LightKind, PunctualLight};
 use super::material::{Cutout, Emission, Material, PbrParams, Scattering};
+use super::mesh::{drop_degenerate, Mesh};
+use super::model::{Scene, Warning};
 use super::normal_map::NormalMap;
 use super::texture::{ChannelRef, TexRef, Texture, Wrap};
-use super::{Mesh, Scene, Warning};
 use crate::bsdf::mitsuba::parse_bsdf;
 use crate::error::{Error, Result};
 use crate::spectrum::Rgb;
@@ -748,7 +749,7 @@ fn convert_primitive(
             t.swap(1, 2);
         }
     }
-    let dropped = super::drop_degenerate(&positions, &mut tris);
+    let dropped = drop_degenerate(&positions, &mut tris);
     if dropped > 0 {
         warnings.push(Warning(format!(
             "mesh \"{mesh_name}\" primitive {}: dropped {dropped} degenerate (zero-area) triangles",

@@ -16,8 +16,8 @@
 //! - A tilted normal that would lie on the other side of the surface than the interpolated
 //!   one (a steep map at a grazing triangle) is not used: the interpolated normal stays.
 
+use super::mesh::Mesh;
 use super::texture::{TexRef, Texture};
-use super::Mesh;
 use glam::{Vec2, Vec3};
 
 /// A tangent-space normal map: `texture`'s RGB after its scale and bias is the normal in the

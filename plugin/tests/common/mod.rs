@@ -4,8 +4,8 @@
 #![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
+use wpbgi::bake::bounce::BounceSettings;
 use wpbgi::bake::{bake, BakeSettings, Quality};
-use wpbgi::bounce::BounceSettings;
 use wpbgi::render::{render_final, FinalSettings};
 use wpbgi::scene::Scene;
 

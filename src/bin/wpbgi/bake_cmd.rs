@@ -6,8 +6,8 @@ use serde_json::{json, Value};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
+use wpbgi::bake::bounce::BounceSettings;
 use wpbgi::bake::{bake_cancellable, BakeSettings, Quality};
-use wpbgi::bounce::BounceSettings;
 use wpbgi::cache::store::{bake_hash, BakedCache};
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -79,7 +79,7 @@ pub struct BakeArgs {
     /// About one surfel in N gathers indirect light in each bounce; the others blend the
     /// light of their nearest gathering neighbours on the same surface (indirect light varies
     /// slowly, and the final render gathers it again). 1: every surfel gathers.
-    #[arg(long, value_name = "N", default_value_t = wpbgi::bounce::iterate::RECEIVER_STRIDE,
+    #[arg(long, value_name = "N", default_value_t = wpbgi::bake::bounce::settings::RECEIVER_STRIDE,
           value_parser = clap::value_parser!(u32).range(1..))]
     receiver_stride: u32,
     /// MATERIAL=FACTOR: that material's surfaces get FACTOR times the surfels per unit area of
@@ -262,7 +262,7 @@ pub fn bake_command(a: BakeArgs) -> Result<()> {
                 "  BSDF operators: {} (one per glossy BSDF without its tints, a textured \
                  roughness snapped to {} levels per octave of α)",
                 baked.operators.len(),
-                wpbgi::bounce::bsdf_operator::ROUGHNESS_LEVELS_PER_OCTAVE
+                wpbgi::bake::bounce::bsdf_operator::ROUGHNESS_LEVELS_PER_OCTAVE
             );
         }
         if let Some(r) = &baked.bounces {

@@ -38,7 +38,7 @@ pub struct CompareArgs {
     pub presets: Vec<QualityArg>,
     /// Indirect bounces of each bake, as for `wpbgi bake` (a number, or `auto`).
     #[arg(long, default_value = "auto", value_parser = crate::bake_cmd::parse_bounces)]
-    pub bounces: wpbgi::bounce::BounceSettings,
+    pub bounces: wpbgi::bake::bounce::BounceSettings,
     /// A shot instead of one frame: bake each preset once and render N frames (at least 2)
     /// along an orbit of the camera (--orbit), the path tracer, raw and denoised, rendering
     /// each frame in the cache's seconds per frame (bake included). The report gives every

@@ -1,7 +1,7 @@
 //! UsdLux lights (DESIGN.md §4): rect, disk and sphere lights become emissive meshes, distant
 //! lights directional lights, a dome light the environment.
 
-use super::{sample, Importer};
+use super::stage::{sample, Importer};
 use crate::error::Result;
 use crate::scene::material::{Emission, Material, Scattering};
 use crate::scene::Environment;
@@ -76,7 +76,7 @@ impl Importer<'_> {
             && match token("poleAxis").as_deref() {
                 Some("Z") => true,
                 Some("Y") => false,
-                _ => super::stage_is_z_up(self.stage),
+                _ => super::stage::stage_is_z_up(self.stage),
             };
         // Light frame to world, without scale: the columns orthonormalised.
         let m = DMat3::from_mat4(world);

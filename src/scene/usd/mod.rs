@@ -20,9 +20,11 @@
 
 mod lights;
 mod shading;
+mod stage;
 
 use super::camera::{Camera, Projection};
-use super::{drop_degenerate, Mesh, Scene, Warning};
+use super::mesh::{drop_degenerate, Mesh};
+use super::model::{Scene, Warning};
 use crate::error::{Error, Result};
 use glam::{DMat4, DVec3, Vec3};
 use openusd::gf;
@@ -31,6 +33,7 @@ use openusd::schemas::geom::{
 };
 use openusd::sdf;
 use openusd::usd::{PrimPredicate, Stage, TimeCode};
+use stage::{is_plain_prim_path, sample, shown, stage_is_z_up, Importer, Time};
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -117,25 +120,6 @@ fn import_unguarded(path: &Path, time: Option<f64>) -> Result<Scene> {
         return Err(usd_err(format!("cannot compose the stage: {e}")));
     }
     Ok(importer.scene)
-}
-
-struct Importer<'a> {
-    path: &'a Path,
-    stage: &'a Stage,
-    time: Time,
-    /// Stage units and up axis to the IR's metres, Y up (column vectors).
-    to_ir: DMat4,
-    scene: Scene,
-    /// Material prim path (or "" for the default material) to its index.
-    materials: HashMap<String, usize>,
-    /// Resolved texture file to its index, and whether `auto` reads it as sRGB.
-    textures: HashMap<String, (usize, bool)>,
-    /// The primvars read by the textures of the material being imported.
-    uv_sets: Vec<String>,
-    /// Each material's texture coordinate primvar (`st` unless its textures say otherwise).
-    uv_set_of: HashMap<usize, String>,
-    /// Local-to-world matrices (column vectors, stage units) by prim path.
-    world: HashMap<String, DMat4>,
 }
 
 impl Importer<'_> {
@@ -564,43 +548,6 @@ fn spread<T: Copy>(values: Vec<T>, face_varying: bool, corner_points: &[u32]) ->
     }
 }
 
-/// When attributes are read.
-#[derive(Clone, Copy)]
-struct Time {
-    code: TimeCode,
-    /// Asked for (`--time`): time samples win over default values.
-    explicit: bool,
-}
-
-/// An attribute's value at `time`: at an explicit time its time samples (else its default);
-/// otherwise its default value, or where it has only time samples, its value at the stage's
-/// start.
-fn sample(attr: &openusd::usd::Attribute, time: Time) -> anyhow::Result<Option<sdf::Value>> {
-    if time.explicit {
-        if let Some(v) = attr.get_at::<sdf::Value>(time.code)? {
-            return Ok(Some(v));
-        }
-    }
-    match attr.get::<sdf::Value>()? {
-        Some(v) => Ok(Some(v)),
-        None => attr.get_at::<sdf::Value>(time.code),
-    }
-}
-
-/// Whether `path` is an absolute prim path of identifiers (what openusd 0.6 can resolve
-/// without looping; see [`check_names`]).
-pub(super) fn is_plain_prim_path(path: &str) -> bool {
-    path.strip_prefix('/')
-        .is_some_and(|p| !p.is_empty() && p.split('/').all(sdf::Path::is_valid_identifier))
-}
-
-/// `text` quoted for a message, cut to 60 characters (fuzzed names run for kilobytes).
-pub(super) fn shown(text: &str) -> String {
-    let cut: String = text.chars().take(60).collect();
-    let more = if cut.len() < text.len() { "…" } else { "" };
-    format!("{cut:?}{more}")
-}
-
 /// Refuse a root layer whose prims or properties are not named by identifiers. openusd 0.6
 /// reads such names (`def Shader "a}b"`) and then recurses without end composing them (found
 /// by fuzzing), so the layer is parsed once on its own and checked first. A layer that does
@@ -752,15 +699,6 @@ fn meters_per_unit(stage: &Stage) -> f64 {
         .and_then(|v| v.cast::<f64>().ok())
         .filter(|m| m.is_finite() && *m > 0.0)
         .unwrap_or(0.01)
-}
-
-fn stage_is_z_up(stage: &Stage) -> bool {
-    stage
-        .stage_metadata("upAxis")
-        .ok()
-        .flatten()
-        .and_then(|v| v.cast::<String>().ok())
-        .is_some_and(|a| a == "Z")
 }
 
 /// Stage coordinates to the IR's: scaled to metres, and a Z-up stage turned Y-up

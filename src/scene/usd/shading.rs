@@ -13,7 +13,7 @@
 //!   material is an alpha cut-out: opaque where `opacity` reaches the threshold, a hole
 //!   elsewhere ([`Cutout`]).
 
-use super::{sample, Importer};
+use super::stage::{sample, Importer};
 use crate::error::Result;
 use crate::scene::material::{Cutout, Emission, Material, PbrParams, Scattering};
 use crate::scene::normal_map::NormalMap;
@@ -54,12 +54,12 @@ impl Importer<'_> {
         // openusd 0.6 recurses without end on a binding to a path that is not made of
         // identifiers (found by fuzzing).
         if let Some(b) = &bound {
-            if !super::is_plain_prim_path(b.as_str()) {
+            if !super::stage::is_plain_prim_path(b.as_str()) {
                 return Err(self.prim_err(
                     prim,
                     format!(
                         "its material binding names {}, which is not a prim path",
-                        super::shown(b.as_str())
+                        super::stage::shown(b.as_str())
                     ),
                 ));
             }
@@ -157,7 +157,7 @@ impl Importer<'_> {
             prim,
             format!(
                 "{what} connects to {}, which is not a property path",
-                super::shown(source.as_str())
+                super::stage::shown(source.as_str())
             ),
         ))
     }
@@ -622,7 +622,7 @@ fn is_plain_property_path(path: &sdf::Path) -> bool {
     let Some((prim, property)) = path.as_str().rsplit_once('.') else {
         return false;
     };
-    super::is_plain_prim_path(prim) && sdf::Path::is_valid_namespace_identifier(property)
+    super::stage::is_plain_prim_path(prim) && sdf::Path::is_valid_namespace_identifier(property)
 }
 
 /// A grey (0.18) diffuse material, for meshes without a binding.

@@ -3,8 +3,12 @@
 pub mod bsdf_operator;
 pub mod iterate;
 pub mod receivers;
+pub mod report;
+pub mod settings;
 pub mod transport;
 pub mod view_tree;
 
 pub use bsdf_operator::BsdfOperator;
-pub use iterate::{add_bounces, BounceReport, BounceSettings, TransportReport};
+pub use iterate::add_bounces;
+pub use report::{BounceReport, TransportReport};
+pub use settings::BounceSettings;

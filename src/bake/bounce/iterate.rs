@@ -36,26 +36,26 @@
 
 use super::bsdf_operator::SurfelOperator;
 use super::receivers::Receivers;
+use super::report::{BounceReport, TransportReport};
+use super::settings::{default_transport_budget, BounceSettings};
 use super::transport::{read_nodes, slot_values, LinkScratch, ReceiverLinks, SlotIndex, Slots};
 use super::view_tree::{receiver_groups, GROUP_SURFELS, VIEW_EPS};
 use crate::accel::Accel;
-use crate::bake::pipeline::{Baked, Progress};
-use crate::bake::plan::map_levels;
+use crate::bake::baked::{Baked, Progress};
 use crate::bake::store::records_of;
 use crate::bsdf::Bsdf;
-use crate::cache::store::{NodeRecord, SurfelRecord};
 use crate::error::{Error, Result};
 use crate::gather::cut::splat_cut;
 use crate::gather::fpbgi::{cluster_cut, member_buffer, Cluster, ClusterReceivers};
 use crate::gather::microbuffer::Microbuffer;
-use crate::gather::senders::{SenderNode, Senders};
+use crate::gather::senders::Senders;
 use crate::geometry::frame::Frame;
 use crate::geometry::offset::offset_origin;
 use crate::haar::{texel_directions, Haar2d, SparseHaar};
 use crate::scene::Scene;
 use crate::spectrum::{luminance, Rgb};
 use crate::surfels::coding::{encode, node_sums, CodedTree};
-use crate::surfels::radiance::{intensity_of, SurfelRadiance};
+use crate::surfels::radiance::{intensity_of, map_levels, SurfelRadiance};
 use crate::surfels::Surfel;
 use glam::{Vec3, Vec3A};
 use rayon::prelude::*;
@@ -74,146 +74,6 @@ pub const DIFFUSE_BUFFER: u32 = 16;
 /// 6.4e-3); the mirror box's bounce light keeps 2.2 million coefficients instead of 7.3, and
 /// a later bounce costs 0.75 s instead of 1.2 (docs/bounces.md).
 pub const SENT_TAU_FACTOR: f32 = 5.0;
-
-/// The default [`BounceSettings::receiver_stride`] (see docs/bounces.md for its measure).
-pub const RECEIVER_STRIDE: u32 = 16;
-
-/// How many bounces to run.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct BounceSettings {
-    /// The most explicit bounces.
-    pub max: u32,
-    /// Stop when a bounce carries less than this fraction of the reflected total; 0 runs
-    /// exactly `max` bounces without extrapolation.
-    pub tolerance: f32,
-    /// The most of its L2 norm each column of a BSDF operator may lose to thresholding.
-    pub operator_tau: f32,
-    /// Share the far part of the gather among nearby surfels (the view tree, see
-    /// [`super::view_tree`]); otherwise every surfel traverses the whole tree.
-    pub view_tree: bool,
-    /// About one surfel in this many gathers in each bounce; the others blend the light of
-    /// their nearest gathering neighbours on the same surface (see [`super::receivers`]).
-    /// 1: every surfel gathers.
-    pub receiver_stride: u32,
-    /// The most bytes the recorded transport may hold, with the receivers' summed light
-    /// ([`TransportReport::incident_bytes`]); receivers past it gather again in every
-    /// bounce. It changes the time, never the cache (so it is not part of the cache's
-    /// hash). `None`: [`default_transport_budget`].
-    pub transport_budget: Option<u64>,
-}
-
-/// The transport's default memory budget: 40 % of the machine's physical memory (the rest
-/// holds the surfels, the tree, the cache being written and the other processes), or 4 GiB
-/// where the machine does not say.
-pub fn default_transport_budget() -> u64 {
-    const FRACTION: f64 = 0.4;
-    crate::machine::total_memory().map_or(4 << 30, |b| (b as f64 * FRACTION) as u64)
-}
-
-/// The least memory (bytes) the bounces of a bake of `points` surfels, whose tree's maps have
-/// `levels`, hold besides the bake itself, with no transport kept: the tree as senders (a
-/// node record and a sender node per node, a surfel record per surfel, two nodes per surfel)
-/// and the bitmap of the transport's slots.
-pub fn memory_floor(points: u64, levels: u32) -> u64 {
-    let nodes = 2 * points;
-    let senders = nodes * (size_of::<NodeRecord>() + size_of::<SenderNode>()) as u64
-        + points * size_of::<SurfelRecord>() as u64;
-    senders + Slots::fewest(points, levels) / 8
-}
-
-/// Refuse bounces whose transport slots cannot be numbered in 32 bits, before any work (see
-/// [`Slots`]), naming the largest point count that fits.
-pub fn check_slots(points: u64, levels: u32) -> Result<()> {
-    let slots = Slots::fewest(points, levels);
-    if slots < u64::from(u32::MAX) {
-        return Ok(());
-    }
-    // fewest(p) = p (4 + k) − (3 + k) with k = 4^levels, below 2^32 − 1.
-    let k = 1u64 << (2 * levels);
-    let most = (u64::from(u32::MAX) + 2 + k) / (4 + k);
-    Err(Error::InvalidSetting(format!(
-        "the bounces of {points} surfels with {side} × {side} maps would read at least {slots} \
-         values of the tree, more than 2^32; bake at most about {most} points (--points), or \
-         rougher materials (coarser maps)",
-        side = 1u32 << levels
-    )))
-}
-
-impl BounceSettings {
-    /// `auto`: up to 30 bounces, stopping once one adds less than 3 % of the total, with the
-    /// geometric tail of the rest (docs/bounces.md, "Bounce control", measures the choice).
-    pub fn auto() -> Self {
-        BounceSettings {
-            max: 30,
-            tolerance: 3e-2,
-            operator_tau: 1e-2,
-            view_tree: true,
-            receiver_stride: RECEIVER_STRIDE,
-            transport_budget: None,
-        }
-    }
-
-    /// Exactly `n` bounces.
-    pub fn exactly(n: u32) -> Self {
-        BounceSettings {
-            max: n,
-            tolerance: 0.0,
-            ..Self::auto()
-        }
-    }
-}
-
-/// What the bounces did.
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct BounceReport {
-    /// Explicit bounces run.
-    pub bounces: u32,
-    /// Energy of each bounce (Σ area × luminance).
-    pub energies: Vec<f64>,
-    /// The last bounce's energy over the reflected total (direct and bounces).
-    pub residual: f64,
-    /// The geometric tail factor r/(1 − r) added, if any.
-    pub extrapolated: Option<f64>,
-    /// Seconds per bounce (the first records the transport).
-    pub seconds: Vec<f64>,
-    /// Seconds after the last bounce: what the receivers gathered over all of them turned
-    /// into outgoing radiance, blended, added to the total, and the tree coded again.
-    pub final_seconds: f64,
-    /// What the recorded transport held.
-    pub transport: TransportReport,
-}
-
-/// The recorded transport's size (see [`super::transport`]).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct TransportReport {
-    /// Bytes of the links kept in memory.
-    pub bytes: u64,
-    /// Bytes the links of every receiver take (what an unbounded budget keeps).
-    pub bytes_unbounded: u64,
-    /// Receiver groups kept, and gathered again in every bounce.
-    pub kept_groups: usize,
-    pub regathered_groups: usize,
-    /// Surfels that gather (the others blend their light, see [`super::receivers`]).
-    pub receivers: usize,
-    /// Slots the receivers read, of all the tree's.
-    pub read_slots: usize,
-    pub slots: u64,
-    /// Bytes of the directional receivers' incident light summed over the bounces, and of
-    /// one bounce's beside it: taken from the budget before the links.
-    pub incident_bytes: u64,
-}
-
-impl BounceReport {
-    /// What the cache records (no times: the cache is byte-identical from run to run).
-    pub fn to_json(&self) -> serde_json::Value {
-        serde_json::json!({
-            "bounces": self.bounces,
-            "energies": self.energies,
-            "residual": self.residual,
-            "extrapolated_tail": self.extrapolated,
-        })
-    }
-}
 
 /// The energy measure of a set of surfel radiances: Σ area × luminance of the mean outgoing
 /// radiance (over the front hemisphere for diffuse surfels, the sphere for maps).
