@@ -90,7 +90,7 @@ fn main() -> common::Result<()> {
             let settings = BakeSettings {
                 points: n,
                 bounces: BounceSettings::auto(),
-                ..BakeSettings::from_quality(Quality::Preview)
+                ..BakeSettings::preset(Quality::Preview).direct_only()
             };
             memory::reset_peak();
             let (baked, cache, bake_s) =

@@ -43,7 +43,7 @@ fn main() -> Result<()> {
         let settings = BakeSettings {
             points: n,
             light_samples: 16,
-            ..BakeSettings::from_quality(Quality::Draft)
+            ..BakeSettings::preset(Quality::Draft).direct_only()
         };
         let t = Instant::now();
         let baked = bake(&scene, &settings, &|_, _| {})?;

@@ -272,7 +272,7 @@ fn compare_modes(names: &[String]) -> Result<(), Box<dyn std::error::Error>> {
         // What `wpbgi bake SCENE` does: the preview preset with automatic bounces.
         let settings = BakeSettings {
             bounces: BounceSettings::auto(),
-            ..BakeSettings::from_quality(Quality::Preview)
+            ..BakeSettings::preset(Quality::Preview).direct_only()
         };
         let (_, cache, _) = common::bake_cache(&scene, &settings, &format!("{name}-modes"))?;
         for &size in &sizes {
@@ -412,7 +412,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let reference = read_exr(&data(&format!("{name}_d3_ref.exr")))?;
         let camera = scene.default_camera(256, 256)?;
         // 1. Bake + render against the path tracer at equal time.
-        let settings = BakeSettings::from_quality(Quality::Draft);
+        let settings = BakeSettings::preset(Quality::Draft).direct_only();
         let (_, cache, bake_s) = common::bake_cache(&scene, &settings, name)?;
         let depth3 = FinalSettings {
             max_depth: 3,

@@ -42,7 +42,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         // What `wpbgi bake` does by default: the preview preset, bounces until they converge.
         let settings = BakeSettings {
             bounces: BounceSettings::auto(),
-            ..BakeSettings::from_quality(Quality::Preview)
+            ..BakeSettings::preset(Quality::Preview).direct_only()
         };
         let t = Instant::now();
         let baked = bake(&scene, &settings, &|_, _| {})?;

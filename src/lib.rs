@@ -48,5 +48,6 @@ pub mod scene;
 pub mod spectrum;
 pub mod surfels;
 pub mod trace;
+pub(crate) mod validate;
 
 pub use error::Error;

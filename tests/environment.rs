@@ -93,7 +93,7 @@ fn convex_object_under_a_uniform_environment_reflects_albedo_times_radiance() {
     let dir = tempdir();
     let cache = common::bake_to_cache(
         &scene,
-        &BakeSettings::from_quality(Quality::Draft),
+        &BakeSettings::preset(Quality::Draft).direct_only(),
         &dir.join("dome.wpbgi"),
     );
     let out = common::final_render(&scene, &cache, &camera);

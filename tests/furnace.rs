@@ -89,7 +89,7 @@ fn bake_furnace(scene: &Scene, threads: usize) -> Baked {
         points: 3000,
         light_samples: 64,
         bounces: BounceSettings::auto(),
-        ..BakeSettings::from_quality(wpbgi::bake::Quality::Draft)
+        ..BakeSettings::preset(wpbgi::bake::Quality::Draft).direct_only()
     };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
@@ -220,7 +220,7 @@ fn closed_room_gathers_pi() {
     for scene in [furnace(0.5, 1.0), conductor_furnace(0.5, 1.0, 0.1)] {
         let settings = BakeSettings {
             points: 3000,
-            ..BakeSettings::from_quality(wpbgi::bake::Quality::Draft)
+            ..BakeSettings::preset(wpbgi::bake::Quality::Draft).direct_only()
         };
         let (baked, gathered) = uniform_gather(&scene, &settings, 1);
         let (mut all, mut edges) = ((0.0f64, 0u32), (0.0f64, 0u32));
@@ -252,7 +252,7 @@ fn closed_room_gathers_pi() {
 #[test]
 fn open_room_gathers_what_its_rays_hit() {
     let scene = Scene::load(&common::mitsuba_data("cbox-diffuse.gltf")).expect("scene");
-    let settings = BakeSettings::from_quality(wpbgi::bake::Quality::Draft);
+    let settings = BakeSettings::preset(wpbgi::bake::Quality::Draft).direct_only();
     let (baked, gathered) = uniform_gather(&scene, &settings, 10);
     let boxes: Vec<Option<(Vec3, Vec3)>> = scene
         .meshes

@@ -82,7 +82,7 @@ fn senders() -> Senders {
     let settings = BakeSettings {
         points: 8000,
         light_samples: 4,
-        ..BakeSettings::from_quality(wpbgi::bake::Quality::Draft)
+        ..BakeSettings::preset(wpbgi::bake::Quality::Draft).direct_only()
     };
     let baked = bake(&scene, &settings, &|_, _| {}).unwrap();
     // Every surfel reflects exactly ρE/π = 0.5 (a directional light has no noise).
@@ -185,7 +185,7 @@ fn a_solid_reaches_only_its_own_solid_as_leaves() {
         points: 3000,
         light_samples: 4,
         bounces: wpbgi::bake::bounce::BounceSettings::exactly(0),
-        ..BakeSettings::from_quality(wpbgi::bake::Quality::Draft)
+        ..BakeSettings::preset(wpbgi::bake::Quality::Draft).direct_only()
     };
     let baked = bake(&scene, &settings, &|_, _| {}).unwrap();
     let senders = cached_senders(&scene, &settings, &baked, &dir.join("two-spheres.wpc"));

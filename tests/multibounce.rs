@@ -31,7 +31,7 @@ fn against_depth_8(name: &str, bounces: BounceSettings, window: [u32; 4]) -> Aga
     let scene = Scene::load(&common::mitsuba_data(&format!("{name}.gltf"))).expect("scene");
     let settings = BakeSettings {
         bounces,
-        ..BakeSettings::from_quality(Quality::Draft)
+        ..BakeSettings::preset(Quality::Draft).direct_only()
     };
     let dir = std::env::temp_dir().join(format!("wpbgi-multibounce-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
@@ -135,7 +135,7 @@ fn rough_draft(bounces: BounceSettings) -> wpbgi::bake::Baked {
     let scene = Scene::load(&common::mitsuba_data("cbox-rough.gltf")).expect("scene");
     let settings = BakeSettings {
         bounces,
-        ..BakeSettings::from_quality(Quality::Draft)
+        ..BakeSettings::preset(Quality::Draft).direct_only()
     };
     wpbgi::bake::bake(&scene, &settings, &|_, _| {}).expect("bake")
 }

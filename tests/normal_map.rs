@@ -169,7 +169,7 @@ fn a_normal_map_tilts_the_cosine_as_analytic() {
             &scene,
             &BakeSettings {
                 points: 2000,
-                ..BakeSettings::from_quality(Quality::Draft)
+                ..BakeSettings::preset(Quality::Draft).direct_only()
             },
             &|_, _| {},
         )

@@ -27,7 +27,7 @@ fn bundled() -> Scene {
 fn cache(scene: &Scene, points: usize) -> BakedCache {
     let settings = BakeSettings {
         points,
-        ..BakeSettings::from_quality(Quality::Draft)
+        ..BakeSettings::preset(Quality::Draft).direct_only()
     };
     let baked = wpbgi::bake::bake(scene, &settings, &|_, _| {}).expect("bake");
     wpbgi::bake::store::in_memory(std::path::Path::new("preview-test.wpc"), &baked).expect("cache")

@@ -28,7 +28,7 @@ fn baked(name: &str) -> (Scene, BakedCache) {
     let scene = Scene::load(&common::mitsuba_data(&format!("{name}.gltf"))).expect("scene");
     let dir = std::env::temp_dir().join(format!("wpbgi-render-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
-    let settings = BakeSettings::from_quality(Quality::Draft);
+    let settings = BakeSettings::preset(Quality::Draft).direct_only();
     let path = dir.join(format!("{name}-{call}.wpc"));
     let cache = common::bake_to_cache(&scene, &settings, &path);
     (scene, cache)

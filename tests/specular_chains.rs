@@ -45,7 +45,7 @@ fn mirror_box_and_glass_sphere_match_the_path_tracer() {
     std::fs::write(&path, smooth).expect("write");
     let scene = Scene::load(&path).expect("load");
 
-    let settings = BakeSettings::from_quality(Quality::Draft);
+    let settings = BakeSettings::preset(Quality::Draft).direct_only();
     let cache = common::bake_to_cache(&scene, &settings, &dir.join("smooth.wpc"));
     let size = 64;
     let camera = scene.default_camera(size, size).expect("camera");

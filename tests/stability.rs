@@ -323,7 +323,7 @@ fn bake_settings() -> BakeSettings {
         points: 3000,
         light_samples: 16,
         bounces: BounceSettings::auto(),
-        ..BakeSettings::from_quality(Quality::Draft)
+        ..BakeSettings::preset(Quality::Draft).direct_only()
     }
 }
 

@@ -31,7 +31,7 @@ fn settings() -> BakeSettings {
     BakeSettings {
         points: 8000,
         bounces: BounceSettings::exactly(2),
-        ..BakeSettings::from_quality(Quality::Draft)
+        ..BakeSettings::preset(Quality::Draft).direct_only()
     }
 }
 

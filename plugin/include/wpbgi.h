@@ -64,7 +64,8 @@ typedef int32_t (*WpbgiProgressFn)(const char *stage, float fraction, void *user
 typedef struct {
   // sizeof(WpbgiRenderSettings), set by the init function; checked by every call.
   uint32_t struct_size;
-  // Image size in pixels, each side 1 … 16384.
+  // Image size in pixels, each side from 1 to the library's limit (`wpbgi_render` refuses
+  // a larger one, naming the limit).
   uint32_t width;
   uint32_t height;
   // Emitter samples per shading point for direct light (final render only).
@@ -192,15 +193,15 @@ int32_t wpbgi_render_to_file(const WpbgiScene *scene, const WpbgiCache *cache, c
 // `scene` NULL or a live handle; otherwise as `wpbgi_render`.
 int32_t wpbgi_preview(const WpbgiScene *scene, const WpbgiCache *cache, const WpbgiRenderSettings *settings, float *rgb_out, size_t floats);
 
-// Fill `settings` with the defaults of `wpbgi bake`: the draft preset, automatic bounces,
-// seed 0, all cores.
+// Fill `settings` with the defaults of `wpbgi bake` (the library's `BakeSettings::default()`:
+// the preview preset, automatic bounces), all cores.
 //
 // # Safety
 // `settings` must be NULL or point to a writable WpbgiBakeSettings.
 int32_t wpbgi_bake_settings_init(WpbgiBakeSettings *settings);
 
-// Fill `settings` with the defaults of `wpbgi render`: 512 × 512, the scene's camera, 32
-// light samples, seed 0, all cores.
+// Fill `settings` with the defaults of `wpbgi render` (the library's `Camera::DEFAULT_SIZE`
+// and `FinalSettings::default()`), the scene's camera, all cores.
 //
 // # Safety
 // `settings` must be NULL or point to a writable WpbgiRenderSettings.

@@ -243,20 +243,24 @@ class Cache(_Handle):
 
 
 def _bake_settings(quality, points, light_samples, bounces, seed, threads):
+    """The library's bake defaults (wpbgi_bake_settings_init), with what is not None set."""
     s = _BakeSettings()
     _check(_lib.wpbgi_bake_settings_init(ctypes.byref(s)))
-    if quality not in QUALITIES:
-        raise Error(INVALID_ARGUMENT, f"quality must be one of {', '.join(QUALITIES)}, got {quality!r}")
-    s.quality = QUALITIES[quality]
+    if quality is not None:
+        if quality not in QUALITIES:
+            raise Error(INVALID_ARGUMENT, f"quality must be one of {', '.join(QUALITIES)}, got {quality!r}")
+        s.quality = QUALITIES[quality]
     s.points = points
     s.light_samples = light_samples
-    s.bounces = -1 if bounces == "auto" else bounces
-    s.seed = seed
+    if bounces is not None:
+        s.bounces = -1 if bounces == "auto" else bounces
+    if seed is not None:
+        s.seed = seed
     s.threads = threads
     return s
 
 
-def bake_hash(scene, quality="draft", points=0, light_samples=0, bounces="auto", seed=0):
+def bake_hash(scene, quality=None, points=0, light_samples=0, bounces=None, seed=None):
     """The content hash a bake with these settings would have (equal to Cache.hash of its cache)."""
     s = _bake_settings(quality, points, light_samples, bounces, seed, 0)
     out = ctypes.create_string_buffer(33)
@@ -264,10 +268,11 @@ def bake_hash(scene, quality="draft", points=0, light_samples=0, bounces="auto",
     return out.value.decode()
 
 
-def bake(scene, cache_path, quality="draft", points=0, light_samples=0, bounces="auto", seed=0,
+def bake(scene, cache_path, quality=None, points=0, light_samples=0, bounces=None, seed=None,
          threads=0, progress=None):
     """Bake `scene` to `cache_path` (atomically). `progress(stage, fraction)` is called on this
-    thread; if it returns True the bake stops and Cancelled is raised. 0 means the preset's
+    thread; if it returns True the bake stops and Cancelled is raised. None means the library's
+    default (that of `wpbgi bake`: the preview preset, automatic bounces); 0 means the preset's
     value for points and light_samples, and one thread per core for threads."""
     s = _bake_settings(quality, points, light_samples, bounces, seed, threads)
     failure = []

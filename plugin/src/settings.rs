@@ -6,6 +6,7 @@ use std::ffi::c_char;
 use wpbgi::bake::bounce::BounceSettings;
 use wpbgi::bake::{BakeSettings, Quality};
 use wpbgi::render::FinalSettings;
+use wpbgi::scene::Camera;
 
 /// How to bake. Initialise it with `wpbgi_bake_settings_init`, then change fields.
 #[repr(C)]
@@ -35,7 +36,8 @@ pub struct WpbgiBakeSettings {
 pub struct WpbgiRenderSettings {
     /// sizeof(WpbgiRenderSettings), set by the init function; checked by every call.
     pub struct_size: u32,
-    /// Image size in pixels, each side 1 … 16384.
+    /// Image size in pixels, each side from 1 to the library's limit (`wpbgi_render` refuses
+    /// a larger one, naming the limit).
     pub width: u32,
     pub height: u32,
     /// Emitter samples per shading point for direct light (final render only).
@@ -49,8 +51,8 @@ pub struct WpbgiRenderSettings {
     pub threads: u32,
 }
 
-/// Fill `settings` with the defaults of `wpbgi bake`: the draft preset, automatic bounces,
-/// seed 0, all cores.
+/// Fill `settings` with the defaults of `wpbgi bake` (the library's `BakeSettings::default()`:
+/// the preview preset, automatic bounces), all cores.
 ///
 /// # Safety
 /// `settings` must be NULL or point to a writable WpbgiBakeSettings.
@@ -59,21 +61,22 @@ pub unsafe extern "C" fn wpbgi_bake_settings_init(settings: *mut WpbgiBakeSettin
     call(|| {
         // SAFETY: the caller's contract; NULL is refused.
         let out = unsafe { checked_mut(settings, "settings") }?;
+        let defaults = BakeSettings::default();
         *out = WpbgiBakeSettings {
             struct_size: std::mem::size_of::<WpbgiBakeSettings>() as u32,
-            quality: 0,
+            quality: quality_code(Quality::default()),
             points: 0,
             light_samples: 0,
-            bounces: -1,
-            seed: 0,
+            bounces: bounces_code(&defaults.bounces),
+            seed: defaults.seed,
             threads: 0,
         };
         Ok(())
     })
 }
 
-/// Fill `settings` with the defaults of `wpbgi render`: 512 × 512, the scene's camera, 32
-/// light samples, seed 0, all cores.
+/// Fill `settings` with the defaults of `wpbgi render` (the library's `Camera::DEFAULT_SIZE`
+/// and `FinalSettings::default()`), the scene's camera, all cores.
 ///
 /// # Safety
 /// `settings` must be NULL or point to a writable WpbgiRenderSettings.
@@ -82,13 +85,15 @@ pub unsafe extern "C" fn wpbgi_render_settings_init(settings: *mut WpbgiRenderSe
     call(|| {
         // SAFETY: the caller's contract; NULL is refused.
         let out = unsafe { checked_mut(settings, "settings") }?;
+        let defaults = FinalSettings::default();
+        let (width, height) = Camera::DEFAULT_SIZE;
         *out = WpbgiRenderSettings {
             struct_size: std::mem::size_of::<WpbgiRenderSettings>() as u32,
-            width: 512,
-            height: 512,
-            light_samples: FinalSettings::default().light_samples,
+            width,
+            height,
+            light_samples: defaults.light_samples,
             camera: std::ptr::null(),
-            seed: 0,
+            seed: defaults.seed,
             threads: 0,
         };
         Ok(())
@@ -98,18 +103,21 @@ pub unsafe extern "C" fn wpbgi_render_settings_init(settings: *mut WpbgiRenderSe
 impl WpbgiBakeSettings {
     /// The library's settings, as `wpbgi bake` builds them from its flags.
     pub(crate) fn to_library(self) -> Result<BakeSettings, Failure> {
-        let quality = match self.quality {
-            0 => Quality::Draft,
-            1 => Quality::Preview,
-            2 => Quality::Final,
-            3 => Quality::Ultra,
-            q => {
-                return Err(Failure::InvalidArgument(format!(
-                    "settings->quality is {q}; it must be 0 (draft), 1 (preview), 2 (final) or 3 (ultra)"
-                )))
-            }
-        };
-        let mut s = BakeSettings::from_quality(quality);
+        let quality = usize::try_from(self.quality)
+            .ok()
+            .and_then(|q| Quality::ALL.get(q).copied())
+            .ok_or_else(|| {
+                let codes: Vec<String> = Quality::ALL
+                    .iter()
+                    .map(|&q| format!("{} ({})", quality_code(q), q.name()))
+                    .collect();
+                Failure::InvalidArgument(format!(
+                    "settings->quality is {}; it must be one of {}",
+                    self.quality,
+                    codes.join(", ")
+                ))
+            })?;
+        let mut s = BakeSettings::preset(quality);
         if self.points > 0 {
             s.points = usize::try_from(self.points).map_err(|_| {
                 Failure::InvalidArgument(format!("settings->points {} is too large", self.points))
@@ -120,7 +128,7 @@ impl WpbgiBakeSettings {
         }
         s.seed = self.seed;
         s.bounces = match self.bounces {
-            -1 => BounceSettings::auto(),
+            AUTO_BOUNCES => BounceSettings::auto(),
             n if n >= 0 => BounceSettings::exactly(n as u32),
             n => {
                 return Err(Failure::InvalidArgument(format!(
@@ -128,25 +136,35 @@ impl WpbgiBakeSettings {
                 )))
             }
         };
+        s.validate()
+            .map_err(|e| Failure::InvalidArgument(format!("settings: {e}")))?;
         Ok(s)
     }
 }
 
-/// The most pixels per side, as `wpbgi render --size`.
-const MAX_SIDE: u32 = 16384;
+/// The number of preset `q` in `WpbgiBakeSettings::quality`: its place in `Quality::ALL`.
+fn quality_code(q: Quality) -> u32 {
+    Quality::ALL.iter().position(|&p| p == q).unwrap_or(0) as u32
+}
+
+/// `WpbgiBakeSettings::bounces` for automatic bounces.
+const AUTO_BOUNCES: i32 = -1;
+
+/// `WpbgiBakeSettings::bounces` for `b`: [`AUTO_BOUNCES`] or the count.
+fn bounces_code(b: &BounceSettings) -> i32 {
+    if *b == BounceSettings::auto() {
+        AUTO_BOUNCES
+    } else {
+        i32::try_from(b.max).unwrap_or(i32::MAX)
+    }
+}
 
 impl WpbgiRenderSettings {
     /// The image size, checked.
     pub(crate) fn size(&self) -> Result<(u32, u32), Failure> {
-        let ok = |s: u32| (1..=MAX_SIDE).contains(&s);
-        if ok(self.width) && ok(self.height) {
-            Ok((self.width, self.height))
-        } else {
-            Err(Failure::InvalidArgument(format!(
-                "settings->width and height are {} and {}; each must be 1 … {MAX_SIDE}",
-                self.width, self.height
-            )))
-        }
+        Camera::check_size(self.width, self.height)
+            .map(|()| (self.width, self.height))
+            .map_err(|m| Failure::InvalidArgument(format!("settings->width and height: {m}")))
     }
 
     /// The camera's name, if one is asked for.
@@ -160,15 +178,13 @@ impl WpbgiRenderSettings {
 
     /// The final render's settings, as `wpbgi render` builds them from its defaults.
     pub(crate) fn to_final(self) -> Result<FinalSettings, Failure> {
-        if self.light_samples == 0 {
-            return Err(Failure::InvalidArgument(
-                "settings->light_samples must be at least 1".into(),
-            ));
-        }
-        Ok(FinalSettings {
+        let s = FinalSettings {
             light_samples: self.light_samples,
             seed: self.seed,
             ..Default::default()
-        })
+        };
+        s.validate()
+            .map_err(|e| Failure::InvalidArgument(format!("settings: {e}")))?;
+        Ok(s)
     }
 }

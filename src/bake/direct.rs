@@ -75,7 +75,7 @@ impl DirectLight<'_> {
         let mut r = Sampler::new(self.seed, id, 0);
         let scramble = r.next_scramble();
         let shift = r.next_1d();
-        let k = self.samples.max(1);
+        let k = self.samples;
         let mut out: Vec<Arrival> = (0..k)
             .filter_map(|i| {
                 // Emitter choice stratified over the K samples, the point by the (0, 2)-sequence.

@@ -34,16 +34,11 @@ use std::time::Instant;
 pub const LIGHT_TREE_FROM: usize = 16;
 
 /// Each mesh's relative surfel density from the per-material factors of `densities`
-/// (material name, factor): an unknown name or a factor that is not a positive finite number
-/// is refused, naming it.
+/// (material name, factor, whose range [`BakeSettings::validate`] checked): a name that is
+/// no material of the scene is refused, naming the materials there are.
 fn mesh_densities(scene: &Scene, densities: &[(String, f32)]) -> Result<Vec<f32>> {
     let mut of_material = vec![1.0f32; scene.materials.len()];
     for (name, w) in densities {
-        if !(w.is_finite() && *w > 0.0) {
-            return Err(Error::InvalidSetting(format!(
-                "the surfel density of material \"{name}\" must be a positive number, got {w}"
-            )));
-        }
         let matching: Vec<usize> = (0..scene.materials.len())
             .filter(|&m| scene.materials[m].name == *name)
             .collect();
@@ -125,17 +120,7 @@ pub fn bake_cancellable(
     cancel: &AtomicBool,
 ) -> Result<Baked> {
     let stop = || crate::error::check_cancel(cancel);
-    if settings.points == 0 || settings.light_samples == 0 {
-        return Err(Error::InvalidSetting(
-            "points and light samples must be at least 1".into(),
-        ));
-    }
-    if !(settings.tau >= 0.0 && settings.tau < 1.0) {
-        return Err(Error::InvalidSetting(format!(
-            "the wavelet threshold must be in [0, 1), got {}",
-            settings.tau
-        )));
-    }
+    settings.validate()?;
     scene.check_renderable()?;
     let density = mesh_densities(scene, &settings.surfel_density)?;
     let mut timings = Vec::new();
@@ -173,7 +158,7 @@ pub fn bake_cancellable(
         samples: settings.light_samples,
         seed: settings.seed,
         light_tree: light_tree.as_ref(),
-        max_cut: settings.max_cut.max(1),
+        max_cut: settings.max_cut,
     };
     let bsdfs: Vec<Bsdf> = surfels.iter().map(|s| surfel_bsdf(scene, s)).collect();
     let shading_normals: Vec<Vec3> = surfels

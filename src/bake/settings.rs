@@ -2,19 +2,31 @@
 //! defaults and refuse what is out of range.
 
 use super::bounce::BounceSettings;
+use crate::error::Result;
+use crate::validate::{in_range, require};
 
 /// Quality presets: surfels and emitter samples per surfel.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Quality {
     Draft,
+    /// The default: `wpbgi bake`, the plugin and Python bake at it unless told otherwise.
+    #[default]
     Preview,
     Final,
     Ultra,
 }
 
 impl Quality {
+    /// Every preset, from the fastest to the finest (the plugin's and Python's numbering).
+    pub const ALL: [Quality; 4] = [
+        Quality::Draft,
+        Quality::Preview,
+        Quality::Final,
+        Quality::Ultra,
+    ];
+
     /// The preset's name on the command line and in reports.
-    pub fn name(self) -> &'static str {
+    pub const fn name(self) -> &'static str {
         match self {
             Quality::Draft => "draft",
             Quality::Preview => "preview",
@@ -26,7 +38,7 @@ impl Quality {
     /// Surfels. The preview preset (the default) takes 50 000: on the five Cornell-class
     /// scenes its relMSE is that of 100 000 within 6 % (higher on three, lower on two) in half
     /// the bake and two thirds of the render (docs/bounces.md, "The preview preset").
-    pub fn points(self) -> usize {
+    pub const fn points(self) -> usize {
         match self {
             Quality::Draft => 20_000,
             Quality::Preview => 50_000,
@@ -40,7 +52,7 @@ impl Quality {
     /// 100 000 surfels: 32 samples give the relMSE of 128 on the five Cornell-class scenes,
     /// within 1 %; at 20 000, 32 instead of 64 cost the caustic 8 %; at 50 000, 64 gave
     /// cbox-glossy and cbox-mirror no lower error than 32).
-    pub fn light_samples(self) -> u32 {
+    pub const fn light_samples(self) -> u32 {
         match self {
             Quality::Draft => 64,
             Quality::Preview => 32,
@@ -51,28 +63,45 @@ impl Quality {
 }
 
 /// Everything that determines a bake's result (and so goes into the cache's content hash).
+/// Start from a preset ([`BakeSettings::preset`], or [`Default`]: the preview preset with
+/// automatic bounces, what `wpbgi bake` does) and change fields; [`BakeSettings::validate`]
+/// (which the bake calls first) refuses a field out of range, naming it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct BakeSettings {
+    /// Surfels, 1 to 2³² − 1 (the tree numbers them in 32 bits).
     pub points: usize,
+    /// Emitter samples per surfel, at least 1.
     pub light_samples: u32,
-    /// Relative wavelet threshold (dimensionless).
+    /// Relative wavelet threshold (dimensionless), in [0, 1): coefficients below this
+    /// fraction of their function's norm are dropped.
     pub tau: f32,
     /// Hierarchical coding split level; `None`: three levels above the deepest leaves, as the
-    /// thesis's 20 of about 23 levels.
+    /// thesis's 20 of about 23 levels. A level at or past the tree's depth means the level
+    /// above its deepest leaves (the tree's depth is known only once it is built).
     pub split_level: Option<u32>,
     pub seed: u64,
-    /// Largest lightcut (clusters) when a light tree is used.
+    /// Largest lightcut (clusters) when a light tree is used, at least 1.
     pub max_cut: usize,
     /// Indirect bounces after the direct light (none: a direct-only cache).
     pub bounces: BounceSettings,
     /// Surfels per unit area of the named materials' meshes relative to the others (1), in
     /// the order given; a material named twice takes its last factor. Finer glass sharpens
     /// the caustics it casts (docs/bounces.md measures it), at the cost of its surfels.
+    /// Each factor is a positive number; each name must be a material of the scene (checked
+    /// by the bake, which has the scene).
     pub surfel_density: Vec<(String, f32)>,
 }
 
+impl Default for BakeSettings {
+    fn default() -> Self {
+        BakeSettings::preset(Quality::Preview)
+    }
+}
+
 impl BakeSettings {
-    pub fn from_quality(q: Quality) -> Self {
+    /// The settings of preset `q`: its surfels and light samples, automatic bounces, and the
+    /// defaults of every other field.
+    pub const fn preset(q: Quality) -> Self {
         BakeSettings {
             points: q.points(),
             light_samples: q.light_samples(),
@@ -80,9 +109,54 @@ impl BakeSettings {
             split_level: None,
             seed: 0,
             max_cut: 1000,
-            bounces: BounceSettings::exactly(0),
+            bounces: BounceSettings::auto(),
             surfel_density: Vec::new(),
         }
+    }
+
+    /// These settings with no indirect bounces: a cache of direct light only.
+    pub fn direct_only(self) -> Self {
+        BakeSettings {
+            bounces: BounceSettings::NONE,
+            ..self
+        }
+    }
+
+    /// Refuse a field out of range, in a sentence that names it (the bake calls this first).
+    pub fn validate(&self) -> Result<()> {
+        const S: &str = "BakeSettings";
+        require(
+            self.points >= 1 && u32::try_from(self.points).is_ok(),
+            S,
+            "points",
+            self.points,
+            "between 1 and 4294967295",
+        )?;
+        require(
+            self.light_samples >= 1,
+            S,
+            "light_samples",
+            self.light_samples,
+            "at least 1",
+        )?;
+        require(
+            in_range(self.tau, 0.0, 1.0, false),
+            S,
+            "tau",
+            self.tau,
+            "a number in [0, 1)",
+        )?;
+        require(self.max_cut >= 1, S, "max_cut", self.max_cut, "at least 1")?;
+        for (name, w) in &self.surfel_density {
+            require(
+                w.is_finite() && *w > 0.0,
+                S,
+                "surfel_density",
+                format_args!("{w} for material \"{name}\""),
+                "a positive number for each material",
+            )?;
+        }
+        self.bounces.validate()
     }
 
     /// A canonical text of the settings, for the content hash and the cache's plan.

@@ -28,6 +28,7 @@ use crate::image::{error_against, srgb8, Image};
 use crate::reference::{render, RenderOutput, RenderSettings};
 use crate::render::{render_final, FinalSettings};
 use crate::scene::{Camera, Scene};
+use crate::validate::require;
 use serde_json::{json, Value};
 use std::path::Path;
 use std::time::{Duration, Instant};
@@ -43,6 +44,30 @@ pub struct CompareSettings {
     pub bounces: BounceSettings,
     pub final_settings: FinalSettings,
     pub seed: u64,
+}
+
+impl CompareSettings {
+    /// Refuse a field out of range, in a sentence that names it ([`compare`] calls this
+    /// first).
+    pub fn validate(&self) -> Result<()> {
+        const S: &str = "CompareSettings";
+        require(
+            !self.presets.is_empty(),
+            S,
+            "presets",
+            "empty",
+            "at least one preset",
+        )?;
+        require(
+            self.reference_spp >= 1,
+            S,
+            "reference_spp",
+            self.reference_spp,
+            "at least 1",
+        )?;
+        self.bounces.validate()?;
+        self.final_settings.validate()
+    }
 }
 
 impl Default for CompareSettings {
@@ -165,11 +190,7 @@ pub fn compare(
     settings: &CompareSettings,
     progress: &(dyn Fn(&str, f32) + Sync),
 ) -> Result<Report> {
-    if settings.presets.is_empty() {
-        return Err(Error::InvalidSetting(
-            "compare needs at least one preset".into(),
-        ));
-    }
+    settings.validate()?;
     let mut runs = Vec::new();
     for &preset in &settings.presets {
         let name = preset.name();
@@ -266,7 +287,7 @@ fn bake_preset(
     let bake_settings = BakeSettings {
         seed: settings.seed,
         bounces: settings.bounces,
-        ..BakeSettings::from_quality(preset)
+        ..BakeSettings::preset(preset)
     };
     let start = Instant::now();
     let baked = bake(scene, &bake_settings, progress)?;

@@ -285,6 +285,10 @@ fn overlap(a0: f32, a1: f32, b0: f32, b1: f32) -> f32 {
 }
 
 impl Microbuffer {
+    /// Pixels per side (per hemisphere) of a diffuse receiver's buffer: the final render's
+    /// default (`FinalSettings::mb_size`) and the bounces' buffer for diffuse surfels.
+    pub const DEFAULT_SIDE: u32 = 16;
+
     /// An empty uniform buffer of `n × n` pixels per hemisphere around the normal of `frame`;
     /// `n` must be even (the pixel grid then follows the concentric map's rings).
     pub fn new(n: u32, spherical: bool, frame: Frame) -> Self {

@@ -29,6 +29,7 @@ use crate::sampler::Sampler;
 use crate::scene::{Camera, Scene};
 use crate::spectrum::Rgb;
 use crate::trace::{intersect, Tracer};
+use crate::validate::{in_range, require};
 use glam::{DVec3, Vec2};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -54,6 +55,29 @@ pub struct RenderSettings {
 }
 
 impl RenderSettings {
+    /// Refuse a field out of range, in a sentence that names it ([`render`] calls this first).
+    pub fn validate(&self) -> Result<()> {
+        const S: &str = "RenderSettings";
+        require(self.spp >= 1, S, "spp", self.spp, "at least 1")?;
+        require(
+            self.max_depth == -1 || self.max_depth >= 1,
+            S,
+            "max_depth",
+            self.max_depth,
+            "-1 (unlimited) or at least 1",
+        )?;
+        if let Transport::CacheOneBounce { smooth_below, .. } = self.transport {
+            require(
+                in_range(smooth_below, 0.0, 1.0, true),
+                S,
+                "transport.smooth_below",
+                smooth_below,
+                "a roughness in [0, 1]",
+            )?;
+        }
+        Ok(())
+    }
+
     /// The integrator's context for these settings: what [`radiance`] needs, built once per
     /// render.
     pub fn context<'a>(&self, scene: &'a Scene) -> RenderContext<'a> {
@@ -206,15 +230,8 @@ pub fn render_progressive(
 
 /// The settings and camera a render refuses.
 fn check(scene: &Scene, camera: &Camera, settings: &RenderSettings) -> Result<()> {
-    if settings.spp == 0 {
-        return Err(Error::InvalidSetting("spp must be at least 1".into()));
-    }
+    settings.validate()?;
     Camera::check_size(camera.width, camera.height).map_err(Error::InvalidSetting)?;
-    if settings.max_depth == 0 || settings.max_depth < -1 {
-        return Err(Error::InvalidSetting(
-            "max depth must be -1 (unlimited) or at least 1".into(),
-        ));
-    }
     scene.check_renderable()
 }
 

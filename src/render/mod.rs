@@ -31,6 +31,7 @@ use crate::sampler::{sobol02, Sampler};
 use crate::scene::{Camera, Scene};
 use crate::spectrum::Rgb;
 use crate::trace::{intersect, Tracer};
+use crate::validate::{in_range, require};
 use glam::{Vec2, Vec3};
 use primary::{trace_primary, CameraSample, LightShare, PrimarySample, PrimarySettings, Receiver};
 use rayon::prelude::*;
@@ -89,11 +90,87 @@ pub struct FinalSettings {
     pub crop: Option<[u32; 4]>,
 }
 
+impl FinalSettings {
+    /// Refuse a field out of range, in a sentence that names it ([`render_final`] calls this
+    /// first; the crop is checked there, against the camera).
+    pub fn validate(&self) -> Result<()> {
+        const S: &str = "FinalSettings";
+        require(
+            (2..=256).contains(&self.mb_size) && self.mb_size.is_multiple_of(2),
+            S,
+            "mb_size",
+            self.mb_size,
+            "even and between 2 and 256",
+        )?;
+        require(
+            in_range(self.glossy_below, 0.0, 1.0, true),
+            S,
+            "glossy_below",
+            self.glossy_below,
+            "a roughness in [0, 1]",
+        )?;
+        require(
+            in_range(self.adaptive_share, 0.0, 1.0, true) && self.adaptive_share > 0.0,
+            S,
+            "adaptive_share",
+            self.adaptive_share,
+            "a fraction in (0, 1]",
+        )?;
+        require(
+            self.adaptive_levels <= MAX_ADAPTIVE_LEVELS,
+            S,
+            "adaptive_levels",
+            self.adaptive_levels,
+            &format!("at most {MAX_ADAPTIVE_LEVELS}"),
+        )?;
+        require(
+            self.light_samples >= 1,
+            S,
+            "light_samples",
+            self.light_samples,
+            "at least 1",
+        )?;
+        require(
+            in_range(self.specular_below, 0.0, 1.0, true),
+            S,
+            "specular_below",
+            self.specular_below,
+            "a roughness in [0, 1]",
+        )?;
+        require(
+            self.max_depth == -1 || self.max_depth >= 1,
+            S,
+            "max_depth",
+            self.max_depth,
+            "-1 (unlimited) or at least 1",
+        )?;
+        require(
+            self.clusters >= 1,
+            S,
+            "clusters",
+            self.clusters,
+            "at least 1",
+        )?;
+        require(
+            self.far_eps.is_finite() && self.far_eps >= 0.0,
+            S,
+            "far_eps",
+            self.far_eps,
+            "a number from 0",
+        )?;
+        require(self.spp >= 1, S, "spp", self.spp, "at least 1")
+    }
+}
+
+/// The most splits of a base microbuffer pixel (a pixel at this level is 4⁻⁸ of its base
+/// pixel, far below any lobe the importance could resolve).
+pub const MAX_ADAPTIVE_LEVELS: u32 = 8;
+
 impl Default for FinalSettings {
     fn default() -> Self {
         FinalSettings {
             gather: GatherMode::Fpbgi,
-            mb_size: 16,
+            mb_size: Microbuffer::DEFAULT_SIDE,
             adaptive: true,
             glossy_below: 0.15,
             adaptive_share: 1.0 / 64.0,
@@ -253,32 +330,7 @@ pub fn render_final_cancellable(
 ) -> Result<FinalOutput> {
     let stop = || crate::error::check_cancel(cancel);
     Camera::check_size(camera.width, camera.height).map_err(Error::InvalidSetting)?;
-    if settings.mb_size < 2 || !settings.mb_size.is_multiple_of(2) || settings.mb_size > 256 {
-        return Err(Error::InvalidSetting(format!(
-            "the microbuffer size must be even and between 2 and 256, got {}",
-            settings.mb_size
-        )));
-    }
-    if settings.max_depth == 0 || settings.max_depth < -1 {
-        return Err(Error::InvalidSetting(
-            "max depth must be -1 (unlimited) or at least 1".into(),
-        ));
-    }
-    if settings.spp == 0 {
-        return Err(Error::InvalidSetting(
-            "the paths gather needs at least 1 ray per receiver (spp)".into(),
-        ));
-    }
-    if settings.light_samples == 0 {
-        return Err(Error::InvalidSetting(
-            "the direct light needs at least 1 light sample per pixel (light samples)".into(),
-        ));
-    }
-    if !(settings.far_eps >= 0.0 && settings.far_eps.is_finite()) || settings.clusters == 0 {
-        return Err(Error::InvalidSetting(
-            "the far threshold must be a non-negative number and clusters at least 1".into(),
-        ));
-    }
+    settings.validate()?;
     let (w, h) = (camera.width, camera.height);
     let [x0, y0, x1, y1] = settings.crop.unwrap_or([0, 0, w, h]);
     if !(x0 < x1 && x1 <= w && y0 < y1 && y1 <= h) {

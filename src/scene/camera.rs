@@ -28,6 +28,10 @@ impl Camera {
     /// The largest image side any render takes (pixels).
     pub const MAX_SIDE: u32 = 16384;
 
+    /// The image size (width, height) when neither the user nor the scene's render settings
+    /// give one.
+    pub const DEFAULT_SIZE: (u32, u32) = (512, 512);
+
     /// Refuse an image of `width` × `height` unless each side is from 1 to
     /// [`Camera::MAX_SIDE`], in one sentence.
     pub fn check_size(width: u32, height: u32) -> Result<(), String> {

@@ -30,7 +30,7 @@ pub const SIZE: u32 = 32;
 
 /// The library's settings for the draft preset with these points and bounces.
 pub fn library_settings(points: u64, bounces: i32) -> BakeSettings {
-    let mut s = BakeSettings::from_quality(Quality::Draft);
+    let mut s = BakeSettings::preset(Quality::Draft).direct_only();
     s.points = points as usize;
     s.bounces = if bounces < 0 {
         BounceSettings::auto()

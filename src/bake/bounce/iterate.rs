@@ -62,9 +62,6 @@ use rayon::prelude::*;
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-/// Microbuffer pixels per side for diffuse surfels (as the final render's default).
-pub const DIFFUSE_BUFFER: u32 = 16;
-
 /// The threshold of the light the bounces send one another, over the cache's threshold: what
 /// a bounce leaves is gathered again and averaged over many senders and pixels, so it need not
 /// be kept as finely as the light the cache stores (whose maps are made once, at the end, from
@@ -614,7 +611,7 @@ impl Gather<'_> {
         let side = |i: u32| {
             self.ops[i as usize]
                 .as_ref()
-                .map_or(DIFFUSE_BUFFER, |op| op.shared.n)
+                .map_or(Microbuffer::DEFAULT_SIDE, |op| op.shared.n)
         };
         let mut buffer = |i: u32| {
             let spherical = self.bsdfs[i as usize].is_two_sided();
@@ -660,7 +657,7 @@ impl Gather<'_> {
             .iter()
             .map(|&i| side(i))
             .max()
-            .unwrap_or(DIFFUSE_BUFFER);
+            .unwrap_or(Microbuffer::DEFAULT_SIDE);
         let mut cut = cluster_cut(self.senders, &receivers, VIEW_EPS, n);
         group
             .members
@@ -831,7 +828,7 @@ mod tests {
             points,
             light_samples,
             tau,
-            ..BakeSettings::from_quality(crate::bake::Quality::Draft)
+            ..BakeSettings::preset(crate::bake::Quality::Draft).direct_only()
         };
         let baked = bake(&scene, &settings, &|_, _| {}).expect("bakes");
         (scene, baked)

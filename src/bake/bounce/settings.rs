@@ -5,6 +5,7 @@ use super::transport::Slots;
 use crate::cache::store::{NodeRecord, SurfelRecord};
 use crate::error::{Error, Result};
 use crate::gather::senders::SenderNode;
+use crate::validate::{in_range, require};
 
 /// The default [`BounceSettings::receiver_stride`] (see docs/bounces.md for its measure).
 pub const RECEIVER_STRIDE: u32 = 16;
@@ -73,7 +74,7 @@ pub fn check_slots(points: u64, levels: u32) -> Result<()> {
 impl BounceSettings {
     /// `auto`: up to 30 bounces, stopping once one adds less than 3 % of the total, with the
     /// geometric tail of the rest (docs/bounces.md, "Bounce control", measures the choice).
-    pub fn auto() -> Self {
+    pub const fn auto() -> Self {
         BounceSettings {
             max: 30,
             tolerance: 3e-2,
@@ -85,11 +86,52 @@ impl BounceSettings {
     }
 
     /// Exactly `n` bounces.
-    pub fn exactly(n: u32) -> Self {
+    pub const fn exactly(n: u32) -> Self {
         BounceSettings {
             max: n,
             tolerance: 0.0,
             ..Self::auto()
+        }
+    }
+
+    /// No bounces: a cache of direct light only.
+    pub const NONE: BounceSettings = BounceSettings::exactly(0);
+
+    /// Refuse a field out of range, in a sentence that names it.
+    pub fn validate(&self) -> Result<()> {
+        const S: &str = "BounceSettings";
+        require(
+            in_range(self.tolerance, 0.0, 1.0, false),
+            S,
+            "tolerance",
+            self.tolerance,
+            "a number in [0, 1) (0: exactly `max` bounces)",
+        )?;
+        require(
+            in_range(self.operator_tau, 0.0, 1.0, false),
+            S,
+            "operator_tau",
+            self.operator_tau,
+            "a number in [0, 1)",
+        )?;
+        require(
+            self.receiver_stride >= 1,
+            S,
+            "receiver_stride",
+            self.receiver_stride,
+            "at least 1 (1: every surfel gathers)",
+        )
+    }
+}
+
+/// `auto` for [`BounceSettings::auto`], otherwise the count: what `wpbgi bake --bounces`
+/// reads back.
+impl std::fmt::Display for BounceSettings {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        if *self == BounceSettings::auto() {
+            f.write_str("auto")
+        } else {
+            write!(f, "{}", self.max)
         }
     }
 }

@@ -23,6 +23,16 @@ pub enum QualityArg {
 }
 
 impl QualityArg {
+    /// The argument that names `q`.
+    pub fn of(q: Quality) -> QualityArg {
+        match q {
+            Quality::Draft => QualityArg::Draft,
+            Quality::Preview => QualityArg::Preview,
+            Quality::Final => QualityArg::Final,
+            Quality::Ultra => QualityArg::Ultra,
+        }
+    }
+
     pub fn quality(self) -> Quality {
         match self {
             QualityArg::Draft => Quality::Draft,
@@ -42,7 +52,7 @@ pub struct BakeArgs {
     #[arg(short, long)]
     output: PathBuf,
     /// Quality preset: surfel count and light samples per surfel.
-    #[arg(long, value_enum, default_value = "preview")]
+    #[arg(long, value_enum, default_value_t = QualityArg::of(Quality::default()))]
     quality: QualityArg,
     /// Number of surfels (overrides the preset).
     #[arg(long)]
@@ -52,23 +62,23 @@ pub struct BakeArgs {
     light_samples: Option<u32>,
     /// Relative wavelet threshold: coefficients below this fraction of their function's norm
     /// are dropped.
-    #[arg(long, default_value_t = 2e-3)]
+    #[arg(long, default_value_t = BakeSettings::default().tau)]
     threshold: f32,
     /// Tree level where the hierarchical coding switches from stored averages to details
     /// (default: three levels above the leaves).
     #[arg(long)]
     split_level: Option<u32>,
     /// Seed of the random streams.
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = BakeSettings::default().seed)]
     seed: u64,
     /// With many point and spot lights (Lightcuts): the largest cut per surfel, in clusters.
-    #[arg(long, default_value_t = 1000)]
+    #[arg(long, default_value_t = BakeSettings::default().max_cut)]
     max_cut: usize,
     /// Indirect bounces after the direct light: a number (0: a direct-only cache), or `auto`:
     /// until a bounce adds less than 3 % of the light (at most 30), then the bounces left at
     /// once, as the geometric tail of the last (r/(1 − r) times it, r the ratio of the last
     /// two bounces' light).
-    #[arg(long, default_value = "auto", value_parser = parse_bounces)]
+    #[arg(long, default_value_t = BakeSettings::default().bounces, value_parser = parse_bounces)]
     bounces: BounceSettings,
     /// Memory (MB) the bounces may keep their recorded light transport in: the first bounce
     /// records which senders every surfel sees and how, and later bounces replay it against
@@ -79,7 +89,7 @@ pub struct BakeArgs {
     /// About one surfel in N gathers indirect light in each bounce; the others blend the
     /// light of their nearest gathering neighbours on the same surface (indirect light varies
     /// slowly, and the final render gathers it again). 1: every surfel gathers.
-    #[arg(long, value_name = "N", default_value_t = wpbgi::bake::bounce::settings::RECEIVER_STRIDE,
+    #[arg(long, value_name = "N", default_value_t = BakeSettings::default().bounces.receiver_stride,
           value_parser = clap::value_parser!(u32).range(1..))]
     receiver_stride: u32,
     /// MATERIAL=FACTOR: that material's surfaces get FACTOR times the surfels per unit area of
@@ -98,12 +108,11 @@ fn parse_density(s: &str) -> Result<(String, f32), String> {
     let (name, factor) = s
         .rsplit_once('=')
         .ok_or_else(|| format!("expected MATERIAL=FACTOR, got \"{s}\""))?;
-    match factor.parse::<f32>() {
-        Ok(w) if w.is_finite() && w > 0.0 => Ok((name.to_string(), w)),
-        _ => Err(format!(
-            "the factor of \"{name}\" must be a positive number, got \"{factor}\""
-        )),
-    }
+    // Its range is the settings' to refuse (BakeSettings::validate).
+    factor
+        .parse::<f32>()
+        .map(|w| (name.to_string(), w))
+        .map_err(|_| format!("the factor of \"{name}\" must be a number, got \"{factor}\""))
 }
 
 pub(crate) fn parse_bounces(s: &str) -> Result<BounceSettings, String> {
@@ -132,7 +141,7 @@ pub struct InspectArgs {
 }
 
 fn settings_of(a: &BakeArgs) -> BakeSettings {
-    let mut s = BakeSettings::from_quality(a.quality.quality());
+    let mut s = BakeSettings::preset(a.quality.quality());
     s.points = a.points.unwrap_or(s.points);
     s.light_samples = a.light_samples.unwrap_or(s.light_samples);
     s.tau = a.threshold;
@@ -161,6 +170,7 @@ pub fn bake_command(a: BakeArgs) -> Result<()> {
     let scene = crate::load_scene(&a.scene)?;
     crate::warn(&scene);
     let settings = settings_of(&a);
+    settings.validate()?;
     let mut plan = wpbgi::bake::Plan::new(&scene);
     plan.note_bounces(&settings.bounces);
     if a.json {

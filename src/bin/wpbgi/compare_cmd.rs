@@ -25,7 +25,7 @@ pub struct CompareArgs {
     #[arg(long)]
     pub reference: Option<PathBuf>,
     /// Samples per pixel of a reference rendered here.
-    #[arg(long, default_value_t = 1024)]
+    #[arg(long, default_value_t = CompareSettings::default().reference_spp)]
     pub reference_spp: u32,
     /// Bake presets to compare (comma-separated); each is baked and rendered, and the path
     /// tracer runs as long as the longest of them.
@@ -33,11 +33,12 @@ pub struct CompareArgs {
         long,
         value_enum,
         value_delimiter = ',',
-        default_value = "draft,preview,final"
+        default_values_t = CompareSettings::default().presets.into_iter().map(QualityArg::of)
     )]
     pub presets: Vec<QualityArg>,
     /// Indirect bounces of each bake, as for `wpbgi bake` (a number, or `auto`).
-    #[arg(long, default_value = "auto", value_parser = crate::bake_cmd::parse_bounces)]
+    #[arg(long, default_value_t = CompareSettings::default().bounces,
+          value_parser = crate::bake_cmd::parse_bounces)]
     pub bounces: wpbgi::bake::bounce::BounceSettings,
     /// A shot instead of one frame: bake each preset once and render N frames (at least 2)
     /// along an orbit of the camera (--orbit), the path tracer, raw and denoised, rendering
@@ -58,7 +59,7 @@ pub struct CompareArgs {
     )]
     pub orbit: f32,
     /// Seed of the random streams.
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = CompareSettings::default().seed)]
     pub seed: u64,
     /// Also write the report (report.json's document) to standard output; a failure as
     /// {"error": ..., "exit": ...}.

@@ -151,13 +151,13 @@ struct ReferenceArgs {
     #[arg(long)]
     time: Option<f64>,
     /// Longest path in segments, as Mitsuba's max_depth: 2 = direct light only, -1 = unlimited.
-    #[arg(long, default_value_t = -1, allow_hyphen_values = true)]
+    #[arg(long, default_value_t = RenderSettings::default().max_depth, allow_hyphen_values = true)]
     max_depth: i32,
     /// Depth at which Russian roulette starts.
-    #[arg(long, default_value_t = 5)]
+    #[arg(long, default_value_t = RenderSettings::default().rr_depth)]
     rr_depth: u32,
     /// Seed of the random streams.
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = RenderSettings::default().seed)]
     seed: u64,
     /// Also write the per-pixel variance of a one-sample estimate (OpenEXR; of the raw
     /// render with --denoise).
@@ -308,9 +308,6 @@ fn run_render(scene: &Scene, camera: &Camera, settings: &RenderSettings) -> Resu
     Ok(out)
 }
 
-/// The image size without `--size` or render settings.
-const DEFAULT_SIZE: (u32, u32) = (512, 512);
-
 /// `-o`, or else the scene's RenderProduct productName (the scene is read for it once more,
 /// at `--time-code`); an error naming both when neither is there.
 pub(crate) fn output_or_product(output: Option<&Path>, scene: &Path) -> Result<PathBuf> {
@@ -331,7 +328,7 @@ impl CameraArgs {
     pub(crate) fn size_for(&self, scene: Option<&Scene>) -> (u32, u32) {
         self.size
             .or_else(|| scene?.render_product.as_ref()?.resolution)
-            .unwrap_or(DEFAULT_SIZE)
+            .unwrap_or(Camera::DEFAULT_SIZE)
     }
 
     /// The camera of --eye, --target and --fov, if given, at `size`.
@@ -525,7 +522,7 @@ fn demo(a: DemoArgs) -> Result<()> {
     let scene = Scene::from_gltf_bytes(Path::new("cbox-rough.gltf (bundled)"), DEMO_SCENE)?;
     warn(&scene);
     // Bake.
-    let settings = wpbgi::bake::BakeSettings::from_quality(wpbgi::bake::Quality::Draft);
+    let settings = wpbgi::bake::BakeSettings::preset(wpbgi::bake::Quality::Draft).direct_only();
     let bar = StagedBar::new("baking");
     let baked = wpbgi::bake::bake(&scene, &settings, &|stage, f| bar.update(stage, f))?;
     bar.finish();
