@@ -97,4 +97,29 @@ else
   unset WPBGI_OIDN_LIBRARY
   echo "note: pyoidn could not be installed; the denoiser's test is skipped" >&2
 fi
+# The Python package (python/: pyo3, built by maturin) as a user installs it: `pip install
+# ./python` in a fresh virtual environment (tests/python_package.rs). maturin and numpy come
+# from PyPI: without network that test says so and is skipped. A build that fails stops here.
+wheel_python() {
+  local venv=target/wheel-venv
+  rm -rf "$venv"
+  make_venv "$venv" || return
+  "$venv/bin/python" -m pip install -q "maturin>=1.5,<2" numpy >/dev/null 2>&1 || return
+  # The package's Rust build shares target/ with the tests (same release profile).
+  # maturin's build backend runs the `maturin` the venv installed, so its bin goes on PATH.
+  PATH="$PWD/$venv/bin:$PATH" CARGO_TARGET_DIR="$PWD/target" \
+    "$venv/bin/python" -m pip install -q --no-build-isolation ./python >&2 ||
+    { echo "error: pip install ./python failed" >&2; return 1; }
+  echo "$PWD/$venv/bin/python"
+}
+if WPBGI_WHEEL_PYTHON="$(wheel_python)" && [ -n "$WPBGI_WHEEL_PYTHON" ]; then
+  export WPBGI_WHEEL_PYTHON
+else
+  [ -x target/wheel-venv/bin/maturin ] && exit 1
+  unset WPBGI_WHEEL_PYTHON
+  echo "note: maturin and numpy could not be installed; the Python package's test is skipped" >&2
+fi
 cargo test --release --workspace --all-targets "$@"
+# The crate documentation's examples (the front door's bake-and-render), which --all-targets
+# leaves out.
+cargo test --release -p wpbgi --doc "$@"

@@ -1,21 +1,40 @@
 //! # wpbgi
 //!
-//! Wavelet point-based global illumination for glTF and USD pipelines. This crate reads a scene
-//! whose materials are Mitsuba 3's `diffuse`, `roughconductor` and `roughdielectric`, and renders
-//! it; the reference path tracer in [`reference`](mod@reference) is the ground truth that every faster method in
-//! the crate is measured against.
+//! Noise-free global illumination for glTF and USD pipelines. wpbgi reads a scene whose
+//! materials are Mitsuba 3's `diffuse`, `roughconductor` and `roughdielectric`, bakes its light
+//! into a cache (surfels whose outgoing radiance is kept as sparse Haar wavelets over
+//! directions, in a bounding-sphere tree, with multiple bounces), and renders final frames from
+//! that cache. A reference path tracer with Mitsuba's semantics ([`reference`](mod@reference))
+//! is the ground truth every faster method is measured against.
 //!
-//! The library never prints and never exits: every fallible operation returns
-//! [`Error`], and long operations report progress through a callback.
+//! The front door is re-exported here: [`Scene`], [`BakeSettings`] and [`bake()`], the
+//! [`Cache`] a bake writes and a render reads, [`RenderSettings`] and [`render()`], the Vulkan
+//! [`Preview`], and [`Error`]. The library never prints and never exits: every fallible
+//! operation returns [`Error`], whose message is one sentence naming the file, the object or
+//! the setting at fault, and long operations report progress through a callback. Settings
+//! start from their defaults (those of the `wpbgi` command) and refuse a field out of range
+//! (`validate()`).
 //!
-//! ```no_run
-//! use wpbgi::{reference::{render, RenderSettings}, scene::Scene};
+//! Bake the bundled Cornell box, save the cache, and render a frame from it:
+//!
+//! ```
+//! use wpbgi::{bake, render, BakeSettings, Cache, Quality, RenderSettings, Scene};
 //! # fn main() -> Result<(), wpbgi::Error> {
-//! let scene = Scene::load("scene.gltf".as_ref())?;
-//! let settings = RenderSettings { spp: 16, max_depth: 8, ..Default::default() };
-//! let camera = scene.default_camera(256, 256)?;
-//! let out = render(&scene, &camera, &settings, &|_| {})?;
-//! wpbgi::image::write_exr(std::path::Path::new("out.exr"), &out.mean)?;
+//! let path = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/cbox-rough.gltf"));
+//! let scene = Scene::load(path)?;
+//! // The draft preset, smaller still; bounces are automatic, as with `wpbgi bake`.
+//! let settings = BakeSettings { points: 4000, ..BakeSettings::preset(Quality::Draft) };
+//! let baked = bake(&scene, &settings, &|_stage, _fraction| {})?;
+//! let cache_path = std::env::temp_dir().join(format!("wpbgi-doc-{}.wpc", std::process::id()));
+//! wpbgi::bake::store::save(&cache_path, &scene, &baked)?;
+//!
+//! // Any later process: open the cache (refused if the scene changed since) and render.
+//! let cache = Cache::open_fresh(&scene, &cache_path)?;
+//! let camera = scene.default_camera(64, 64)?;
+//! let frame = render(&scene, &cache, &camera, &RenderSettings::default(), &|_, _| {})?;
+//! assert!(frame.beauty.pixels.iter().all(|p| p.is_finite()));
+//! wpbgi::image::write_exr(&std::env::temp_dir().join("wpbgi-doc.exr"), &frame.beauty)?;
+//! # std::fs::remove_file(&cache_path).ok();
 //! # Ok(()) }
 //! ```
 
@@ -50,4 +69,18 @@ pub mod surfels;
 pub mod trace;
 pub(crate) mod validate;
 
+pub use bake::{bake, BakeSettings, Quality};
+/// A baked cache, read and validated: what [`render()`] and [`Preview`] draw from.
+pub use cache::store::BakedCache as Cache;
 pub use error::Error;
+pub use preview::Preview;
+/// The final render from a [`Cache`].
+pub use render::render_final as render;
+/// The settings of the final render ([`render()`]).
+pub use render::FinalSettings as RenderSettings;
+pub use scene::Scene;
+
+/// The README's Rust example, compiled as a doc test so that it stays true.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;

@@ -1,5 +1,5 @@
 //! What both path tracers share (the reference one in [`crate::reference`] and the final
-//! render's in [`crate::render`]): the scene with its acceleration structure and emitter
+//! render's in [`crate::render`](mod@crate::render)): the scene with its acceleration structure and emitter
 //! sampler ([`Tracer`]), the description of a ray's closest hit that shading reads
 //! ([`SurfaceHit`]), and the multiple-importance weight ([`mis`]). Neither path tracer knows
 //! the other; both build on this.

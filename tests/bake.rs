@@ -281,7 +281,8 @@ fn a_cancelled_bake_stops_in_the_stage_that_sees_the_flag() {
 /// A bake that cannot fit says so before any work, naming the figure: no progress is
 /// reported. cbox-rough's glass (α = 0.1) needs 16² maps, so 259 transport slots per inner
 /// node: 20 million surfels would need 5.2 billion, past 32-bit slots (16 519 105 points at
-/// most: p·260 − 259 < 2³² − 1); 10¹² surfels need more memory than any machine has.
+/// most: p·260 − 259 < 2³² − 1); 4·10⁹ surfels need more memory than a test machine has (the
+/// structures alone take over a terabyte), and 10¹² are past the surfels' 32-bit numbering.
 #[test]
 fn a_bake_that_cannot_fit_is_refused_before_any_work() {
     use std::sync::Mutex;
@@ -289,11 +290,17 @@ fn a_bake_that_cannot_fit_is_refused_before_any_work() {
     for (points, bounces, says) in [
         (20_000_000, 1, "bake at most about 16519105 points"),
         (
+            4_000_000_000,
+            0,
+            "a bake of 4000000000 surfels needs at least",
+        ),
+        (4_000_000_000, 3, "more than 2^32"),
+        // Surfels are numbered in 32 bits.
+        (
             1_000_000_000_000,
             0,
-            "a bake of 1000000000000 surfels needs at least",
+            "BakeSettings.points is 1000000000000; it must be between 1 and 4294967295",
         ),
-        (1_000_000_000_000, 3, "more than 2^32"),
     ] {
         let s = BakeSettings {
             points,

@@ -1,6 +1,6 @@
 //! `wpbgi compare` and `wpbgi render --reference` from the outside: on the bundled scene (its
 //! reference path-traced by compare) and on cbox-glossy (against Mitsuba 3's render), compare
-//! writes report.json as the README documents it, a plot with both curves as SVG and PNG, and
+//! writes report.json as docs/commands.md documents it, a plot with both curves as SVG and PNG, and
 //! a summary; render stores the error it prints, equal to the error recomputed from the files.
 
 use std::path::{Path, PathBuf};
@@ -41,7 +41,7 @@ fn mitsuba_32(name: &str, out: &Path) {
     write_exr(out, &r.box_downsample(8).expect("256 / 8")).expect("write reference");
 }
 
-/// The report's files exist and say what the README says they do.
+/// The report's files exist and say what docs/commands.md says they do.
 fn check_report(report: &Path, rendered_reference: bool) {
     let json: serde_json::Value = serde_json::from_str(
         &std::fs::read_to_string(report.join("report.json")).expect("report.json"),
@@ -261,7 +261,7 @@ fn render_with_a_reference_stores_the_error_it_prints() {
 }
 
 /// `compare --frames 8` on the bundled scene: every method's frames and flicker in
-/// report.json as the README documents it. A still camera (`--orbit 0`) gives the cache a
+/// report.json as docs/commands.md documents it. A still camera (`--orbit 0`) gives the cache a
 /// temporal MSE of exactly 0 (the same cache, camera and seed give the same bytes) and the
 /// path tracer, whose samples change with the frame, a positive one. Under an orbiting
 /// camera every method's is positive: the references' own noise (32 samples) moves with the

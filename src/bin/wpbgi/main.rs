@@ -42,8 +42,8 @@ use wpbgi::scene::{Camera, Scene};
 /// The Cornell box compiled into the binary for `wpbgi demo`.
 const DEMO_SCENE: &[u8] = include_bytes!("../../../scenes/cbox-rough.gltf");
 
-/// Mitsuba 3's render of it at 256², max_depth 3 (see scenes/README.md).
-const DEMO_REFERENCE: &[u8] = include_bytes!("../../../scenes/cbox-rough_d3_ref.exr");
+/// Mitsuba 3's render of it at 256², max_depth 8 (see scenes/README.md).
+const DEMO_REFERENCE: &[u8] = include_bytes!("../../../scenes/cbox-rough_d8_ref.exr");
 
 #[derive(Parser)]
 #[command(name = "wpbgi", version, about = "Noise-free global illumination for glTF and USD scenes with Mitsuba's diffuse, roughconductor and roughdielectric materials.", long_about = None)]
@@ -85,9 +85,11 @@ enum Command {
     /// Path-trace the ground truth of a scene (unidirectional, next-event estimation with MIS,
     /// Russian roulette; Mitsuba `path` semantics) and write a float EXR.
     Reference(ReferenceArgs),
-    /// The main job on the bundled Cornell box (rough gold box, glass sphere): bake it, render
-    /// it from the cache to DIR/demo.exr and DIR/demo.png, and print the times and the error
-    /// against Mitsuba 3's render of it.
+    /// The main job on the bundled Cornell box (rough gold box, glass sphere): bake it as
+    /// `wpbgi bake` does (preview preset, automatic bounces) to DIR/demo.wpc, render it from the
+    /// cache to DIR/demo.exr and DIR/demo.png, print the times and the error against Mitsuba
+    /// 3's path-traced render (max_depth 8, DIR/mitsuba_reference.exr), and draw the cache
+    /// with the Vulkan previewer, headless, to DIR/preview.png.
     Demo(DemoArgs),
     /// Bake a scene's direct light into a cache: Poisson-disk surfels, their outgoing radiance
     /// (RGB for diffuse surfaces, Haar wavelets over directions otherwise), and the surfel tree
@@ -521,8 +523,8 @@ fn demo(a: DemoArgs) -> Result<()> {
         .with_context(|| format!("cannot create the folder {}", a.output.display()))?;
     let scene = Scene::from_gltf_bytes(Path::new("cbox-rough.gltf (bundled)"), DEMO_SCENE)?;
     warn(&scene);
-    // Bake.
-    let settings = wpbgi::bake::BakeSettings::preset(wpbgi::bake::Quality::Draft).direct_only();
+    // Bake as `wpbgi bake` does by default: the preview preset, with automatic bounces.
+    let settings = wpbgi::bake::BakeSettings::default();
     let bar = StagedBar::new("baking");
     let baked = wpbgi::bake::bake(&scene, &settings, &|stage, f| bar.update(stage, f))?;
     bar.finish();
@@ -539,27 +541,61 @@ fn demo(a: DemoArgs) -> Result<()> {
     let png = a.output.join("demo.png");
     wpbgi::image::write_exr_layers(&exr, &out.beauty, &[])?;
     write_png(&png, &out.beauty)?;
-    // Against Mitsuba 3's render of the same scene and light transport (max_depth 3: direct
-    // light and one bounce, which a direct-only cache holds).
+    // Against Mitsuba 3's path-traced render of the same scene (max_depth 8: what the
+    // cache's bounces leave beyond eight segments is below the cache's own error).
     let reference_path = a.output.join("mitsuba_reference.exr");
     std::fs::write(&reference_path, DEMO_REFERENCE)
         .with_context(|| format!("cannot write {}", reference_path.display()))?;
     let reference = wpbgi::image::read_exr(&reference_path)?;
     say!(
-        "wrote {} and {}: bake {:.2} s ({} surfels), render {:.2} s, total {:.2} s",
+        "wrote {} and {}: bake {:.2} s ({} surfels, {} bounces), render {:.2} s, total {:.2} s",
         exr.display(),
         png.display(),
         bake_seconds,
         baked.surfels.len(),
+        baked.bounces.as_ref().map_or(0, |b| b.bounces),
         render_seconds,
         start.elapsed().as_secs_f64()
     );
     let error = wpbgi::image::error_against(&out.beauty, &reference);
     if let Some((mse, rel)) = error {
         say!(
-            "error against Mitsuba 3 (path tracing, max_depth 3, 8192 spp): MSE {mse:.3e}, relMSE {rel:.3e}"
+            "error against Mitsuba 3 (path tracing, max_depth 8, 8192 spp): MSE {mse:.3e}, relMSE {rel:.3e}"
         );
     }
+    // The cache as the previewer shows it: Vulkan, headless. A machine without a Vulkan
+    // driver (lavapipe or a GPU's) still gets the rest of the demo.
+    let preview_png = a.output.join("preview.png");
+    let preview = match preview_cmd::headless_frame(
+        &cache,
+        Some(&scene),
+        &camera,
+        wpbgi::preview::Show::Total,
+        wpbgi::preview::DEFAULT_CUT_PIXELS,
+    ) {
+        Ok((frame, gpu)) => {
+            write_png(&preview_png, &frame.image)?;
+            say!(
+                "wrote {} (the preview on {}: a cut of {} nodes in {:.1} ms, drawn in {:.1} ms)",
+                preview_png.display(),
+                gpu.name,
+                frame.cut_size,
+                1e3 * frame.cut_seconds,
+                1e3 * frame.draw_seconds
+            );
+            Some(serde_json::json!({
+                "file": preview_png.display().to_string(),
+                "device": gpu.name,
+                "cut_nodes": frame.cut_size,
+                "cut_seconds": frame.cut_seconds,
+                "draw_seconds": frame.draw_seconds,
+            }))
+        }
+        Err(e) => {
+            say!("no preview frame: {e:#} (the previewer needs a Vulkan driver: lavapipe, from mesa-vulkan-drivers, or a GPU's)");
+            None
+        }
+    };
     if a.json {
         println!(
             "{}",
@@ -572,6 +608,8 @@ fn demo(a: DemoArgs) -> Result<()> {
                 "total_seconds": start.elapsed().as_secs_f64(),
                 "mse": error.map(|e| e.0),
                 "rel_mse": error.map(|e| e.1),
+                "bounces": baked.bounces.as_ref().map(|b| b.bounces),
+                "preview": preview,
             })
         );
     }

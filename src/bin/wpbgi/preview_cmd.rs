@@ -10,7 +10,7 @@ use wpbgi::cache::store::BakedCache;
 use wpbgi::image::{write_exr, write_png};
 use wpbgi::preview::device::Gpu;
 use wpbgi::preview::window::{run_window, WindowSettings};
-use wpbgi::preview::{bounds, framing_camera, Preview, Show, DEFAULT_CUT_PIXELS};
+use wpbgi::preview::{bounds, framing_camera, Frame, Preview, Show, DEFAULT_CUT_PIXELS};
 use wpbgi::scene::{Camera, Scene};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -100,10 +100,9 @@ pub fn preview_command(a: PreviewArgs) -> Result<()> {
     if !a.headless {
         return windowed(&a, &cache, scene.as_ref(), camera);
     }
-    let gpu = Arc::new(Gpu::from_env()?);
-    let mut preview = Preview::new(gpu.clone(), &cache, scene.as_ref(), (w, h))?;
     let output = a.output.context("--headless needs --output")?;
-    let frame = preview.frame(&camera, a.show.into(), a.cut_pixels)?;
+    let (frame, gpu) =
+        headless_frame(&cache, scene.as_ref(), &camera, a.show.into(), a.cut_pixels)?;
     match output.extension().and_then(|e| e.to_str()) {
         Some(e) if e.eq_ignore_ascii_case("exr") => write_exr(&output, &frame.image)?,
         Some(e) if e.eq_ignore_ascii_case("png") => write_png(&output, &frame.image)?,
@@ -137,6 +136,22 @@ pub fn preview_command(a: PreviewArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// One frame of `cache` through `camera` (at the camera's size), drawn headless on the device
+/// `WPBGI_VULKAN_DEVICE` names or the first there is; also the device, for its name and
+/// validation messages.
+pub(crate) fn headless_frame(
+    cache: &BakedCache,
+    scene: Option<&Scene>,
+    camera: &Camera,
+    show: Show,
+    cut_pixels: f32,
+) -> Result<(Frame, Arc<Gpu>)> {
+    let gpu = Arc::new(Gpu::from_env()?);
+    let mut preview = Preview::new(gpu.clone(), cache, scene, (camera.width, camera.height))?;
+    let frame = preview.frame(camera, show, cut_pixels)?;
+    Ok((frame, gpu))
 }
 
 /// The --eye camera, or one that frames the cache.

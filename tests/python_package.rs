@@ -1,0 +1,122 @@
+//! The Python package (`python/`, pyo3 + maturin) as a user gets it: `pip install ./python` in a
+//! fresh virtual environment (scripts/test.sh does that and names its interpreter in
+//! WPBGI_WHEEL_PYTHON), then `import wpbgi` bakes and renders the bundled scene to a numpy
+//! array. The cache is byte for byte the one `wpbgi bake` writes with the same settings, and
+//! the array is bit for bit the EXR `wpbgi render` writes from it.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const SCRIPT: &str = r#"
+import sys, wpbgi, numpy
+scene_path, cache_path, out_path = sys.argv[1:4]
+scene = wpbgi.Scene(scene_path)
+stages = []
+report = wpbgi.bake(scene, cache_path, quality="draft", points=3000, bounces=2,
+                    progress=lambda stage, f: stages.append(stage))
+assert report["surfels"] == 3000 and report["bounces"] == 2, report
+assert "surfels" in stages and "bounces" in stages, stages
+cache = wpbgi.Cache(scene, cache_path)
+assert cache.hash == report["hash"] == wpbgi.bake_hash(scene, quality="draft", points=3000, bounces=2)
+image = wpbgi.render(scene, cache, 48, 32, light_samples=8)
+assert image.shape == (32, 48, 3) and image.dtype == numpy.float32, (image.shape, image.dtype)
+image.astype("<f4").tofile(out_path)
+# A setting out of range is refused, naming it; a callback returning True cancels.
+try:
+    wpbgi.render(scene, cache, 8, 8, max_depth=0)
+    raise SystemExit("max_depth=0 was not refused")
+except wpbgi.Error as e:
+    assert "max_depth" in str(e), e
+try:
+    wpbgi.bake(scene, cache_path + ".cancelled", quality="draft", points=3000, progress=lambda s, f: True)
+    raise SystemExit("the bake was not cancelled")
+except wpbgi.Cancelled:
+    pass
+print("ok")
+"#;
+
+fn wpbgi(args: &[&str]) {
+    let out = Command::new(env!("CARGO_BIN_EXE_wpbgi"))
+        .args(args)
+        .output()
+        .expect("runs");
+    assert!(
+        out.status.success(),
+        "wpbgi {args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+#[test]
+fn pip_installed_package_bakes_and_renders_what_the_cli_does() {
+    let Some(python) = std::env::var_os("WPBGI_WHEEL_PYTHON").map(PathBuf::from) else {
+        eprintln!(
+            "skipped: WPBGI_WHEEL_PYTHON is not set (scripts/test.sh sets it after pip install \
+             ./python in a fresh virtual environment; without network it cannot)"
+        );
+        return;
+    };
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cbox-rough.gltf");
+    let dir = std::env::temp_dir().join(format!("wpbgi-python-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let (py_cache, py_image) = (dir.join("python.wpc"), dir.join("python.f32"));
+    let out = Command::new(&python)
+        .args(["-c", SCRIPT])
+        .arg(&scene)
+        .arg(&py_cache)
+        .arg(&py_image)
+        // Not the source tree's python/wpbgi: the installed package.
+        .current_dir(&dir)
+        .output()
+        .expect("runs python");
+    assert!(
+        out.status.success() && String::from_utf8_lossy(&out.stdout).trim() == "ok",
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+
+    let s = |p: &Path| p.to_str().expect("utf-8 path").to_string();
+    let cli_cache = dir.join("cli.wpc");
+    let cli_image = dir.join("cli.exr");
+    wpbgi(&[
+        "bake",
+        &s(&scene),
+        "-o",
+        &s(&cli_cache),
+        "--quality",
+        "draft",
+        "--points",
+        "3000",
+        "--bounces",
+        "2",
+    ]);
+    assert!(
+        std::fs::read(&py_cache).expect("python's cache")
+            == std::fs::read(&cli_cache).expect("the CLI's cache"),
+        "the caches differ"
+    );
+    wpbgi(&[
+        "render",
+        &s(&scene),
+        "--cache",
+        &s(&cli_cache),
+        "-o",
+        &s(&cli_image),
+        "--size",
+        "48x32",
+        "--light-samples",
+        "8",
+    ]);
+    let exr = wpbgi::image::read_exr(&cli_image).expect("the CLI's EXR");
+    let from_cli: Vec<u8> = exr
+        .pixels
+        .iter()
+        .flat_map(|p| p.to_array())
+        .flat_map(f32::to_le_bytes)
+        .collect();
+    let from_python = std::fs::read(&py_image).expect("python's array");
+    assert_eq!(from_python.len(), 48 * 32 * 3 * 4);
+    assert!(from_python == from_cli, "the images differ");
+    let _ = std::fs::remove_dir_all(&dir);
+}
