@@ -1,4 +1,4 @@
-//! The previewer's frame time at 1280×720 (DESIGN.md §8): the bundled Cornell box at draft
+//! The previewer's frame time at 1280×720 (docs/design.md §8): the bundled Cornell box at draft
 //! quality (20 000 surfels) and at about a million surfels, from the scene camera, for several
 //! cut bounds; per frame, the cut's size, the CPU time of the cut (with each node's radiance
 //! towards the eye) and the GPU time (three passes and, headless, the 14.7 MB readback of the

@@ -24,34 +24,12 @@ fi
 if ! command -v python3 >/dev/null 2>&1; then
   $SUDO apt-get update -qq && $SUDO apt-get install -y -qq python3
 fi
-# Pixar's USD Python modules (usd-core, from PyPI) for the plugin's USD pipeline example, in a
-# virtual environment under target/. Without them (no network, say) that one test is skipped
-# with a message; everything else runs.
 # A Python virtual environment at $1 under target/ (python3-venv installed if missing).
 make_venv() {
   [ -x "$1/bin/python" ] && return
   python3 -m venv "$1" >/dev/null 2>&1 ||
     { $SUDO apt-get install -y -qq python3-venv >/dev/null 2>&1 && python3 -m venv "$1"; }
 }
-usd_python() {
-  if python3 -c "import pxr.Sdf" >/dev/null 2>&1; then
-    echo python3
-    return
-  fi
-  local venv=target/usd-venv
-  make_venv "$venv" || return
-  if "$venv/bin/python" -c "import pxr.Sdf" >/dev/null 2>&1 ||
-    "$venv/bin/python" -m pip install -q usd-core >/dev/null 2>&1; then
-    echo "$PWD/$venv/bin/python"
-  fi
-}
-WPBGI_USD_PYTHON="$(usd_python || true)"
-if [ -n "$WPBGI_USD_PYTHON" ]; then
-  export WPBGI_USD_PYTHON
-else
-  unset WPBGI_USD_PYTHON
-  echo "note: usd-core could not be installed; the USD pipeline example's test is skipped" >&2
-fi
 # The farm tests (tests/farm.rs): the Open Job Description CLI (openjd-cli, from PyPI) in a
 # virtual environment under target/, and a single-node Slurm (the Debian packages slurm-wlm and
 # munge; the test starts and stops its daemons, as root). Without them (no network, not root)
@@ -98,8 +76,9 @@ else
   echo "note: pyoidn could not be installed; the denoiser's test is skipped" >&2
 fi
 # The Python package (python/: pyo3, built by maturin) as a user installs it: `pip install
-# ./python` in a fresh virtual environment (tests/python_package.rs). maturin and numpy come
-# from PyPI: without network that test says so and is skipped. A build that fails stops here.
+# ./python` in a fresh virtual environment (tests/python_package.rs), with Pixar's usd-core
+# beside it for the USD pipeline example. maturin, numpy and usd-core come from PyPI: without
+# network those tests say so and are skipped. A build that fails stops here.
 wheel_python() {
   local venv=target/wheel-venv
   rm -rf "$venv"
@@ -110,6 +89,8 @@ wheel_python() {
   PATH="$PWD/$venv/bin:$PATH" CARGO_TARGET_DIR="$PWD/target" \
     "$venv/bin/python" -m pip install -q --no-build-isolation ./python >&2 ||
     { echo "error: pip install ./python failed" >&2; return 1; }
+  "$venv/bin/python" -m pip install -q usd-core >/dev/null 2>&1 ||
+    echo "note: usd-core could not be installed; the USD pipeline example's test is skipped" >&2
   echo "$PWD/$venv/bin/python"
 }
 if WPBGI_WHEEL_PYTHON="$(wheel_python)" && [ -n "$WPBGI_WHEEL_PYTHON" ]; then

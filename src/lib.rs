@@ -80,6 +80,9 @@ pub use render::render_final as render;
 pub use render::FinalSettings as RenderSettings;
 pub use scene::Scene;
 
+/// This crate's version, as caches record it (it enters their hash).
+pub const VERSION: &str = env!("CARGO_PKG_VERSION");
+
 /// The README's Rust example, compiled as a doc test so that it stays true.
 #[cfg(doctest)]
 #[doc = include_str!("../README.md")]

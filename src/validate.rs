@@ -28,3 +28,14 @@ pub(crate) fn require(
 pub(crate) fn in_range(x: f32, lo: f32, hi: f32, hi_included: bool) -> bool {
     x.is_finite() && x >= lo && (x < hi || (hi_included && x == hi))
 }
+
+/// Refuse a `max_depth` (Mitsuba's: path segments) other than −1 (unlimited) or a count from 1.
+pub(crate) fn require_max_depth(settings: &str, max_depth: i32) -> Result<()> {
+    require(
+        max_depth == -1 || max_depth >= 1,
+        settings,
+        "max_depth",
+        max_depth,
+        "-1 (unlimited) or at least 1",
+    )
+}

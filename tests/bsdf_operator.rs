@@ -1,4 +1,4 @@
-//! The 4D Haar BSDF operator (spec §8.2, §8.6): D = V·C against the brute-force O(n⁴) sum, the
+//! The 4D Haar BSDF operator (docs/method.md §8.2, §8.6): D = V·C against the brute-force O(n⁴) sum, the
 //! stated thresholding bound, energy conservation, the tints applied to an untinted operator,
 //! and the error of the roughness levels a textured roughness snaps to.
 

@@ -1,4 +1,4 @@
-//! The Haar transform and the equal-area octahedral map (spec §4.2, DESIGN.md §5.3).
+//! The Haar transform and the equal-area octahedral map (docs/method.md §4.2, docs/design.md §5.3).
 
 use glam::{DVec2, Vec2, Vec3};
 use wpbgi::geometry::warp::square_to_uniform_sphere;

@@ -1,6 +1,6 @@
 //! The previewer's Vulkan device (issue 6, build item 1). `scripts/test.sh` installs lavapipe
 //! (`mesa-vulkan-drivers`) and the validation layer; a missing device fails these tests
-//! instead of skipping them (DESIGN.md §11).
+//! instead of skipping them (docs/design.md §11).
 
 use wpbgi::preview::device::Gpu;
 

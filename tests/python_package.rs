@@ -2,7 +2,8 @@
 //! fresh virtual environment (scripts/test.sh does that and names its interpreter in
 //! WPBGI_WHEEL_PYTHON), then `import wpbgi` bakes and renders the bundled scene to a numpy
 //! array. The cache is byte for byte the one `wpbgi bake` writes with the same settings, and
-//! the array is bit for bit the EXR `wpbgi render` writes from it.
+//! the array is bit for bit the EXR `wpbgi render` writes from it. The USD pipeline example
+//! (python/examples/usd_pipeline.py) runs on the same installed package with Pixar's usd-core.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -47,13 +48,21 @@ fn wpbgi(args: &[&str]) {
     );
 }
 
-#[test]
-fn pip_installed_package_bakes_and_renders_what_the_cli_does() {
-    let Some(python) = std::env::var_os("WPBGI_WHEEL_PYTHON").map(PathBuf::from) else {
+/// The Python of the fresh virtual environment the package was installed into, if any.
+fn wheel_python() -> Option<PathBuf> {
+    let python = std::env::var_os("WPBGI_WHEEL_PYTHON").map(PathBuf::from);
+    if python.is_none() {
         eprintln!(
             "skipped: WPBGI_WHEEL_PYTHON is not set (scripts/test.sh sets it after pip install \
              ./python in a fresh virtual environment; without network it cannot)"
         );
+    }
+    python
+}
+
+#[test]
+fn pip_installed_package_bakes_and_renders_what_the_cli_does() {
+    let Some(python) = wheel_python() else {
         return;
     };
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cbox-rough.gltf");
@@ -119,4 +128,99 @@ fn pip_installed_package_bakes_and_renders_what_the_cli_does() {
     assert_eq!(from_python.len(), 48 * 32 * 3 * 4);
     assert!(from_python == from_cli, "the images differ");
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The example's JSON line for `stage`.
+fn pipeline(python: &Path, stage: &Path) -> serde_json::Value {
+    let out = Command::new(python)
+        .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("python/examples/usd_pipeline.py"))
+        .arg(stage)
+        .args(["--quality", "draft", "--points", "1500", "--bounces", "0"])
+        .output()
+        .expect("run usd_pipeline.py");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "usd_pipeline.py failed:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_str(stdout.trim()).unwrap_or_else(|e| panic!("{e}: {stdout}"))
+}
+
+fn hash_of(cache: &Path) -> String {
+    let c = wpbgi::Cache::read(cache, None).expect("a valid cache");
+    wpbgi::cache::hash_hex(c.cache.hash)
+}
+
+/// python/examples/usd_pipeline.py records the cache and its hash in the stage's root layer,
+/// re-uses it while the stage and settings are unchanged, and bakes again when a material
+/// changes or the cache goes missing.
+#[test]
+fn usd_pipeline_records_the_cache_and_reuses_it_while_it_is_good() {
+    let Some(python) = wheel_python() else {
+        return;
+    };
+    let has_usd = Command::new(&python)
+        .args(["-c", "import pxr.Sdf"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !has_usd {
+        eprintln!(
+            "skipped: usd-core is not installed beside the package (scripts/test.sh installs it)"
+        );
+        return;
+    }
+    let dir = std::env::temp_dir().join(format!("wpbgi-usd-pipeline-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).expect("temp dir");
+    let stage = dir.join("cbox.usda");
+    let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/usd/cbox-diffuse.usda");
+    std::fs::copy(&source, &stage).expect("copy the stage");
+
+    // First run: nothing recorded, so it bakes and records the cache next to the stage.
+    let first = pipeline(&python, &stage);
+    assert_eq!(first["baked"], true, "{first}");
+    assert_eq!(first["reason"], "no record");
+    let cache = PathBuf::from(first["cache"].as_str().expect("cache path"));
+    assert_eq!(cache, dir.join("cbox.wpc"));
+    let hash = first["hash"].as_str().expect("hash").to_string();
+    assert_eq!(hash_of(&cache), hash, "the recorded hash is the cache's");
+    let text = std::fs::read_to_string(&stage).expect("the stage");
+    assert!(
+        text.contains("customLayerData") && text.contains(&hash) && text.contains("cbox.wpc"),
+        "the record is in the root layer:\n{text}"
+    );
+
+    // Second run: the stage and settings are unchanged, so the cache is re-used untouched.
+    let modified = std::fs::metadata(&cache)
+        .and_then(|m| m.modified())
+        .expect("mtime");
+    let second = pipeline(&python, &stage);
+    assert_eq!(second["baked"], false, "{second}");
+    assert_eq!(second["hash"], hash.as_str());
+    assert_eq!(
+        std::fs::metadata(&cache).and_then(|m| m.modified()).ok(),
+        Some(modified)
+    );
+
+    // A changed material: baked again, under a new hash.
+    let text = std::fs::read_to_string(&stage).expect("the stage");
+    let changed = text.replacen("0.885809", "0.5", 1);
+    assert_ne!(
+        changed, text,
+        "the fixture has the colour this test changes"
+    );
+    std::fs::write(&stage, changed).expect("write the stage");
+    let third = pipeline(&python, &stage);
+    assert_eq!(third["baked"], true, "{third}");
+    assert_eq!(third["reason"], "the stage or the settings changed");
+    assert_ne!(third["hash"], hash.as_str());
+    assert_eq!(hash_of(&cache), third["hash"].as_str().expect("hash"));
+
+    // The recorded cache deleted: baked again, under the same hash.
+    std::fs::remove_file(&cache).expect("remove the cache");
+    let fourth = pipeline(&python, &stage);
+    assert_eq!(fourth["baked"], true, "{fourth}");
+    assert_eq!(fourth["reason"], "the recorded cache is missing or stale");
+    assert_eq!(fourth["hash"], third["hash"]);
+    let _ = std::fs::remove_dir_all(dir);
 }

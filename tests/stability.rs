@@ -1,4 +1,4 @@
-//! The stability matrix of DESIGN.md §10: stiff and extreme inputs, each case checked for
+//! The stability matrix of docs/design.md §10: stiff and extreme inputs, each case checked for
 //! finite output and against an answer that does not come from the code under test.
 //!
 //! | case | checked against |

@@ -1,4 +1,4 @@
-//! The surfel tree and its hierarchical wavelet coding (spec §6, DESIGN.md §5.5–§5.6).
+//! The surfel tree and its hierarchical wavelet coding (docs/method.md §6, docs/design.md §5.5–§5.6).
 
 use glam::{Vec2, Vec3};
 use wpbgi::haar::{texel_directions, Haar2d, SparseHaar};
@@ -59,7 +59,7 @@ fn exact(m: &Haar2d<Rgb>) -> SparseHaar<Rgb> {
     SparseHaar::compress_below(m, 0.0)
 }
 
-/// The coding as spec §6 writes it, on dense maps: per node the exact G = G(left) + G(right)
+/// The coding as docs/method.md §6 writes it, on dense maps: per node the exact G = G(left) + G(right)
 /// and H = (G(left) − G(right))/2, each kept above τ‖G‖ ([`Haar2d::combine`], [`Haar2d::norm`]).
 fn dense_coding(
     tree: &SurfelTree,

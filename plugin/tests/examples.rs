@@ -1,7 +1,7 @@
 //! The examples, run as a user runs them: the C example compiled with the system's C compiler
-//! against `wpbgi.h` and the shared library, the Python example through ctypes, and the USD
-//! pipeline example when Pixar's USD modules are installed. Their caches and images must equal
-//! the Rust API's byte for byte.
+//! against `wpbgi.h` and the shared library, and the Python example through ctypes. Their
+//! caches and images must equal the Rust API's byte for byte. (The USD pipeline example uses
+//! the Python package: tests/python_package.rs.)
 
 mod common;
 
@@ -167,109 +167,5 @@ print("python errors ok")
         .env("PYTHONPATH", plugin_dir().join("python"))
         .env("WPBGI_LIBRARY", library_path()));
     assert!(log.contains("python errors ok"), "{log}");
-    let _ = std::fs::remove_dir_all(dir);
-}
-
-/// A Python with Pixar's USD modules: $WPBGI_USD_PYTHON (scripts/test.sh sets it when it could
-/// install usd-core), else python3 if it has them.
-fn usd_python() -> Option<String> {
-    let candidates = std::env::var("WPBGI_USD_PYTHON")
-        .into_iter()
-        .chain(["python3".to_string()]);
-    for python in candidates {
-        let ok = Command::new(&python)
-            .args(["-c", "import pxr.Sdf"])
-            .output()
-            .is_ok_and(|o| o.status.success());
-        if ok {
-            return Some(python);
-        }
-    }
-    None
-}
-
-/// The pipeline example's JSON line.
-fn pipeline(python: &str, stage: &Path) -> serde_json::Value {
-    let out = Command::new(python)
-        .arg(plugin_dir().join("python/usd_pipeline.py"))
-        .arg(stage)
-        .args(["--points", "1500", "--bounces", "0"])
-        .env("WPBGI_LIBRARY", library_path())
-        .output()
-        .expect("run usd_pipeline.py");
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "usd_pipeline.py failed:\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    serde_json::from_str(stdout.trim()).unwrap_or_else(|e| panic!("{e}: {stdout}"))
-}
-
-fn hash_of(cache: &Path) -> String {
-    let c = wpbgi::cache::store::BakedCache::read(cache, None).expect("a valid cache");
-    wpbgi::cache::hash_hex(c.cache.hash)
-}
-
-#[test]
-fn usd_pipeline_records_the_cache_and_reuses_it_while_it_is_good() {
-    let Some(python) = usd_python() else {
-        eprintln!(
-            "skipped: Pixar's USD Python modules are not installed (pip install usd-core, or set \
-             WPBGI_USD_PYTHON to a Python that has them)"
-        );
-        return;
-    };
-    let dir = scratch("usd-pipeline");
-    let stage = dir.join("cbox.usda");
-    let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/usd/cbox-diffuse.usda");
-    std::fs::copy(&source, &stage).expect("copy the stage");
-
-    // First run: nothing recorded, so it bakes and records the cache next to the stage.
-    let first = pipeline(&python, &stage);
-    assert_eq!(first["baked"], true, "{first}");
-    assert_eq!(first["reason"], "no record");
-    let cache = PathBuf::from(first["cache"].as_str().expect("cache path"));
-    assert_eq!(cache, dir.join("cbox.wpc"));
-    let hash = first["hash"].as_str().expect("hash").to_string();
-    assert_eq!(hash_of(&cache), hash, "the recorded hash is the cache's");
-    let text = std::fs::read_to_string(&stage).expect("the stage");
-    assert!(
-        text.contains("customLayerData") && text.contains(&hash) && text.contains("cbox.wpc"),
-        "the record is in the root layer:\n{text}"
-    );
-
-    // Second run: the stage and settings are unchanged, so the cache is re-used untouched.
-    let modified = std::fs::metadata(&cache)
-        .and_then(|m| m.modified())
-        .expect("mtime");
-    let second = pipeline(&python, &stage);
-    assert_eq!(second["baked"], false, "{second}");
-    assert_eq!(second["hash"], hash.as_str());
-    assert_eq!(
-        std::fs::metadata(&cache).and_then(|m| m.modified()).ok(),
-        Some(modified)
-    );
-
-    // A changed material: baked again, under a new hash.
-    let text = std::fs::read_to_string(&stage).expect("the stage");
-    let changed = text.replacen("0.885809", "0.5", 1);
-    assert_ne!(
-        changed, text,
-        "the fixture has the colour this test changes"
-    );
-    std::fs::write(&stage, changed).expect("write the stage");
-    let third = pipeline(&python, &stage);
-    assert_eq!(third["baked"], true, "{third}");
-    assert_eq!(third["reason"], "the stage or the settings changed");
-    assert_ne!(third["hash"], hash.as_str());
-    assert_eq!(hash_of(&cache), third["hash"].as_str().expect("hash"));
-
-    // The recorded cache deleted: baked again, under the same hash.
-    std::fs::remove_file(&cache).expect("remove the cache");
-    let fourth = pipeline(&python, &stage);
-    assert_eq!(fourth["baked"], true, "{fourth}");
-    assert_eq!(fourth["reason"], "the recorded cache is missing or stale");
-    assert_eq!(fourth["hash"], third["hash"]);
     let _ = std::fs::remove_dir_all(dir);
 }

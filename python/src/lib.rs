@@ -397,5 +397,6 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(render, m)?)?;
     m.add("Error", m.py().get_type::<Error>())?;
     m.add("Cancelled", m.py().get_type::<Cancelled>())?;
+    m.add("__version__", wpbgi::VERSION)?;
     Ok(())
 }

@@ -26,9 +26,9 @@ Ctrl-C) cancels the work, which raises ``wpbgi.Cancelled`` (or what the callback
 import numpy
 
 from . import _native
-from ._native import Cache, Cancelled, Error, Scene, bake, bake_hash
+from ._native import Cache, Cancelled, Error, Scene, __version__, bake, bake_hash
 
-__all__ = ["Scene", "Cache", "bake", "bake_hash", "render", "Error", "Cancelled"]
+__all__ = ["Scene", "Cache", "bake", "bake_hash", "render", "Error", "Cancelled", "__version__"]
 
 
 def render(scene, cache, width=None, height=None, camera=None, *, threads=0, progress=None, **settings):

@@ -33,7 +33,7 @@ pub struct Baked {
     /// Radiant intensity I(ω) of every node (RGB).
     pub coded: CodedTree<Rgb>,
     /// Projected area P(ω) of every node, on an 8 × 8 map: a node seen from afar subtends
-    /// P/d² and has radiance I/P (DESIGN.md §5.5).
+    /// P/d² and has radiance I/P (docs/design.md §5.5).
     pub projected: CodedTree<f32>,
     /// Seconds per stage, in order.
     pub timings: Vec<(&'static str, f64)>,

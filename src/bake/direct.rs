@@ -1,4 +1,4 @@
-//! Direct light at surfels by ray tracing (DESIGN.md §5.2, spec §5.1).
+//! Direct light at surfels by ray tracing (docs/design.md §5.2, docs/method.md §5.1).
 //!
 //! Each surfel draws `samples` emitter samples, chosen by power and placed on the emitter by a
 //! scrambled (0, 2)-sequence (see [`crate::sampler::sobol02`]), uniformly over the solid angle
@@ -55,7 +55,7 @@ pub struct DirectLight<'a> {
 /// module docs).
 pub const NEAR_SPECULAR_ALPHA: f32 = 0.01;
 
-/// Lightcuts' relative error target (DESIGN.md §5.2).
+/// Lightcuts' relative error target (docs/design.md §5.2).
 pub const LIGHTCUT_ERROR: f32 = 0.02;
 
 /// One unoccluded emitter sample as seen from a surfel.

@@ -1,5 +1,5 @@
 //! Many point and spot lights through a light tree and Lightcuts (Walter et al., SIGGRAPH 2005;
-//! DESIGN.md §5.2).
+//! docs/design.md §5.2).
 //!
 //! The tree is built top-down by median split on the longest axis of the light positions. Each
 //! cluster keeps its bounding box, its total intensity and a representative light, chosen

@@ -1,4 +1,4 @@
-//! The bake (DESIGN.md §5): surfels, their direct light, the surfel tree and its wavelet coding.
+//! The bake (docs/design.md §5): surfels, their direct light, the surfel tree and its wavelet coding.
 
 pub mod baked;
 pub mod bounce;

@@ -1,4 +1,4 @@
-//! The bake, stage by stage (DESIGN.md §5): plan, surfels, direct light, tree, coding.
+//! The bake, stage by stage (docs/design.md §5): plan, surfels, direct light, tree, coding.
 //!
 //! Per surfel, the direct-lit outgoing radiance is kept compactly: RGB for diffuse surfels, a
 //! thresholded wavelet map (at the resolution its BSDF needs) for the others. The tree is then

@@ -1,4 +1,4 @@
-//! The bake plan (DESIGN.md §5.4): before any work, decide what the scene needs and say what
+//! The bake plan (docs/design.md §5.4): before any work, decide what the scene needs and say what
 //! is left out. The plan is printed, stored in the cache, and drives the bake.
 
 use crate::bsdf::Bsdf;

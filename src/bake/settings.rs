@@ -8,11 +8,14 @@ use crate::validate::{in_range, require};
 /// Quality presets: surfels and emitter samples per surfel.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Quality {
+    /// The fastest: for blocking and checking a scene.
     Draft,
     /// The default: `wpbgi bake`, the plugin and Python bake at it unless told otherwise.
     #[default]
     Preview,
+    /// For final frames.
     Final,
+    /// For stills and references.
     Ultra,
 }
 
@@ -79,6 +82,7 @@ pub struct BakeSettings {
     /// thesis's 20 of about 23 levels. A level at or past the tree's depth means the level
     /// above its deepest leaves (the tree's depth is known only once it is built).
     pub split_level: Option<u32>,
+    /// Seed of every random stream: one bake per seed, byte for byte.
     pub seed: u64,
     /// Largest lightcut (clusters) when a light tree is used, at least 1.
     pub max_cut: usize,

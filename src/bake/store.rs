@@ -163,7 +163,7 @@ impl Sections {
         let plan = json!({
             "format": "wpbgi bake",
             "bake_format": BAKE_FORMAT,
-            "crate_version": env!("CARGO_PKG_VERSION"),
+            "crate_version": crate::VERSION,
             "settings": baked.settings.to_json(),
             "split_level": baked.coded.split_level,
             "plan": baked.plan.json,

@@ -3,7 +3,7 @@
 //! Mitsuba 3's `MicrofacetDistribution`, formula for formula, in single precision: Walter et al.
 //! 2007 for the distributions, Heitz & d'Eon 2014 for visible normals, Jakob 2014's numerical
 //! inversion for Beckmann and Heitz 2018's construction for GGX. Matching Mitsuba to the last
-//! digit matters because users compare our images with Mitsuba's (DESIGN.md §4).
+//! digit matters because users compare our images with Mitsuba's (docs/design.md §4).
 //!
 //! One inherited inexactness, kept on purpose: Beckmann's Smith G1 is Walter et al.'s rational
 //! approximation (< 0.35 % error), and [`Microfacet::pdf`] uses it, while [`Microfacet::sample`]

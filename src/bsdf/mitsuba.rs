@@ -3,7 +3,7 @@
 //!
 //! Defaults follow what Mitsuba 3.9.1 itself reports (`mi.load_dict` + `mi.traverse`), which for
 //! `roughconductor.material` is `none` (a perfect mirror) and not `Cu` as older Mitsuba versions
-//! and DESIGN.md §4 say: the point of the explicit description is to agree with Mitsuba.
+//! and docs/design.md §4 say: the point of the explicit description is to agree with Mitsuba.
 
 use super::ior::{conductor_ior, dielectric_ior};
 use super::{Bsdf, Diffuse, Distribution, Microfacet, RoughConductor, RoughDielectric};
@@ -95,7 +95,7 @@ pub fn parse_bsdf(v: &Value) -> Result<Bsdf, String> {
             let distr = microfacet(obj)?;
             let int_ior = ior(obj, "int_ior", "bk7")?;
             // Equal indices are allowed: the interface is invisible, and the scene leaves such
-            // clear glass out (`Scene::drop_invisible_meshes`, DESIGN.md §10).
+            // clear glass out (`Scene::drop_invisible_meshes`, docs/design.md §10).
             let ext_ior = ior(obj, "ext_ior", "air")?;
             Ok(Bsdf::Dielectric(RoughDielectric {
                 distr,
@@ -252,7 +252,7 @@ mod tests {
     }
 
     /// Equal indices parse (an index-matched interface, η = 1); the scene leaves such glass
-    /// out (DESIGN.md §10), it is not an error.
+    /// out (docs/design.md §10), it is not an error.
     #[test]
     fn index_matched_dielectric_parses() {
         let b = parse_bsdf(&json!({"type": "roughdielectric", "int_ior": 1.0, "ext_ior": 1.0}));

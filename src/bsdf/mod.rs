@@ -1,4 +1,4 @@
-//! Mitsuba 3's `diffuse`, `roughconductor` and `roughdielectric`, value for value (DESIGN.md §4).
+//! Mitsuba 3's `diffuse`, `roughconductor` and `roughdielectric`, value for value (docs/design.md §4).
 //!
 //! # Convention
 //!

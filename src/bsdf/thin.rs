@@ -1,5 +1,5 @@
 //! A thin-walled rough dielectric: glTF's `KHR_materials_transmission` without a volume (the
-//! glTF spec's thin-walled case, DESIGN.md §4), such as a window pane or a leaf modelled as one
+//! glTF spec's thin-walled case, docs/design.md §4), such as a window pane or a leaf modelled as one
 //! surface.
 //!
 //! Mitsuba's `thindielectric` is smooth only, so this extends it to rough interfaces in the way

@@ -1,4 +1,4 @@
-//! The `.wpc` cache file (DESIGN.md §6): a validated container of named sections.
+//! The `.wpc` cache file (docs/design.md §6): a validated container of named sections.
 //!
 //! Layout, all integers little-endian:
 //!

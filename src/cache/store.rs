@@ -1,4 +1,4 @@
-//! A bake in a `.wpc` cache (DESIGN.md §6): which sections hold what, and the records' layout.
+//! A bake in a `.wpc` cache (docs/design.md §6): which sections hold what, and the records' layout.
 //!
 //! Sections, coarse to fine: `plan` (JSON: format, crate version, settings, plan, statistics),
 //! `nodes` (the tree, breadth-first), `map_index` and `maps` (the coded tree's and the surfels'
@@ -111,21 +111,27 @@ pub fn bake_hash(scene: &Scene, settings: &Value) -> [u8; 16] {
         lights.as_bytes(),
         &environment,
         settings.to_string().as_bytes(),
-        env!("CARGO_PKG_VERSION").as_bytes(),
+        crate::VERSION.as_bytes(),
     ])
 }
 
 /// A cache's records, read back and checked (the bake's `bake::store` writes them).
 pub struct BakedCache {
+    /// The file's sections, checked.
     pub cache: Cache,
+    /// The bake's plan and statistics, as the cache records them (`wpbgi inspect` prints it).
     pub plan: Value,
+    /// The surfels.
     pub surfels: Vec<SurfelRecord>,
+    /// The tree's nodes, breadth-first from the root.
     pub nodes: Vec<NodeRecord>,
     /// Surfel indices in leaf order: node `j`'s surfels are `order[first .. first + count]`.
     pub order: Vec<u32>,
 }
 
 impl BakedCache {
+    /// Read and check the cache at `path` (memory-mapped); with `expected_hash`, refuse it
+    /// as stale unless it was baked with that hash.
     pub fn read(path: &Path, expected_hash: Option<[u8; 16]>) -> Result<BakedCache, CacheError> {
         Self::from_cache(Cache::read(path, expected_hash)?)
     }

@@ -1,4 +1,4 @@
-//! Error against run time (DESIGN.md §9): the cache's bake and final render at several quality
+//! Error against run time (docs/design.md §9): the cache's bake and final render at several quality
 //! presets, one point each, against the path tracer's whole curve (one progressive render, its
 //! image at 1, 2, 4, … samples per pixel, up to the longest cache run's time) and the same
 //! curve denoised by Intel Open Image Denoise with the guides a user would give it (the
@@ -311,7 +311,7 @@ impl Report {
             "width": self.width,
             "height": self.height,
             "threads": self.threads,
-            "wpbgi_version": env!("CARGO_PKG_VERSION"),
+            "wpbgi_version": crate::VERSION,
             "reference": {
                 "path": self.reference.path.as_ref().map(|p| p.display().to_string()),
                 "spp": self.reference.spp,

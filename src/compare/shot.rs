@@ -320,7 +320,7 @@ impl ShotReport {
             "width": self.width,
             "height": self.height,
             "threads": self.threads,
-            "wpbgi_version": env!("CARGO_PKG_VERSION"),
+            "wpbgi_version": crate::VERSION,
             "shot": {
                 "frames": self.frames,
                 "orbit_degrees": self.orbit_degrees,

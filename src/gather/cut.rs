@@ -1,4 +1,4 @@
-//! A receiver's cut of the sender tree, splatted into its microbuffer (spec §2.3, §7.3).
+//! A receiver's cut of the sender tree, splatted into its microbuffer (docs/method.md §2.3, §7.3).
 //!
 //! From the given start nodes (the root for plain PBGI, the near nodes of a cluster cut for
 //! FPBGI), a node joins the cut when the solid angle it covers, P(ω)/d², is no larger than the
@@ -7,7 +7,7 @@
 //! visited. Nodes whose bounding sphere lies below a hemispherical receiver's horizon are
 //! culled.
 //!
-//! Near leaves (spec §2.3 step 3): a leaf wider than its pixel, or within [`NEAR_RADII`] disc
+//! Near leaves (docs/method.md §2.3 step 3): a leaf wider than its pixel, or within [`NEAR_RADII`] disc
 //! radii (where P/d² no longer holds), is split into m × m equal-area pieces of its disc, each
 //! no wider than a pixel, splatted with its own direction, distance and cosine; pieces below
 //! a hemispherical receiver's horizon are dropped, which clips the disc exactly there. The

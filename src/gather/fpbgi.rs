@@ -1,15 +1,15 @@
-//! Factorized PBGI (spec §3): receivers of one image tile are clustered, each cluster shares
+//! Factorized PBGI (docs/method.md §3): receivers of one image tile are clustered, each cluster shares
 //! one cut of the far nodes and one microbuffer of them, and each receiver refines only the
 //! near nodes into its own buffer.
 //!
-//! - Clustering (spec §3.2): k-means over positions and normals with the metric
+//! - Clustering (docs/method.md §3.2): k-means over positions and normals with the metric
 //!   D(x, c) = ‖p_c − p_x‖² + α‖n_c − n_x‖², α = the diagonal of the bounding box of the tile's
-//!   receivers. The spec leaves the start and the iteration count open: the k starting centres
+//!   receivers. The thesis leaves the start and the iteration count open: the k starting centres
 //!   are receivers evenly spaced in image order (deterministic, spread over the tile) and the
 //!   iterations stop when no receiver changes cluster, or after [`KMEANS_ITERATIONS`].
 //! - The active receiver is the one nearest its cluster's final centre; the cluster radius r
-//!   is its largest distance to a member (spec §13 item 4).
-//! - Cluster cut (spec §3.3, with the far/near rule read as §13 item 1 recommends): a node with
+//!   is its largest distance to a member (docs/method.md §13 item 4).
+//! - Cluster cut (docs/method.md §3.3, with the far/near rule read as §13 item 1 recommends): a node with
 //!   r/d > ε is near and stops the cluster's traversal (0.3 ε for nodes made mostly of glossy
 //!   surfels, whose radiance changes fast with the direction: with ε for all, FPBGI differed
 //!   from PBGI by relMSE 1.6e-4 on cbox-glossy, in the glow the gold box reflects; with 0.3 ε,
@@ -18,7 +18,7 @@
 //!   and not culled by any horizon, so it serves members whose normals differ from the active receiver's.
 //! - Each member traverses from the near nodes into its own buffer; the two are composited by
 //!   depth per pixel, the cluster buffer looked up along each member pixel's direction
-//!   (spec §3.4 step 3).
+//!   (docs/method.md §3.4 step 3).
 
 use super::cut::{fits_pixel, splat_cut, CutStats};
 use super::microbuffer::Microbuffer;
@@ -198,7 +198,7 @@ pub struct ClusterReceivers {
 }
 
 /// The cluster cut for `receivers`, with far threshold `far_eps`, into an `n × n` spherical
-/// buffer (spec §3.3).
+/// buffer (docs/method.md §3.3).
 pub fn cluster_cut(
     senders: &Senders,
     receivers: &ClusterReceivers,

@@ -1,11 +1,11 @@
-//! The microbuffer: a receiver's small RGBZ image of its incoming light (spec §2.3, §7).
+//! The microbuffer: a receiver's small RGBZ image of its incoming light (docs/method.md §2.3, §7).
 //!
 //! The pixels tile the hemisphere around the receiver's normal with the equal-area concentric
-//! map (DESIGN.md §5.3), so a pixel's solid angle is 2π times its area in the map's unit square
+//! map (docs/design.md §5.3), so a pixel's solid angle is 2π times its area in the map's unit square
 //! and every pixel is valid (the thesis's Nusselt map has neither property). A spherical
 //! microbuffer, for receivers that transmit, adds a second grid for the lower hemisphere.
 //!
-//! The buffer is adaptive (spec §7.2): it starts as a uniform n × n grid per hemisphere, and any
+//! The buffer is adaptive (docs/method.md §7.2): it starts as a uniform n × n grid per hemisphere, and any
 //! pixel can be split 2 × 2, recursively, where the receiver's BSDF needs finer directions
 //! ([`Microbuffer::refine_for_bsdf`]). A uniform buffer is the case with no split.
 //!
@@ -469,7 +469,7 @@ impl Microbuffer {
         self.cells[cell_index as usize].children = first;
     }
 
-    /// BSDF importance (spec §7.1–§7.2, F_ρ): split every pixel whose share of the receiver's
+    /// BSDF importance (docs/method.md §7.1–§7.2, F_ρ): split every pixel whose share of the receiver's
     /// reflected light, w = max f·|cos| over the pixel × its solid angle, exceeds `share` of
     /// the total over the base pixels, down to `max_level` splits. The maximum is taken over a
     /// 3 × 3 grid of directions in the pixel and the lobe centres that fall in it, so that a

@@ -1,4 +1,4 @@
-//! The final gather from the cache (DESIGN.md §7, spec §2.3, §3, §7).
+//! The final gather from the cache (docs/design.md §7, docs/method.md §2.3, §3, §7).
 
 pub mod cut;
 pub mod fpbgi;

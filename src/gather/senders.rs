@@ -1,10 +1,10 @@
 //! The cache as a gather sees it: the surfel tree with, for every node, the radiance it sends
-//! towards a receiver and the solid angle it covers there (spec §2.3, §6.5; DESIGN.md §5.5).
+//! towards a receiver and the solid angle it covers there (docs/method.md §2.3, §6.5; docs/design.md §5.5).
 //!
 //! A node seen from afar along ω (from the node towards the receiver) has radiant intensity
 //! I(ω) and projected area P(ω), so it covers P(ω)/d² and has radiance I(ω)/P(ω). Nodes below
 //! the split level store only details; their G is rebuilt once here, top-down
-//! (G(child) = G(parent)/2 ± H(parent), spec §6.5), so that a lookup is one sparse evaluation.
+//! (G(child) = G(parent)/2 ± H(parent), docs/method.md §6.5), so that a lookup is one sparse evaluation.
 //! A leaf is its surfel: its radiance and its exact projected area A|n·ω|.
 //!
 //! The final render lights emitters directly, so the gather must see only reflected light:

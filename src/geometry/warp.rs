@@ -62,7 +62,7 @@ fn atan_unit(t: f32) -> f32 {
 
 /// The equal-area map from the unit square to the hemisphere around +z: the concentric disk,
 /// then Lambert's azimuthal equal-area projection (z = 1 − r², (x, y) scaled by √(2 − r²)).
-/// Every cell of an n × n grid subtends 2π/n² steradians (DESIGN.md §5.3).
+/// Every cell of an n × n grid subtends 2π/n² steradians (docs/design.md §5.3).
 #[inline]
 pub fn square_to_hemisphere_equal_area(u: Vec2) -> Vec3 {
     let p = square_to_uniform_disk_concentric(u);

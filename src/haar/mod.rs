@@ -1,4 +1,4 @@
-//! Directional functions on the sphere as Haar wavelets (DESIGN.md §5.3, spec §4–§5): the
+//! Directional functions on the sphere as Haar wavelets (docs/design.md §5.3, docs/method.md §4–§5): the
 //! equal-area octahedral map from directions to the unit square, and the orthonormal
 //! non-standard 2D Haar transform over it.
 

@@ -1,4 +1,4 @@
-//! Sparse Haar coefficient trees with O(log N) point evaluation (spec §5.2).
+//! Sparse Haar coefficient trees with O(log N) point evaluation (docs/method.md §5.2).
 //!
 //! A [`SparseHaar`] keeps the scaling coefficient and a quadtree of detail triples: a node holds
 //! the three details of one cell and the indices of its four children (the quadrants one level

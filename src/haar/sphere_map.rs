@@ -1,5 +1,5 @@
 //! The equal-area octahedral map between the unit sphere and the unit square (Clarberg, "Fast
-//! Equal-Area Mapping of the (Hemi)Sphere using SIMD", JGT 2008), DESIGN.md §5.3.
+//! Equal-Area Mapping of the (Hemi)Sphere using SIMD", JGT 2008), docs/design.md §5.3.
 //!
 //! The upper hemisphere fills the inner diamond |u| + |v| ≤ 1 of [−1, 1]², the lower one the four
 //! corner triangles, folded across the diamond's edges. The Jacobian is constant, so every texel

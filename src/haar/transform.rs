@@ -1,4 +1,4 @@
-//! The orthonormal non-standard 2D Haar transform of an N × N image, N = 2^J (spec §4.2).
+//! The orthonormal non-standard 2D Haar transform of an N × N image, N = 2^J (docs/method.md §4.2).
 //!
 //! Texel values are read as a piecewise-constant function f on the unit square. Its coefficients
 //! are the inner products with the orthonormal basis: one scaling coefficient `⟨f, 1⟩` and, for

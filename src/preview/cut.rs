@@ -1,10 +1,10 @@
-//! The view-dependent cut (DESIGN.md §8): instead of the thesis's one tree level (spec §9),
+//! The view-dependent cut (docs/design.md §8): instead of the thesis's one tree level (docs/method.md §9),
 //! every frame takes the coarsest nodes whose bounding spheres cover at most a given number of
 //! pixels on screen, so that zooming in does not alias and far nodes cost little; the nodes
 //! wholly outside the view are left out. Each cut node becomes one [`Splat`].
 //!
 //! A node's radiance towards the eye is evaluated here, on the CPU, from its wavelets along
-//! the direction from its centre to the eye (spec §9's cheaper option), with the same
+//! the direction from its centre to the eye (docs/method.md §9's cheaper option), with the same
 //! [`Senders::seen`] the final render's gather uses. The cut is built on the CPU anyway, and
 //! this keeps the coefficient trees off the GPU: a splat carries three floats of radiance.
 

@@ -1,4 +1,4 @@
-//! The Vulkan device of the previewer (DESIGN.md §3, §8).
+//! The Vulkan device of the previewer (docs/design.md §3, §8).
 //!
 //! - The instance asks for Vulkan 1.1 and, where the loader has it, `VK_EXT_debug_utils`, so
 //!   that every GPU resource can carry a name ([`Gpu::name`]).

@@ -1,4 +1,4 @@
-//! The Vulkan previewer (DESIGN.md §8, spec §9): the cache splatted with ash, headless and in
+//! The Vulkan previewer (docs/design.md §8, docs/method.md §9): the cache splatted with ash, headless and in
 //! a window.
 //!
 //! - [`device`]: the Vulkan device (lavapipe where there is no GPU).

@@ -1,4 +1,4 @@
-//! The previewer's frame (DESIGN.md §8, spec §9), three render passes:
+//! The previewer's frame (docs/design.md §8, docs/method.md §9), three render passes:
 //!
 //! 1. **G-buffer**: the scene's meshes into position, geometric normal and emitted radiance
 //!    (float images), depth tested.

@@ -1,4 +1,4 @@
-//! A window's surface and swapchain (DESIGN.md §8's windowed mode): images the frame is
+//! A window's surface and swapchain (docs/design.md §8's windowed mode): images the frame is
 //! blitted into, acquired and presented in turn.
 
 use super::device::{check, Gpu, VulkanError};

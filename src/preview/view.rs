@@ -1,5 +1,5 @@
 //! The camera as the previewer's shaders see it: the per-frame uniforms (`frame.glsl`) and the
-//! frustum that culls the cut (DESIGN.md §8).
+//! frustum that culls the cut (docs/design.md §8).
 //!
 //! Clip space is Vulkan's: x right, y down, with depth reversed (1 at the near plane, 0 at the
 //! far one), which float depth resolves evenly over the range: with the usual mapping, a
@@ -25,7 +25,7 @@ pub struct FrameUniforms {
 }
 
 /// The splat weight's threshold: Gautron et al.'s w > 1, i.e. ‖p − p_k‖ < R where normals
-/// agree (spec §9). The shader subtracts it, so that a splat's weight falls to zero at its rim
+/// agree (docs/method.md §9). The shader subtracts it, so that a splat's weight falls to zero at its rim
 /// and pixels do not pop where a footprint ends.
 pub const W_MIN: f32 = 1.0;
 

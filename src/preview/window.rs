@@ -1,4 +1,4 @@
-//! The windowed preview (DESIGN.md §8): winit 0.30 and ash-window, an orbit camera, and the
+//! The windowed preview (docs/design.md §8): winit 0.30 and ash-window, an orbit camera, and the
 //! cut refined while the camera rests.
 //!
 //! - Left drag orbits the camera around its target, right or middle drag pans, the wheel

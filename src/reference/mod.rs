@@ -1,5 +1,5 @@
 //! The reference path tracer: the ground truth every faster method in the crate is measured
-//! against (DESIGN.md §9).
+//! against (docs/design.md §9).
 //!
 //! Unidirectional path tracing with next-event estimation and multiple importance sampling
 //! (power heuristic), Russian roulette, and Mitsuba's `path` integrator semantics, so that our
@@ -29,7 +29,7 @@ use crate::sampler::Sampler;
 use crate::scene::{Camera, Scene};
 use crate::spectrum::Rgb;
 use crate::trace::{intersect, Tracer};
-use crate::validate::{in_range, require};
+use crate::validate::{in_range, require, require_max_depth};
 use glam::{DVec3, Vec2};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -59,13 +59,7 @@ impl RenderSettings {
     pub fn validate(&self) -> Result<()> {
         const S: &str = "RenderSettings";
         require(self.spp >= 1, S, "spp", self.spp, "at least 1")?;
-        require(
-            self.max_depth == -1 || self.max_depth >= 1,
-            S,
-            "max_depth",
-            self.max_depth,
-            "-1 (unlimited) or at least 1",
-        )?;
+        require_max_depth(S, self.max_depth)?;
         if let Transport::CacheOneBounce { smooth_below, .. } = self.transport {
             require(
                 in_range(smooth_below, 0.0, 1.0, true),

@@ -1,4 +1,4 @@
-//! The final render from a cache (DESIGN.md §7, spec §2.3, §3, §7).
+//! The final render from a cache (docs/design.md §7, docs/method.md §2.3, §3, §7).
 //!
 //! 1. Centre rays find the primary hits; pixels on an edge (another mesh, a normal turning by
 //!    more than 25°, or a depth step of 5 %) or on a mirror or clear glass get 64
@@ -9,7 +9,7 @@
 //! 3. The gather, per 32 × 32 tile: receivers get their indirect light from the cache through
 //!    a microbuffer ([`crate::gather`]), one by one (`pbgi`) or by clusters (`fpbgi`, the
 //!    default). Glossy receivers (roughness below `glossy_below`) always gather alone, through
-//!    a buffer refined by their BSDF (spec §7), since a shared uniform cluster buffer would
+//!    a buffer refined by their BSDF (docs/method.md §7), since a shared uniform cluster buffer would
 //!    blur their lobe. Or (`paths`) each receiver traces rays drawn from its BSDF and takes
 //!    the cache's light where they hit ([`paths`]): noisy, no buffers.
 //!
@@ -31,7 +31,7 @@ use crate::sampler::{sobol02, Sampler};
 use crate::scene::{Camera, Scene};
 use crate::spectrum::Rgb;
 use crate::trace::{intersect, Tracer};
-use crate::validate::{in_range, require};
+use crate::validate::{in_range, require, require_max_depth};
 use glam::{Vec2, Vec3};
 use primary::{trace_primary, CameraSample, LightShare, PrimarySample, PrimarySettings, Receiver};
 use rayon::prelude::*;
@@ -42,9 +42,9 @@ use std::time::Instant;
 /// How receivers gather.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum GatherMode {
-    /// One cut and one microbuffer per receiver (spec §2.3).
+    /// One cut and one microbuffer per receiver (docs/method.md §2.3).
     Pbgi,
-    /// Clustered receivers sharing the far field (spec §3).
+    /// Clustered receivers sharing the far field (docs/method.md §3).
     Fpbgi,
     /// Rays drawn from each receiver's BSDF, ending in the cache ([`paths`]).
     Paths,
@@ -53,10 +53,11 @@ pub enum GatherMode {
 /// Settings of a final render.
 #[derive(Clone, Debug)]
 pub struct FinalSettings {
+    /// How receivers gather (FPBGI by default).
     pub gather: GatherMode,
     /// Base microbuffer pixels per side (per hemisphere).
     pub mb_size: u32,
-    /// Refine glossy receivers' buffers by BSDF importance (spec §7); off: uniform buffers.
+    /// Refine glossy receivers' buffers by BSDF importance (docs/method.md §7); off: uniform buffers.
     pub adaptive: bool,
     /// Receivers smoother than this are glossy: they gather alone, through buffers refined by
     /// their BSDF (rougher lobes are resolved by the uniform buffer: on cbox-rough, α = 0.2
@@ -75,14 +76,16 @@ pub struct FinalSettings {
     pub chain_depth: u32,
     /// Mitsuba's `max_depth` (−1: everything the cache holds).
     pub max_depth: i32,
-    /// FPBGI: clusters per tile and the far threshold r/d (spec §3.7).
+    /// FPBGI: clusters per tile (docs/method.md §3.7).
     pub clusters: usize,
+    /// FPBGI: the far threshold r/d (docs/method.md §3.3).
     pub far_eps: f32,
     /// The path-traced gather's rays per receiver.
     pub spp: u32,
     /// Diffuse receivers gather on a sparse grid and interpolate between ([`sparse`]);
     /// off, every receiver gathers.
     pub sparse: bool,
+    /// Seed of every random stream.
     pub seed: u64,
     /// Render only the pixels x0 ≤ x < x1, y0 ≤ y < y1 of the camera's image (`[x0, y0, x1,
     /// y1]`). Every pixel comes out as in the whole image, bit for bit: the render works in
@@ -137,13 +140,7 @@ impl FinalSettings {
             self.specular_below,
             "a roughness in [0, 1]",
         )?;
-        require(
-            self.max_depth == -1 || self.max_depth >= 1,
-            S,
-            "max_depth",
-            self.max_depth,
-            "-1 (unlimited) or at least 1",
-        )?;
+        require_max_depth(S, self.max_depth)?;
         require(
             self.clusters >= 1,
             S,
@@ -272,6 +269,7 @@ impl GatherStats {
 
 /// The render: the beauty image, its AOVs, and what it cost.
 pub struct FinalOutput {
+    /// The image: emission, direct and indirect light.
     pub beauty: Image,
     /// Emission and direct light.
     pub direct: Image,
@@ -281,7 +279,9 @@ pub struct FinalOutput {
     /// or specular one (and everything seen through mirrors and glass). The two sum to
     /// `indirect` up to rounding.
     pub indirect_diffuse: Image,
+    /// See `indirect_diffuse`.
     pub indirect_glossy: Image,
+    /// The first hit's albedo (for a denoiser).
     pub albedo: Image,
     /// World-space shading normal of the first hit (as RGB = xyz).
     pub normal: Image,
@@ -291,6 +291,7 @@ pub struct FinalOutput {
     pub alpha: Vec<f32>,
     /// Seconds per stage, in order.
     pub timings: Vec<(&'static str, f64)>,
+    /// What the gather did (cuts, splats, clusters).
     pub stats: GatherStats,
     /// Camera samples taken (adaptive anti-aliasing).
     pub samples: u64,

@@ -1,4 +1,4 @@
-//! What the camera sees before the gather (DESIGN.md §7, spec §2.3 step 0): the primary hit,
+//! What the camera sees before the gather (docs/design.md §7, docs/method.md §2.3 step 0): the primary hit,
 //! emission, direct light by ray tracing, and for receivers smoother than the specular cut-off
 //! their reflection / refraction chain, followed by ray tracing to the first rough hit.
 //!

@@ -1,5 +1,5 @@
 //! The environment: radiance arriving from infinitely far away (a USD dome light), as a
-//! latitude-longitude map or one colour (DESIGN.md §4).
+//! latitude-longitude map or one colour (docs/design.md §4).
 //!
 //! Map orientation is OpenEXR's, which UsdLux adopts: in the environment's frame +Y is up,
 //! image x runs from longitude +π (left) to −π (right), image y from latitude +π/2 (top) to

@@ -1,4 +1,4 @@
-//! Materials of the scene IR and their mapping to Mitsuba BSDFs (DESIGN.md §4).
+//! Materials of the scene IR and their mapping to Mitsuba BSDFs (docs/design.md §4).
 //!
 //! An explicit Mitsuba description always wins. Otherwise glTF metallic-roughness (and
 //! UsdPreviewSurface, read into the same parameters) maps as: `alpha = roughness²` with GGX;
@@ -6,7 +6,7 @@
 //! colour; otherwise transmission > 0 → `roughdielectric` (`int_ior` = the glTF IOR, exterior
 //! 1.0, `specular_transmittance` = base colour), or the thin-walled [`ThinDielectric`] when the
 //! material has no `KHR_materials_volume` or a zero thickness (the glTF definition of
-//! thin-walled); otherwise `diffuse(base colour)`. Metal comes first, in DESIGN.md §4's order
+//! thin-walled); otherwise `diffuse(base colour)`. Metal comes first, in docs/design.md §4's order
 //! and as in glTF, where transmission is a lobe of the dielectric part only. Textured factors
 //! are resolved per shading point, so a metallic mask switches the BSDF per texel.
 
@@ -207,7 +207,7 @@ impl Material {
 mod tests {
     use super::*;
 
-    /// Metal wins over transmission (DESIGN.md §4's order; glTF's transmission is a lobe of
+    /// Metal wins over transmission (docs/design.md §4's order; glTF's transmission is a lobe of
     /// the dielectric part only), and transmission over diffuse.
     #[test]
     fn metal_then_transmission_then_diffuse() {

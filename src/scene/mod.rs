@@ -1,5 +1,5 @@
 //! The scene IR: world-space triangle meshes, materials, textures, emitters and cameras. One IR
-//! for every importer (glTF now, USD later), validated on import (DESIGN.md §4).
+//! for every importer (glTF now, USD later), validated on import (docs/design.md §4).
 
 pub mod camera;
 pub mod environment;

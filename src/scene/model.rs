@@ -16,25 +16,34 @@ use std::path::PathBuf;
 #[derive(Clone, Debug, PartialEq)]
 pub struct Warning(pub String);
 
+/// A scene as wpbgi renders it: world-space triangle meshes (Y up, metres), Mitsuba
+/// materials, textures, lights and cameras, whatever file it came from. Load one with
+/// [`Scene::load`].
 #[derive(Clone, Debug, Default)]
 pub struct Scene {
     /// The file the scene came from (named in every error).
     pub path: PathBuf,
+    /// The triangle meshes, in world space.
     pub meshes: Vec<Mesh>,
+    /// The materials the meshes index.
     pub materials: Vec<Material>,
+    /// The textures the materials index.
     pub textures: Vec<Texture>,
+    /// Point, spot and directional lights (area lights are emissive meshes).
     pub lights: Vec<PunctualLight>,
     /// Radiance from far away (a USD dome light).
     pub environment: Option<Environment>,
+    /// The scene's cameras, by name.
     pub cameras: Vec<Camera>,
     /// What a USD stage's render settings ask of the image, when it has them.
     pub render_product: Option<RenderProduct>,
+    /// What the importer noticed and worked around.
     pub warnings: Vec<Warning>,
 }
 
 impl Scene {
     /// Leave out meshes that do not interact with light: clear glass of index 1 (index-matched
-    /// with the air around it: no reflection, no bending), which DESIGN.md §10 requires to
+    /// with the air around it: no reflection, no bending), which docs/design.md §10 requires to
     /// vanish. Kept, they would still stop shadow rays and hold surfels. A warning each.
     /// Meshes whose material's alpha cut-out removes them whole (a constant alpha below the
     /// cutoff) are left out too.

@@ -1,9 +1,9 @@
-//! Hierarchical wavelet coding of the surfel tree (spec §6, DESIGN.md §5.5–§5.6).
+//! Hierarchical wavelet coding of the surfel tree (docs/method.md §6, docs/design.md §5.5–§5.6).
 //!
 //! Every node has a directional function on the octahedral map: for a leaf, its surfel's
 //! radiant intensity I(ω) = A max(0, n·ω) L(ω); for an inner node the sum of its children's,
 //! G(j) = G(left) + G(right), so that a node seen from afar emits exactly what its surfels do
-//! (DESIGN.md replaces the thesis's plain average by this sum). Alongside, the detail
+//! (docs/design.md §5.5 replaces the thesis's plain average by this sum). Alongside, the detail
 //! H(j) = (G(left) − G(right)) / 2 recovers the children: G(left) = G(j)/2 + H(j) and
 //! G(right) = G(j)/2 − H(j).
 //!

@@ -1,6 +1,6 @@
 //! Poisson-disk surfels on every surface by weighted sample elimination (Yuksel, "Sample
-//! Elimination for Generating Poisson Disk Sample Sets", Eurographics 2015), DESIGN.md §5.1 and
-//! spec §2.1.
+//! Elimination for Generating Poisson Disk Sample Sets", Eurographics 2015), docs/design.md §5.1 and
+//! docs/method.md §2.1.
 //!
 //! 1. Draw `CANDIDATES_PER_SURFEL × N` candidates uniformly by area (each from its own counter-
 //!    based random stream, so the set does not depend on the thread count).

@@ -137,7 +137,7 @@ pub fn projected_area_map(s: &Surfel) -> Haar2d<f32> {
     Haar2d::forward(&texels, 1 << PROJECTED_AREA_LEVELS)
 }
 /// Directional resolution (log2 of the octahedral map side) a BSDF needs, from its roughness:
-/// α ≥ 0.5 → 8², ≥ 0.1 → 16², ≥ 0.03 → 32², smaller → 64² (DESIGN.md §5.4). `None` for a
+/// α ≥ 0.5 → 8², ≥ 0.1 → 16², ≥ 0.03 → 32², smaller → 64² (docs/design.md §5.4). `None` for a
 /// diffuse BSDF, whose surfels store RGB only.
 pub fn map_levels(bsdf: &Bsdf) -> Option<u32> {
     let alpha = bsdf.alpha()?;

@@ -1,4 +1,4 @@
-//! The surfel tree: a binary bounding-sphere hierarchy (DESIGN.md §5.5, spec §6.1).
+//! The surfel tree: a binary bounding-sphere hierarchy (docs/design.md §5.5, docs/method.md §6.1).
 //!
 //! Built top-down by median split along the longest axis of the surfel centres' bounds (a
 //! balanced tree, depth ⌈log₂ N⌉, one surfel per leaf), then bottom-up for the bounding spheres

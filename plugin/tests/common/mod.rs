@@ -5,7 +5,7 @@
 
 use std::path::{Path, PathBuf};
 use wpbgi::bake::bounce::BounceSettings;
-use wpbgi::bake::{bake, BakeSettings, Quality};
+use wpbgi::bake::{bake, BakeSettings};
 use wpbgi::render::{render_final, FinalSettings};
 use wpbgi::scene::Scene;
 
@@ -23,21 +23,23 @@ pub fn scratch(name: &str) -> PathBuf {
     dir
 }
 
-/// The small bake every test uses: the draft preset with `points` surfels and `bounces`.
+/// The small bake every test uses: the default preset (`wpbgi_bake_settings_init`'s) with
+/// `points` surfels and `bounces`.
 pub const POINTS: u64 = 3000;
 pub const BOUNCES: i32 = 1;
 pub const SIZE: u32 = 32;
 
-/// The library's settings for the draft preset with these points and bounces.
+/// The library's settings for the default preset with these points and bounces.
 pub fn library_settings(points: u64, bounces: i32) -> BakeSettings {
-    let mut s = BakeSettings::preset(Quality::Draft).direct_only();
-    s.points = points as usize;
-    s.bounces = if bounces < 0 {
-        BounceSettings::auto()
-    } else {
-        BounceSettings::exactly(bounces as u32)
-    };
-    s
+    BakeSettings {
+        points: points as usize,
+        bounces: if bounces < 0 {
+            BounceSettings::auto()
+        } else {
+            BounceSettings::exactly(bounces as u32)
+        },
+        ..BakeSettings::default()
+    }
 }
 
 /// The cache bytes and the image (RGB floats, rows top first) that the Rust API gives for

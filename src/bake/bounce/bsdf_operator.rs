@@ -1,8 +1,8 @@
 //! A BSDF as a sparse 4D Haar operator: the outgoing radiance of a surfel for all directions at
-//! once from the wavelets of its incoming radiance (spec §8.2, refraction §8.6).
+//! once from the wavelets of its incoming radiance (docs/method.md §8.2, refraction §8.6).
 //!
 //! Both the incoming and the outgoing directions are texels of an n × n equal-area grid per
-//! hemisphere of the local frame (the microbuffer's grid, DESIGN.md §5.3): one hemisphere for
+//! hemisphere of the local frame (the microbuffer's grid, docs/design.md §5.3): one hemisphere for
 //! reflecting BSDFs, two (upper, then lower) for `roughdielectric`. With `x[i]` the mean
 //! incoming radiance of texel i and `L[o]` the mean outgoing radiance of texel o,
 //!
@@ -11,14 +11,14 @@
 //! ```
 //!
 //! With W the orthonormal non-standard 2D Haar matrix per hemisphere, C = W x, V = W K Wᵀ and
-//! D = V C = W L, so L = Wᵀ D (spec Eq. 5.2; the four hemisphere blocks of §8.6 are the blocks
+//! D = V C = W L, so L = Wᵀ D (the thesis's Eq. 5.2; the four hemisphere blocks of docs/method.md §8.6 are the blocks
 //! of K). V and C are thresholded; by the triangle and Cauchy–Schwarz inequalities and
 //! Parseval, the error of L in the L2 norm over texels is at most
 //! ‖E_V‖_F ‖C‖ + ‖V_kept‖_F ‖E_C‖ (E the dropped coefficients), which
 //! [`BsdfOperator::error_bound`] states.
 //!
-//! Decisions where the spec is open:
-//! - The cosine is folded into K, not into x (the spec folds it into x). Each column of K (the
+//! Decisions where the thesis is open:
+//! - The cosine is folded into K, not into x (the thesis folds it into x). Each column of K (the
 //!   light arriving through one texel) is scaled, its reflected and its transmitted part
 //!   separately, so that the flux it sends out equals what importance sampling of the BSDF
 //!   from that texel gives (Mitsuba's sampling weights, at most 1 together). Lobes narrower
@@ -606,8 +606,8 @@ impl BsdfOperator {
     }
 
     /// Per texel of a surfel's global sphere map (`2^levels` texels per side), the texel of
-    /// this operator's grid in the surfel's `frame` that feeds it, by nearest texel (spec
-    /// §8.2: "the filter is unspecified"), or [`NO_TEXEL`]. A grid has at most 2 × 32² texels
+    /// this operator's grid in the surfel's `frame` that feeds it, by nearest texel (the
+    /// thesis leaves the filter open, docs/method.md §8.2), or [`NO_TEXEL`]. A grid has at most 2 × 32² texels
     /// ([`operator_side`]), well within `u16`.
     pub fn map_texels(&self, frame: Frame, levels: u32) -> Vec<u16> {
         texel_directions(levels)

@@ -1,11 +1,11 @@
-//! Bounces of indirect light in the cache (spec §8.1, §8.4–§8.5; DESIGN.md §5.7–§5.8).
+//! Bounces of indirect light in the cache (docs/method.md §8.1, §8.4–§8.5; docs/design.md §5.7–§5.8).
 //!
 //! Each bounce gathers, for every surfel, the light the previous bounce left in the tree (the
 //! direct light for the first) through a microbuffer around its normal (spherical for
 //! `roughdielectric`), and turns it into outgoing radiance: diffuse surfels by the cosine
 //! convolution (one RGB value), the others through their BSDF's 4D Haar operator
 //! ([`BsdfOperator`](super::BsdfOperator)), resampled from the local grid onto the surfel's
-//! global sphere map. The result becomes what the next bounce sends (spec §8.5's
+//! global sphere map. The result becomes what the next bounce sends (docs/method.md §8.5's
 //! recommendation: `emit` and `total` kept apart, never re-sending the total), thresholded at
 //! [`SENT_TAU_FACTOR`] times the cache's threshold with its flux kept. What the receivers
 //! gather is linear in the light sent, so it is summed over the bounces (`Incident`) and
@@ -19,7 +19,7 @@
 //! last bounce is added at once (a stiff scene, albedo near 1, would need hundreds of
 //! bounces, and a tail left out darkens the cache by r/(1 − r) times the last bounce).
 //!
-//! Receivers gather per group of the view tree (spec §8.3, [`super::view_tree`]): nearby
+//! Receivers gather per group of the view tree (docs/method.md §8.3, [`super::view_tree`]): nearby
 //! surfels share one cut of the far senders. Every pixel of a bounce's microbuffer whose
 //! centre ray hits the scene is normalised to full coverage ([`Microbuffer::close_gaps`]): the splats' coverage is right on average but not
 //! pixel by pixel, and a bounce that lost a few percent of coverage would pass that loss on
@@ -604,7 +604,7 @@ impl Gather<'_> {
     }
 
     /// The closed microbuffer of every member of `group`, recording links: gathered with the
-    /// group's far senders shared (spec §8.3), and closed.
+    /// group's far senders shared (docs/method.md §8.3), and closed.
     fn buffers(&self, group: &Cluster, scratch: &mut Scratch) -> Vec<(u32, Microbuffer)> {
         let Scratch { stack, buffers, .. } = scratch;
         let surfels = self.surfels;

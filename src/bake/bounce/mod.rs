@@ -1,4 +1,4 @@
-//! Multi-bounce light in the cache (DESIGN.md §5.7–§5.8, spec §8).
+//! Multi-bounce light in the cache (docs/design.md §5.7–§5.8, docs/method.md §8).
 
 pub mod bsdf_operator;
 pub mod iterate;

@@ -1,5 +1,5 @@
 //! The bounces' light transport, computed once and replayed against every bounce's light
-//! (DESIGN.md §12: "transport is computed once").
+//! (docs/design.md §12: "transport is computed once").
 //!
 //! A receiver's gather (tree cut, splats, compositing, the rays that close its gaps) depends on
 //! geometry alone: every pixel of its closed microbuffer is a weighted sum of [`Lookup`]s, the

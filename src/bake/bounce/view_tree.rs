@@ -1,10 +1,10 @@
-//! The view tree (spec §8.3): the surfel tree, read as a tree of receivers, lets nearby surfels
+//! The view tree (docs/method.md §8.3): the surfel tree, read as a tree of receivers, lets nearby surfels
 //! share the part of their gather that looks the same from all of them.
 //!
-//! The spec pairs sender and receiver nodes top-down and keeps, per receiver node, the senders
+//! The thesis pairs sender and receiver nodes top-down and keeps, per receiver node, the senders
 //! it may share, with their microbuffers reused by children of similar normal (§8.3–§8.4). It
 //! leaves the pairing order, the overlap rule and the reuse threshold open (§13 items 17–19).
-//! This version takes the form the final render's FPBGI already proves (spec §3), with the
+//! This version takes the form the final render's FPBGI already proves (docs/method.md §3), with the
 //! surfel tree instead of k-means as the clustering:
 //!
 //! - The receiver groups are the largest nodes of the surfel tree with at most
@@ -15,7 +15,7 @@
 //!   traversal, every member on its glass sphere building its own.
 //! - A group shares one cut of the far senders, those whose view solid angle of the group is
 //!   small (r_V/d ≤ [`VIEW_EPS`], π r_V²/d² ≤ 0.031 sr), splatted into one spherical buffer
-//!   around its active member (the one nearest the node's centre), as the spec's "entry
+//!   around its active member (the one nearest the node's centre), as the thesis's "entry
 //!   list" of the receiver node. The thesis's 0.005 sr (ε = 0.04) shared almost nothing in a
 //!   Cornell box of 20 000 surfels (1.02×, every sender within 1.25 of a group of radius
 //!   0.05 is near); ε = 0.1, the final render's FPBGI threshold, keeps the bounce light

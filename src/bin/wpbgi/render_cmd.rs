@@ -265,7 +265,7 @@ pub fn exr_options(
         display: (camera.width, camera.height),
         origin: (0, 0),
         header: ExrHeader {
-            software: Some(format!("wpbgi {}", env!("CARGO_PKG_VERSION"))),
+            software: Some(format!("wpbgi {}", wpbgi::VERSION)),
             world_to_camera: Some(camera.world_to_camera()),
             world_to_ndc: Some(camera.world_to_ndc()),
             capture_date: Some(exr_capture_date(now)),

@@ -1,4 +1,4 @@
-//! UsdLux lights (DESIGN.md §4): rect, disk and sphere lights become emissive meshes, distant
+//! UsdLux lights (docs/design.md §4): rect, disk and sphere lights become emissive meshes, distant
 //! lights directional lights, a dome light the environment.
 
 use super::stage::{sample, Importer};

@@ -1,5 +1,5 @@
 //! USD import (`.usda`, `.usdc`, `.usdz`) through `openusd` 0.6 into the same scene IR as
-//! glTF (DESIGN.md §3–§4).
+//! glTF (docs/design.md §3–§4).
 //!
 //! - The stage is composed by openusd (sublayers, references, instancing); every active,
 //!   loaded, defined `Mesh` that is visible and not of `proxy` or `guide` purpose becomes a

@@ -1,4 +1,4 @@
-//! Materials (DESIGN.md §4): `UsdPreviewSurface` read into the same parameters as glTF's
+//! Materials (docs/design.md §4): `UsdPreviewSurface` read into the same parameters as glTF's
 //! metallic-roughness, with its `UsdUVTexture` networks, unless explicit `mitsuba:*`
 //! attributes on the material say otherwise.
 //!
@@ -9,7 +9,7 @@
 //!   UsdPreviewSurface specification says), `wrapS`/`wrapT` (`useMetadata` repeats), `scale`
 //!   and `bias`. Its `st` comes from a `UsdPrimvarReader_float2`, optionally through a
 //!   `UsdTransform2d`; the primvar it names is the mesh's texture coordinate set.
-//! - `opacity` < 1 is transmission with `ior` (DESIGN.md §4); with `opacityThreshold` > 0 the
+//! - `opacity` < 1 is transmission with `ior` (docs/design.md §4); with `opacityThreshold` > 0 the
 //!   material is an alpha cut-out: opaque where `opacity` reaches the threshold, a hole
 //!   elsewhere ([`Cutout`]).
 

@@ -1,9 +1,11 @@
 """Bake a USD stage with wpbgi and record the cache on the stage, so that downstream tools find
 it and later runs re-use it while it is still good. Needs Pixar's USD Python modules
-(`pip install usd-core`) and the wpbgi library (see wpbgi.py).
+(`pip install usd-core`) and the wpbgi package (`pip install ./python`).
 
-    python3 plugin/python/usd_pipeline.py STAGE.usda|.usdc [--cache PATH] [--quality draft]
-                                          [--points N] [--bounces N|auto] [--seed S]
+    python3 python/examples/usd_pipeline.py STAGE.usda|.usdc [--cache PATH] [--quality Q]
+                                            [--points N] [--bounces N|auto] [--seed S]
+
+Settings not given are the library's defaults, those of `wpbgi bake`.
 
 The root layer's customLayerData gets a `wpbgi` dictionary:
 
@@ -44,7 +46,7 @@ def recorded(layer):
 
 def record(layer, cache_rel, hash_):
     data = dict(layer.customLayerData)
-    data[KEY] = {"cache": cache_rel, "hash": hash_, "version": wpbgi.version()}
+    data[KEY] = {"cache": cache_rel, "hash": hash_, "version": wpbgi.__version__}
     layer.customLayerData = data
     if not layer.Save():
         raise RuntimeError(f"{layer.identifier}: cannot save the layer")
@@ -55,13 +57,12 @@ def cache_hash(path, scene):
     if not os.path.exists(path):
         return None
     try:
-        with wpbgi.Cache(path, scene) as cache:
-            return cache.hash
+        return wpbgi.Cache(scene, path).hash
     except wpbgi.Error:
         return None
 
 
-def run(stage_path, cache=None, quality="draft", points=0, bounces="auto", seed=0, progress=None):
+def run(stage_path, cache=None, progress=None, **settings):
     """Make sure the stage has a good cache; return what was done (the printed JSON)."""
     if Sdf is None:
         raise RuntimeError("Pixar's USD Python modules are not installed (pip install usd-core)")
@@ -74,18 +75,17 @@ def run(stage_path, cache=None, quality="draft", points=0, bounces="auto", seed=
     rec = recorded(layer)
     cache_rel = cache or rec.get("cache") or os.path.splitext(os.path.basename(stage_path))[0] + ".wpc"
     cache_path = cache_rel if os.path.isabs(cache_rel) else os.path.join(folder, cache_rel)
-    with wpbgi.Scene(stage_path) as scene:
-        want = wpbgi.bake_hash(scene, quality=quality, points=points, bounces=bounces, seed=seed)
-        have = cache_hash(cache_path, scene)
-        if rec.get("hash") == want and have == want:
-            return {"stage": stage_path, "cache": cache_path, "hash": want, "baked": False,
-                    "reason": "the recorded cache is still good"}
-        if rec.get("hash") != want:
-            reason = "no record" if not rec else "the stage or the settings changed"
-        else:
-            reason = "the recorded cache is missing or stale"
-        wpbgi.bake(scene, cache_path, quality=quality, points=points, bounces=bounces, seed=seed,
-                   progress=progress)
+    scene = wpbgi.Scene(stage_path)
+    want = wpbgi.bake_hash(scene, **settings)
+    have = cache_hash(cache_path, scene)
+    if rec.get("hash") == want and have == want:
+        return {"stage": stage_path, "cache": cache_path, "hash": want, "baked": False,
+                "reason": "the recorded cache is still good"}
+    if rec.get("hash") != want:
+        reason = "no record" if not rec else "the stage or the settings changed"
+    else:
+        reason = "the recorded cache is missing or stale"
+    wpbgi.bake(scene, cache_path, progress=progress, **settings)
     record(layer, cache_rel, want)
     return {"stage": stage_path, "cache": cache_path, "hash": want, "baked": True, "reason": reason}
 
@@ -94,18 +94,19 @@ def main(argv):
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("stage")
     p.add_argument("--cache", help="where the cache goes (default: the record's, or STAGE.wpc)")
-    p.add_argument("--quality", default="draft", choices=sorted(wpbgi.QUALITIES))
-    p.add_argument("--points", type=int, default=0, help="surfels (default: the preset's)")
-    p.add_argument("--bounces", default="auto", help="indirect bounces, or auto")
-    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--quality", help="draft, preview, final or ultra (default: wpbgi bake's)")
+    p.add_argument("--points", type=int, help="surfels (default: the preset's)")
+    p.add_argument("--bounces", help="indirect bounces, or auto (default: wpbgi bake's)")
+    p.add_argument("--seed", type=int)
     a = p.parse_args(argv[1:])
-    bounces = a.bounces if a.bounces == "auto" else int(a.bounces)
+    bounces = a.bounces if a.bounces in (None, "auto") else int(a.bounces)
 
     def progress(stage, fraction):
         print(f"\r  {stage:<14} {100 * fraction:3.0f}%", end="", file=sys.stderr)
 
     try:
-        result = run(a.stage, a.cache, a.quality, a.points, bounces, a.seed, progress)
+        result = run(a.stage, a.cache, progress, quality=a.quality, points=a.points,
+                     bounces=bounces, seed=a.seed)
     except (wpbgi.Error, RuntimeError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 1
