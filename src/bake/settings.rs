@@ -98,7 +98,7 @@ pub struct BakeSettings {
 
 impl Default for BakeSettings {
     fn default() -> Self {
-        BakeSettings::preset(Quality::Preview)
+        BakeSettings::preset(Quality::default())
     }
 }
 

@@ -799,8 +799,8 @@ fn convert_camera(node: &g::Node, cam: &g::Camera, world: Mat4) -> Option<Camera
         up,
         forward,
         projection,
-        width: 512,
-        height: 512,
+        width: Camera::DEFAULT_SIZE.0,
+        height: Camera::DEFAULT_SIZE.1,
     })
 }
 

@@ -10,16 +10,34 @@ use wpbgi::bake::bounce::BounceSettings;
 use wpbgi::bake::{bake_cancellable, BakeSettings, Quality};
 use wpbgi::cache::store::{bake_hash, BakedCache};
 
-#[derive(Clone, Copy, Debug, ValueEnum)]
+/// `--quality`: a bake preset, by its name; `--help` gives each one's surfels and light
+/// samples, read from the library's presets.
+#[derive(Clone, Copy, Debug)]
 pub enum QualityArg {
-    /// 20 000 surfels, 64 light samples each.
     Draft,
-    /// 50 000 surfels, 32 light samples (denser surfels need fewer each).
     Preview,
-    /// 500 000 surfels, 256 light samples.
     Final,
-    /// 2 000 000 surfels, 512 light samples.
     Ultra,
+}
+
+impl ValueEnum for QualityArg {
+    fn value_variants<'a>() -> &'a [Self] {
+        &[
+            QualityArg::Draft,
+            QualityArg::Preview,
+            QualityArg::Final,
+            QualityArg::Ultra,
+        ]
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        let q = self.quality();
+        Some(clap::builder::PossibleValue::new(q.name()).help(format!(
+            "{} surfels, {} light samples each",
+            q.points(),
+            q.light_samples()
+        )))
+    }
 }
 
 impl QualityArg {

@@ -531,8 +531,8 @@ impl Importer<'_> {
             up,
             forward,
             projection,
-            width: 512,
-            height: 512,
+            width: Camera::DEFAULT_SIZE.0,
+            height: Camera::DEFAULT_SIZE.1,
         });
         Ok(())
     }
