@@ -36,6 +36,13 @@ fn against_depth_8(name: &str, bounces: BounceSettings, window: [u32; 4]) -> Aga
     let dir = std::env::temp_dir().join(format!("wpbgi-multibounce-{}", std::process::id()));
     std::fs::create_dir_all(&dir).expect("temp dir");
     let cache = common::bake_to_cache(&scene, &settings, &dir.join(format!("{name}.wpc")));
+    // The cache records what the bake did: exactly the bounces asked for, when a number was.
+    if bounces.tolerance == 0.0 {
+        assert_eq!(cache.bounces(), bounces.max, "{name}");
+    }
+    cache
+        .check_scene(&scene)
+        .expect("the cache is this scene's");
     let camera = scene.default_camera(128, 128).expect("camera");
     let out = common::final_render(&scene, &cache, &camera);
     assert!(out.beauty.pixels.iter().all(|p| p.is_finite()));
@@ -56,7 +63,7 @@ fn against_depth_8(name: &str, bounces: BounceSettings, window: [u32; 4]) -> Aga
     let window_ratio = sum(&out.beauty) / sum(&reference);
     eprintln!(
         "{name}: {} bounces, relMSE {rel:.3e}, mean {mean} vs {ref_mean}, window {window_ratio:.3}",
-        cache.plan["plan"]["bounces"]["bounces"]
+        cache.bounces()
     );
     Against8 {
         rel,

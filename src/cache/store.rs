@@ -140,10 +140,34 @@ impl BakedCache {
     /// changed since it was baked.
     pub fn open_fresh(scene: &Scene, path: &Path) -> Result<BakedCache, CacheError> {
         let cache = Self::read(path, None)?;
-        cache
-            .cache
-            .check_fresh(bake_hash(scene, &cache.plan["settings"]))?;
+        cache.check_scene(scene)?;
         Ok(cache)
+    }
+
+    /// Refuse the cache as stale unless it was baked from `scene` as it is now (with the
+    /// settings it records).
+    pub fn check_scene(&self, scene: &Scene) -> Result<(), CacheError> {
+        self.cache.check_fresh(bake_hash(scene, self.settings()))
+    }
+
+    /// The bake settings the cache records, as their canonical JSON (what the hash covers).
+    pub fn settings(&self) -> &Value {
+        &self.plan["settings"]
+    }
+
+    /// The indirect bounces the bake ran (0: a cache of direct light only).
+    pub fn bounces(&self) -> u32 {
+        self.plan["plan"]["bounces"]["bounces"]
+            .as_u64()
+            .map_or(0, |b| u32::try_from(b).unwrap_or(u32::MAX))
+    }
+
+    /// The side, in texels, of the finest directional map the tree holds (none recorded: a
+    /// cache of diffuse surfels only).
+    pub fn map_resolution(&self) -> Option<u32> {
+        self.plan["plan"]["map_resolution"]
+            .as_u64()
+            .and_then(|r| u32::try_from(r).ok())
     }
 
     /// Validate `bytes` as a cache file's contents (`path` only names it in errors).

@@ -218,9 +218,7 @@ impl Senders {
     pub fn from_cache(cache: &BakedCache) -> Result<Senders, CacheError> {
         let path = &cache.cache.path;
         let records = &cache.nodes;
-        let levels = cache.plan["plan"]["map_resolution"]
-            .as_u64()
-            .map_or(3, |r| r.max(1).ilog2());
+        let levels = cache.map_resolution().map_or(3, |r| r.max(1).ilog2());
         let at = |j: u32| &records[j as usize];
         let intensity = rebuild(
             path,

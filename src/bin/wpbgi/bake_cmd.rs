@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 use wpbgi::bake::bounce::BounceSettings;
 use wpbgi::bake::{bake_cancellable, BakeSettings, Quality};
-use wpbgi::cache::store::{bake_hash, BakedCache};
+use wpbgi::cache::store::BakedCache;
 
 /// `--quality`: a bake preset, by its name; `--help` gives each one's surfels and light
 /// samples, read from the library's presets.
@@ -335,8 +335,7 @@ pub fn inspect_command(a: InspectArgs) -> Result<()> {
     if let Some(p) = &a.scene {
         // The settings the cache was baked with are in it: hash the scene with those.
         let scene = crate::load_scene(p)?;
-        c.cache
-            .check_fresh(bake_hash(&scene, &c.plan["settings"]))?;
+        c.check_scene(&scene)?;
     }
     let sections: Vec<Value> = c
         .cache
@@ -351,7 +350,7 @@ pub fn inspect_command(a: InspectArgs) -> Result<()> {
         "content_hash": hash,
         "bytes": c.cache.len(),
         "crate_version": c.plan["crate_version"],
-        "settings": c.plan["settings"],
+        "settings": c.settings(),
         "plan": c.plan["plan"],
         "stats": c.plan["stats"],
         "sections": sections,
@@ -366,7 +365,7 @@ pub fn inspect_command(a: InspectArgs) -> Result<()> {
             c.plan["crate_version"]
         );
         println!("content hash {hash}, {} bytes", c.cache.len());
-        println!("settings: {}", c.plan["settings"]);
+        println!("settings: {}", c.settings());
         println!("plan: {}", c.plan["plan"]);
         println!("stats: {}", c.plan["stats"]);
         println!("sections:");

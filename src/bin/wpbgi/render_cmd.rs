@@ -5,7 +5,7 @@ use anyhow::{bail, Result};
 use clap::{Args, ValueEnum};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
-use wpbgi::cache::store::{bake_hash, BakedCache};
+use wpbgi::cache::store::BakedCache;
 use wpbgi::image::{
     exr_capture_date, read_exr, write_exr_channels, ExrChannels, ExrCompression, ExrHeader,
     ExrOptions, ExrPrecision, Image,
@@ -343,12 +343,8 @@ fn render_frame(
     let scene = crate::load_scene_at(&a.scene, time)?;
     crate::warn(&scene);
     let camera = crate::pick_camera(&scene, &a.camera)?;
-    cache
-        .cache
-        .check_fresh(bake_hash(&scene, &cache.plan["settings"]))?;
-    let bounces = cache.plan["plan"]["bounces"]["bounces"]
-        .as_u64()
-        .unwrap_or(0);
+    cache.check_scene(&scene)?;
+    let bounces = cache.bounces();
     if a.max_depth >= 0 && bounces > 0 {
         eprintln!(
             "warning: the cache holds {bounces} indirect bounces, which --max-depth {} cannot cut: \
