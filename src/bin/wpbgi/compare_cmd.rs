@@ -2,6 +2,17 @@
 //! tracer's curve, raw and denoised; with `--frames`, the same over a shot.
 
 use crate::bake_cmd::QualityArg;
+use std::sync::LazyLock;
+
+/// `--presets`' default, `CompareSettings::default()`'s, as the flag takes it (comma-separated).
+static DEFAULT_PRESETS: LazyLock<String> = LazyLock::new(|| {
+    let names: Vec<&str> = CompareSettings::default()
+        .presets
+        .iter()
+        .map(|q| q.name())
+        .collect();
+    names.join(",")
+});
 use crate::{CameraArgs, StagedBar};
 use anyhow::{anyhow, bail, Result};
 use clap::Args;
@@ -33,7 +44,7 @@ pub struct CompareArgs {
         long,
         value_enum,
         value_delimiter = ',',
-        default_values_t = CompareSettings::default().presets.into_iter().map(QualityArg::of)
+        default_value = DEFAULT_PRESETS.as_str()
     )]
     pub presets: Vec<QualityArg>,
     /// Indirect bounces of each bake, as for `wpbgi bake` (a number, or `auto`).
