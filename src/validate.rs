@@ -39,3 +39,8 @@ pub(crate) fn require_max_depth(settings: &str, max_depth: i32) -> Result<()> {
         "-1 (unlimited) or at least 1",
     )
 }
+
+/// Refuse a count of `field` below 1.
+pub(crate) fn require_positive(settings: &str, field: &str, value: u64) -> Result<()> {
+    require(value >= 1, settings, field, value, "at least 1")
+}

@@ -53,8 +53,9 @@ fn the_demo_bakes_bounces_renders_compares_and_previews() {
             .is_some_and(|n| n > 0),
         "{report}"
     );
-    // The render is the cache's, not a placeholder: it matches the reference's mean within
-    // the error reported.
+    // The render is the cache's, not a placeholder: its mean colour is Mitsuba's within 5 %
+    // (measured 1.4 %). The bound is looser than the measure: a cache that lost or gained a
+    // twentieth of the light would be a defect whatever its per-pixel error.
     let image = wpbgi::image::read_exr(&dir.join("demo.exr")).expect("the render");
     let reference = wpbgi::image::read_exr(Path::new(&dir.join("mitsuba_reference.exr")))
         .expect("the reference");

@@ -247,7 +247,8 @@ fn folder_graph() -> Graph {
         for path in inline_paths(&f.code, &BTreeSet::new()) {
             if let Some(name) = path.strip_prefix("crate::") {
                 let name = name.split("::").next().unwrap_or("");
-                if !name.is_empty() && name != top {
+                // Modules only: `crate::VERSION` names an item of lib.rs, not a folder.
+                if name.starts_with(|c: char| c.is_lowercase()) && name != top {
                     targets.insert(name.to_string());
                 }
             }

@@ -3,7 +3,7 @@
 
 use super::bounce::BounceSettings;
 use crate::error::Result;
-use crate::validate::{in_range, require};
+use crate::validate::{in_range, require, require_positive};
 
 /// Quality presets: surfels and emitter samples per surfel.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -136,13 +136,7 @@ impl BakeSettings {
             self.points,
             "between 1 and 4294967295",
         )?;
-        require(
-            self.light_samples >= 1,
-            S,
-            "light_samples",
-            self.light_samples,
-            "at least 1",
-        )?;
+        require_positive(S, "light_samples", self.light_samples as u64)?;
         require(
             in_range(self.tau, 0.0, 1.0, false),
             S,
@@ -150,7 +144,7 @@ impl BakeSettings {
             self.tau,
             "a number in [0, 1)",
         )?;
-        require(self.max_cut >= 1, S, "max_cut", self.max_cut, "at least 1")?;
+        require_positive(S, "max_cut", self.max_cut as u64)?;
         for (name, w) in &self.surfel_density {
             require(
                 w.is_finite() && *w > 0.0,

@@ -28,7 +28,7 @@ use crate::image::{error_against, srgb8, Image};
 use crate::reference::{render, RenderOutput, RenderSettings};
 use crate::render::{render_final, FinalSettings};
 use crate::scene::{Camera, Scene};
-use crate::validate::require;
+use crate::validate::{require, require_positive};
 use serde_json::{json, Value};
 use std::path::Path;
 use std::time::{Duration, Instant};
@@ -58,13 +58,7 @@ impl CompareSettings {
             "empty",
             "at least one preset",
         )?;
-        require(
-            self.reference_spp >= 1,
-            S,
-            "reference_spp",
-            self.reference_spp,
-            "at least 1",
-        )?;
+        require_positive(S, "reference_spp", self.reference_spp as u64)?;
         self.bounces.validate()?;
         self.final_settings.validate()
     }

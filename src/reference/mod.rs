@@ -29,7 +29,7 @@ use crate::sampler::Sampler;
 use crate::scene::{Camera, Scene};
 use crate::spectrum::Rgb;
 use crate::trace::{intersect, Tracer};
-use crate::validate::{in_range, require, require_max_depth};
+use crate::validate::{in_range, require, require_max_depth, require_positive};
 use glam::{DVec3, Vec2};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -58,7 +58,7 @@ impl RenderSettings {
     /// Refuse a field out of range, in a sentence that names it ([`render`] calls this first).
     pub fn validate(&self) -> Result<()> {
         const S: &str = "RenderSettings";
-        require(self.spp >= 1, S, "spp", self.spp, "at least 1")?;
+        require_positive(S, "spp", self.spp as u64)?;
         require_max_depth(S, self.max_depth)?;
         if let Transport::CacheOneBounce { smooth_below, .. } = self.transport {
             require(

@@ -31,7 +31,7 @@ use crate::sampler::{sobol02, Sampler};
 use crate::scene::{Camera, Scene};
 use crate::spectrum::Rgb;
 use crate::trace::{intersect, Tracer};
-use crate::validate::{in_range, require, require_max_depth};
+use crate::validate::{in_range, require, require_max_depth, require_positive};
 use glam::{Vec2, Vec3};
 use primary::{trace_primary, CameraSample, LightShare, PrimarySample, PrimarySettings, Receiver};
 use rayon::prelude::*;
@@ -126,13 +126,7 @@ impl FinalSettings {
             self.adaptive_levels,
             &format!("at most {MAX_ADAPTIVE_LEVELS}"),
         )?;
-        require(
-            self.light_samples >= 1,
-            S,
-            "light_samples",
-            self.light_samples,
-            "at least 1",
-        )?;
+        require_positive(S, "light_samples", self.light_samples as u64)?;
         require(
             in_range(self.specular_below, 0.0, 1.0, true),
             S,
@@ -141,13 +135,7 @@ impl FinalSettings {
             "a roughness in [0, 1]",
         )?;
         require_max_depth(S, self.max_depth)?;
-        require(
-            self.clusters >= 1,
-            S,
-            "clusters",
-            self.clusters,
-            "at least 1",
-        )?;
+        require_positive(S, "clusters", self.clusters as u64)?;
         require(
             self.far_eps.is_finite() && self.far_eps >= 0.0,
             S,
@@ -155,7 +143,7 @@ impl FinalSettings {
             self.far_eps,
             "a number from 0",
         )?;
-        require(self.spp >= 1, S, "spp", self.spp, "at least 1")
+        require_positive(S, "spp", self.spp as u64)
     }
 }
 
