@@ -341,7 +341,7 @@ fn uniform_gather(scene: &Scene, settings: &BakeSettings, step: usize) -> (Baked
     baked.emitted.fill(Rgb::ZERO);
     let leaf = |i: u32| {
         let s = &baked.surfels[i as usize];
-        intensity_map(s, &baked.radiance[i as usize], true)
+        intensity_map(s.n, s.area, &baked.radiance[i as usize], true)
     };
     baked.coded = wpbgi::surfels::coding::encode(
         &baked.tree,

@@ -203,6 +203,7 @@ fn a_solid_reaches_only_its_own_solid_as_leaves() {
             vec![senders.surfels[node.surfel as usize].mesh]
         } else {
             let mut m: Vec<u32> = node
+                .node
                 .children
                 .iter()
                 .filter(|&&c| (c as usize) < below.len())

@@ -61,16 +61,7 @@ fn records(baked: &Baked, maps: &mut impl MapSink) -> (Vec<NodeRecord>, Vec<Surf
         .zip(&baked.projected.nodes)
     {
         nodes.push(NodeRecord {
-            center: n.center.to_array(),
-            radius: n.radius,
-            axis: n.axis.to_array(),
-            cone_angle: n.cone_angle,
-            area: n.area,
-            level: n.level,
-            parent: n.parent,
-            children: n.children,
-            first: n.first,
-            count: n.count,
+            node: *n,
             g: c.g.as_ref().map_or(NO_MAP, |m| maps.push(m)),
             h: c.h.as_ref().map_or(NO_MAP, |m| maps.push(m)),
             area_g: a.g.as_ref().map_or(NO_MAP, |m| maps.push(m)),

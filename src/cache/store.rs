@@ -8,6 +8,7 @@
 use crate::cache::{self, Cache, CacheError};
 use crate::haar::{Coefficient, SparseHaar};
 use crate::scene::Scene;
+use crate::surfels::tree::Node;
 use bytemuck::{Pod, Zeroable};
 use serde_json::Value;
 use std::path::Path;
@@ -47,20 +48,13 @@ pub use crate::surfels::radiance::{BACK_SIDED, CLOSED, SOLID};
 /// The layout of the bake's sections; caches of another layout are refused (bake again).
 pub const BAKE_FORMAT: u32 = 3;
 
-/// One tree node in the `nodes` section.
+/// One tree node in the `nodes` section: the surfel tree's node as the build made it, and
+/// where its maps are in `map_index`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct NodeRecord {
-    pub center: [f32; 3],
-    pub radius: f32,
-    pub axis: [f32; 3],
-    pub cone_angle: f32,
-    pub area: f32,
-    pub level: u32,
-    pub parent: u32,
-    pub children: [u32; 2],
-    pub first: u32,
-    pub count: u32,
+    /// The node: bounds, normal cone, area and links.
+    pub node: Node,
     /// Indices into `map_index` of the stored G and H of the radiant intensity, or [`NO_MAP`].
     pub g: u32,
     pub h: u32,
@@ -205,13 +199,13 @@ impl BakedCache {
         let maps = (cache.section("map_index")?.len() / 8) as u32;
         let in_range = |i: u32, n: usize| i == u32::MAX || (i as usize) < n;
         for n in &nodes {
-            if !(in_range(n.children[0], nodes.len())
-                && in_range(n.children[1], nodes.len())
+            if !(in_range(n.node.children[0], nodes.len())
+                && in_range(n.node.children[1], nodes.len())
                 && in_range(n.g, maps as usize)
                 && in_range(n.h, maps as usize)
                 && in_range(n.area_g, maps as usize)
                 && in_range(n.area_h, maps as usize)
-                && (n.first as u64 + n.count as u64) <= surfels.len() as u64)
+                && (n.node.first as u64 + n.node.count as u64) <= surfels.len() as u64)
             {
                 return Err(bad("a tree node points outside the file"));
             }

@@ -69,9 +69,9 @@ pub fn splat_cut(
     stack.extend_from_slice(start);
     while let Some(j) = stack.pop() {
         stats.visited += 1;
-        let node = &senders.nodes[j as usize];
-        let v = node.center - p;
-        if !mb.spherical && n.dot(v) < -node.radius {
+        let sender = &senders.nodes[j as usize];
+        let v = sender.node.center - p;
+        if !mb.spherical && n.dot(v) < -sender.node.radius {
             continue;
         }
         let d2 = v.length_squared();
@@ -81,7 +81,7 @@ pub fn splat_cut(
         if back_hidden && senders.faces_away(j, p, 0.0) {
             continue;
         }
-        if node.is_leaf() {
+        if sender.is_leaf() {
             // A surfel centred below a hemispherical receiver's horizon belongs to a surface
             // that passes under it (at a contact or an intersection): the part of its disc
             // that peeks above is an artefact of the disc, not something the receiver sees.
@@ -91,7 +91,7 @@ pub fn splat_cut(
             let dir = v / d;
             // A leaf's projected area is exact and cheap; its radiance is looked up only if it
             // is splatted whole (split leaves look up each piece's).
-            let s = &senders.surfels[node.surfel as usize];
+            let s = &senders.surfels[sender.surfel as usize];
             let omega = s.area * Vec3::from(s.n).dot(dir).abs() / d2;
             let disc = (s.area / std::f32::consts::PI).sqrt();
             let pixel = mb
@@ -104,7 +104,7 @@ pub fn splat_cut(
                 }
             } else {
                 stats.split_leaves += 1;
-                stats.splats += split_leaf(senders, node.surfel, (p, mesh), d, pixel, mb);
+                stats.splats += split_leaf(senders, sender.surfel, (p, mesh), d, pixel, mb);
             }
             continue;
         }
@@ -113,9 +113,9 @@ pub fn splat_cut(
         // would be taken as a back face seen from below and darken the horizon. Its children
         // are visited instead, and a flat node lying in the receiver's plane, facing its way,
         // is that surface itself: it sends nothing towards the receiver and does not occlude.
-        if !mb.spherical && n.dot(v).abs() < node.radius {
-            if !node.holds_plane_of(p, n) {
-                stack.extend(node.children.into_iter().filter(|&c| c != NO_NODE));
+        if !mb.spherical && n.dot(v).abs() < sender.node.radius {
+            if !sender.holds_plane_of(p, n) {
+                stack.extend(sender.node.children.into_iter().filter(|&c| c != NO_NODE));
             }
             continue;
         }
@@ -132,7 +132,7 @@ pub fn splat_cut(
             let seen = senders.seen(j, -dir, mesh, back_hidden);
             stats.splats += u64::from(mb.splat(&senders.sender(j, v, seen), seen.projected / d2));
         } else {
-            for c in node.children {
+            for c in sender.node.children {
                 if c != NO_NODE {
                     stack.push(c);
                 }
@@ -147,7 +147,7 @@ pub fn splat_cut(
 /// away, its bounding sphere is not wider than four pixels, and the solid angle it covers,
 /// P/d², is no larger than the pixel.
 pub(crate) fn fits_pixel(senders: &Senders, j: u32, d2: f32, dir: Vec3, pixel: f32) -> bool {
-    let r = senders.nodes[j as usize].radius;
+    let r = senders.nodes[j as usize].node.radius;
     d2 > 4.0 * r * r
         && std::f32::consts::PI * r * r / d2 <= 4.0 * pixel
         && senders.projected_area(j, -dir) / d2 <= pixel

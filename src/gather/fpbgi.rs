@@ -197,6 +197,91 @@ pub struct ClusterReceivers {
     pub record_links: bool,
 }
 
+impl ClusterReceivers {
+    /// The receivers of `cluster`, whose active member is at `p` on `mesh` with frame `frame`:
+    /// members on one surface (`cluster.cone`) keep a plane unless their buffers are
+    /// `spherical`.
+    pub fn of(
+        cluster: &Cluster,
+        (p, mesh, frame): (Vec3, u32, Frame),
+        spherical: bool,
+        record_links: bool,
+    ) -> ClusterReceivers {
+        ClusterReceivers {
+            p,
+            mesh,
+            frame,
+            radius: cluster.radius,
+            plane_slope: cluster.cone.filter(|_| !spherical).map(f32::sin),
+            record_links,
+        }
+    }
+}
+
+/// How the members of one cluster fill their microbuffers: the one receiver-gather loop of the
+/// final render and of the bake's bounces. Alone ([`ClusterGather::alone`]), a receiver
+/// traverses the whole tree; together ([`ClusterGather::shared`]), members share the
+/// cluster's far cut and each refines only its near nodes ([`member_buffer`]).
+pub struct ClusterGather<'a> {
+    senders: &'a Senders,
+    shared: Option<ClusterCut>,
+}
+
+impl<'a> ClusterGather<'a> {
+    /// Receivers that each traverse the whole tree.
+    pub fn alone(senders: &'a Senders) -> Self {
+        ClusterGather {
+            senders,
+            shared: None,
+        }
+    }
+
+    /// Members of one cluster that share its cut ([`cluster_cut`], far threshold `far_eps`,
+    /// an `n × n` shared buffer).
+    pub fn shared(
+        senders: &'a Senders,
+        receivers: &ClusterReceivers,
+        far_eps: f32,
+        n: u32,
+    ) -> Self {
+        ClusterGather {
+            senders,
+            shared: Some(cluster_cut(senders, receivers, far_eps, n)),
+        }
+    }
+
+    /// What the shared cut cost (nothing for receivers alone).
+    pub fn shared_stats(&self) -> CutStats {
+        self.shared
+            .as_ref()
+            .map_or_else(CutStats::default, |c| c.stats)
+    }
+
+    /// Fill `mb`, reset for the receiver at `p` on `mesh`, with the light it sees, resolved
+    /// (and composited with the shared buffer). `stack` is scratch.
+    pub fn fill(
+        &mut self,
+        p: Vec3,
+        mesh: u32,
+        mb: &mut Microbuffer,
+        stack: &mut Vec<u32>,
+    ) -> CutStats {
+        match &mut self.shared {
+            Some(cut) => member_buffer(self.senders, cut, p, mesh, mb, stack),
+            None => {
+                let root: &[u32] = if self.senders.nodes.is_empty() {
+                    &[]
+                } else {
+                    &[0]
+                };
+                let stats = splat_cut(self.senders, p, mesh, mb, root, stack);
+                mb.resolve();
+                stats
+            }
+        }
+    }
+}
+
 /// The cluster cut for `receivers`, with far threshold `far_eps`, into an `n × n` spherical
 /// buffer (docs/method.md §3.3).
 pub fn cluster_cut(
@@ -225,14 +310,14 @@ pub fn cluster_cut(
     }
     while let Some(j) = stack.pop() {
         stats.visited += 1;
-        let node = &senders.nodes[j as usize];
-        let v = node.center - p;
+        let sender = &senders.nodes[j as usize];
+        let v = sender.node.center - p;
         let d2 = v.length_squared();
         let d = d2.sqrt();
         // Near: the cluster is not small as seen from the node. A node made mostly of
         // directional (glossy) surfels, whose radiance changes fast with the direction it is
         // seen from, must be farther to be shared.
-        let eps = if node.directional > 0.5 {
+        let eps = if sender.directional > 0.5 {
             far_eps * DIRECTIONAL_FAR
         } else {
             far_eps
@@ -246,12 +331,12 @@ pub fn cluster_cut(
         // Members' planes turn at most `slope` from the active's, about points within
         // `radius` of it: a member sees the node's centre that much higher or lower.
         let straddles = plane_slope
-            .is_some_and(|slope| frame.n.dot(v).abs() < node.radius + slope * (d + radius));
+            .is_some_and(|slope| frame.n.dot(v).abs() < sender.node.radius + slope * (d + radius));
         if straddles {
-            if node.is_leaf() {
+            if sender.is_leaf() {
                 near.push(j);
-            } else if !node.holds_plane_of(p, frame.n) {
-                stack.extend(node.children.into_iter().filter(|&c| c != NO_NODE));
+            } else if !sender.holds_plane_of(p, frame.n) {
+                stack.extend(sender.node.children.into_iter().filter(|&c| c != NO_NODE));
             }
             continue;
         }
@@ -262,17 +347,17 @@ pub fn cluster_cut(
         }
         let dir = v / d;
         let pixel = buffer.pixels[buffer.pixel_of(dir).unwrap_or(0)].solid_angle;
-        let small = node.is_leaf() || fits_pixel(senders, j, d2, dir, pixel);
+        let small = sender.is_leaf() || fits_pixel(senders, j, d2, dir, pixel);
         if small {
             let seen = senders.seen(j, -dir, mesh, back_hidden);
             let omega = seen.projected / d2;
-            if node.is_leaf() && omega > pixel {
+            if sender.is_leaf() && omega > pixel {
                 near.push(j);
                 continue;
             }
             stats.splats += u64::from(buffer.splat(&senders.sender(j, v, seen), omega));
         } else {
-            for c in node.children {
+            for c in sender.node.children {
                 if c != NO_NODE {
                     stack.push(c);
                 }

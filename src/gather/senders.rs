@@ -9,9 +9,9 @@
 //!
 //! The final render lights emitters directly, so the gather must see only reflected light:
 //! every node's emitted intensity E(ω) is rebuilt exactly as the bake built it into I, and
-//! subtracted (emitting surfels still occlude). That is why this module, alone of the readers
-//! of a cache, imports the bake: its `intensity_map` (with its surfel and radiance types), so
-//! that E is I's emission bit for bit.
+//! subtracted (emitting surfels still occlude). That is why this module reads the surfels'
+//! `intensity_map` (the one the bake's coding sums up the tree), so that E is I's emission bit
+//! for bit.
 
 use super::lookup::Lookup;
 use super::microbuffer::Sender;
@@ -27,8 +27,7 @@ use crate::haar::{
 };
 use crate::spectrum::Rgb;
 use crate::surfels::radiance::{intensity_map, SurfelRadiance};
-use crate::surfels::tree::NONE;
-use crate::surfels::Surfel;
+use crate::surfels::tree::{Node, NONE};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::path::Path;
@@ -38,18 +37,14 @@ use std::sync::OnceLock;
 /// have a plane, which tells the surface they lie on from occluders (30°).
 pub const FLAT_CONE: f32 = std::f32::consts::FRAC_PI_6;
 
-/// One node of the tree, as traversal needs it.
+/// One node of the tree, as traversal needs it: the cache's node, and what the gather sums
+/// from the surfels below it.
 #[derive(Clone, Copy, Debug)]
 pub struct SenderNode {
-    pub center: Vec3,
-    pub radius: f32,
-    /// `[left, right]`, or `[NONE, NONE]` for a leaf.
-    pub children: [u32; 2],
+    /// The node as the tree built it (bounds, normal cone, children).
+    pub node: Node,
     /// The surfel of a leaf ([`NONE`] for inner nodes).
     pub surfel: u32,
-    /// Normal cone: every surfel normal below is within `cone_angle` of `axis`.
-    pub axis: Vec3,
-    pub cone_angle: f32,
     /// sin(cone_angle), or above 1 for cones wider than a hemisphere.
     pub sin_cone: f32,
     /// Σ A n over the surfels below: for directions where every normal below faces the same
@@ -75,18 +70,19 @@ pub struct SenderNode {
 }
 
 impl SenderNode {
+    /// Whether the node is a leaf (its surfel alone).
     pub fn is_leaf(&self) -> bool {
-        self.children[0] == NONE
+        self.node.is_leaf()
     }
 
     /// Whether every surfel below lies in the plane through `p` with normal `n`, facing its
     /// way, to within [`PLANAR_SLAB`] of the node's radius: a receiver at `p` on that plane
     /// sees the node edge-on (it sends nothing there and hides nothing).
     pub fn holds_plane_of(&self, p: Vec3, n: Vec3) -> bool {
-        let tolerance = PLANAR_SLAB * self.radius;
-        let h = self.axis.dot(p);
-        self.cone_angle <= PLANAR_CONE
-            && self.axis.dot(n) > 0.0
+        let tolerance = PLANAR_SLAB * self.node.radius;
+        let h = self.node.axis.dot(p);
+        self.node.cone_angle <= PLANAR_CONE
+            && self.node.axis.dot(n) > 0.0
             && self.slab[1] - self.slab[0] <= tolerance
             && h >= self.slab[0] - tolerance
             && h <= self.slab[1] + tolerance
@@ -165,7 +161,7 @@ impl Below {
     fn of_surfel(s: &SurfelRecord, leaf: SenderNode) -> Below {
         let area_normal = Vec3::from(s.n) * s.area;
         let reflected = (Vec3::from(s.rgb) - Vec3::from(s.emitted)).max(Vec3::ZERO);
-        let h = leaf.axis.dot(Vec3::from(s.p));
+        let h = leaf.node.axis.dot(Vec3::from(s.p));
         Below {
             area_normal,
             directional_area: if s.map != NO_MAP { s.area } else { 0.0 },
@@ -181,8 +177,8 @@ impl Below {
     /// slab along the parent's axis is its own, widened by how far its axis turns from the
     /// parent's over its radius.
     fn of_child(ch: &SenderNode, directional_area: f32, parent: SenderNode) -> Below {
-        let shift = parent.axis.dot(ch.center) - ch.axis.dot(ch.center);
-        let widen = (parent.axis - ch.axis).length() * ch.radius;
+        let shift = parent.node.axis.dot(ch.node.center) - ch.node.axis.dot(ch.node.center);
+        let widen = (parent.node.axis - ch.node.axis).length() * ch.node.radius;
         Below {
             area_normal: ch.area_normal,
             directional_area,
@@ -292,15 +288,17 @@ impl Senders {
         // bottom-up (the directional area as an area, turned into a fraction further down).
         let mut directional_area = vec![0.0f32; nodes.len()];
         for j in (0..nodes.len()).rev() {
-            let node = nodes[j];
-            let below = if node.is_leaf() {
-                Below::of_surfel(&surfels[node.surfel as usize], node)
+            let sender = nodes[j];
+            let below = if sender.is_leaf() {
+                Below::of_surfel(&surfels[sender.surfel as usize], sender)
             } else {
-                node.children
+                sender
+                    .node
+                    .children
                     .iter()
                     .filter(|&&c| (c as usize) < nodes.len() && c as usize > j)
                     .map(|&c| {
-                        Below::of_child(&nodes[c as usize], directional_area[c as usize], node)
+                        Below::of_child(&nodes[c as usize], directional_area[c as usize], sender)
                     })
                     .reduce(Below::join)
                     .unwrap_or_default()
@@ -319,7 +317,7 @@ impl Senders {
                 below.back_sided,
                 below.closed_mesh,
             );
-            if node.cone_angle <= PLANAR_CONE {
+            if sender.node.cone_angle <= PLANAR_CONE {
                 n.slab = below.slab;
             }
             directional_area[j] = below.directional_area;
@@ -342,8 +340,8 @@ impl Senders {
             }
         }
         for (n, (d, r)) in nodes.iter_mut().zip(directional_area.iter().zip(records)) {
-            n.directional = if r.area > 0.0 {
-                (d / r.area).min(1.0)
+            n.directional = if r.node.area > 0.0 {
+                (d / r.node.area).min(1.0)
             } else {
                 0.0
             };
@@ -383,23 +381,23 @@ impl Senders {
         receiver_mesh: u32,
         back_hidden: bool,
     ) -> (Lookup, f32) {
-        let node = &self.nodes[j as usize];
-        if node.is_leaf() {
-            let s = &self.surfels[node.surfel as usize];
+        let sender = &self.nodes[j as usize];
+        if sender.is_leaf() {
+            let s = &self.surfels[sender.surfel as usize];
             let cos = Vec3::from(s.n).dot(w);
             if back_hidden && cos < 0.0 {
                 return (Lookup::Nothing, 0.0);
             }
             return (
-                self.surfel_lookup(node.surfel, w, cos, receiver_mesh),
+                self.surfel_lookup(sender.surfel, w, cos, receiver_mesh),
                 s.area * cos.abs(),
             );
         }
         // Every surfel below diffuse and facing ω: Σ A L (n·ω) / Σ A (n·ω), exactly. The
         // maps' texels (25° wide at 8²) straddle a wall's edge-on band there and took up to
         // 8 % of a closed room's light (tests/furnace.rs).
-        let facing = node.area_normal.dot(w);
-        if node.directional == 0.0 && facing > 0.0 && node.axis.dot(w) > node.sin_cone {
+        let facing = sender.area_normal.dot(w);
+        if sender.directional == 0.0 && facing > 0.0 && sender.node.axis.dot(w) > sender.sin_cone {
             return (
                 Lookup::NodeNormal {
                     node: j,
@@ -411,8 +409,8 @@ impl Senders {
         let levels = self.projected[j as usize].levels();
         let p = direction_to_square(w);
         let mapped = self.projected[j as usize].eval(p.x, p.y).max(0.0);
-        let projected = self.exact_projected(node, w).unwrap_or(mapped);
-        let n_dot = node.area_normal.dot(w);
+        let projected = self.exact_projected(sender, w).unwrap_or(mapped);
+        let n_dot = sender.area_normal.dot(w);
         let (front, back) = (0.5 * (projected + n_dot), 0.5 * (projected - n_dot));
         // I's cosine and P are sampled at the centres of P's texels (see `intensity_map`);
         // where the normals allow, P at the centre is exact.
@@ -422,24 +420,24 @@ impl Senders {
             scale: 1.0 / denominator,
         };
         let area_at = |p: Vec2, centre: Vec3| {
-            self.exact_projected(node, centre)
+            self.exact_projected(sender, centre)
                 .unwrap_or_else(|| self.projected[j as usize].eval(p.x, p.y).max(0.0))
         };
         if back_hidden && !(front > 0.0) {
             return (Lookup::Nothing, 0.0);
         }
         let centre = texel_centre(p, levels);
-        if !node.back_sided && (front >= back || back_hidden) {
+        if !sender.back_sided && (front >= back || back_hidden) {
             // Surfels that send light from their front only (all but thin sheets): the
             // radiance is I over the front projected area P⁺ = (P + N·ω)/2 (cos⁺ = (|cos| +
             // cos)/2) at the texel's centre, where I was sampled (I/P lost up to 8 % where
             // the texel straddles an edge-on band, tests/furnace.rs). Where the centre sees
             // much less of the front than ω does (a flat node seen within a texel of edge-on,
             // whose centre lies behind it), the texel tilted towards the front is read.
-            let front_at = |p: Vec2, c: Vec3| 0.5 * (area_at(p, c) + node.area_normal.dot(c));
+            let front_at = |p: Vec2, c: Vec3| 0.5 * (area_at(p, c) + sender.area_normal.dot(c));
             let mut texel = (p, front_at(p, centre));
-            if !(texel.1 >= 0.5 * front) && node.axis.dot(w) > 0.0 && node.sin_cone < 1.0 {
-                let (q, c) = texel_on_side(w, node.axis, node.sin_cone, levels);
+            if !(texel.1 >= 0.5 * front) && sender.node.axis.dot(w) > 0.0 && sender.sin_cone < 1.0 {
+                let (q, c) = texel_on_side(w, sender.node.axis, sender.sin_cone, levels);
                 texel = (q, front_at(q, c));
             }
             let (q, front_texel) = texel;
@@ -518,9 +516,9 @@ impl Senders {
     /// back faces, drawn as black occluders, filled the gaps between the front faces' splats
     /// and took 5–12 % of the light a Cornell box's walls gathered.
     pub fn back_hidden(&self, j: u32, p: Vec3, margin: f32, mesh: u32) -> bool {
-        let node = &self.nodes[j as usize];
-        let m = node.closed_mesh;
-        if m == NONE || m == mesh || node.back_sided {
+        let sender = &self.nodes[j as usize];
+        let m = sender.closed_mesh;
+        if m == NONE || m == mesh || sender.back_sided {
             return false;
         }
         self.closed_boxes
@@ -537,13 +535,13 @@ impl Senders {
     /// for n within the cone of half-angle θ around the axis a, and x in the bounding sphere,
     /// n·(x − p) ≥ (a·v) cos θ − |a × v| sin θ − r with v = centre − p.
     pub fn faces_away(&self, j: u32, p: Vec3, margin: f32) -> bool {
-        let node = &self.nodes[j as usize];
-        let v = node.center - p;
+        let sender = &self.nodes[j as usize];
+        let v = sender.node.center - p;
         // cos θ from sin θ: the cone is narrower than a hemisphere there.
-        node.cone_angle < std::f32::consts::FRAC_PI_2
-            && node.axis.dot(v) * (1.0 - node.sin_cone * node.sin_cone).max(0.0).sqrt()
-                - node.axis.cross(v).length() * node.sin_cone
-                > node.radius + margin
+        sender.node.cone_angle < std::f32::consts::FRAC_PI_2
+            && sender.node.axis.dot(v) * (1.0 - sender.sin_cone * sender.sin_cone).max(0.0).sqrt()
+                - sender.node.axis.cross(v).length() * sender.sin_cone
+                > sender.node.radius + margin
     }
 
     /// Whether a receiver on `mesh` must reach the surfels of a solid below node `j` one by
@@ -553,10 +551,10 @@ impl Senders {
     /// its outward light, are all the receiver sees of it (two glass objects would otherwise
     /// reach each other's every surfel).
     pub fn needs_leaves(&self, j: u32, mesh: u32) -> bool {
-        let node = &self.nodes[j as usize];
-        node.solid
+        let sender = &self.nodes[j as usize];
+        sender.solid
             && self.solid_meshes.get(mesh as usize) == Some(&true)
-            && (node.closed_mesh == NONE || node.closed_mesh == mesh)
+            && (sender.closed_mesh == NONE || sender.closed_mesh == mesh)
     }
 
     /// Where the cache's radiance along `w` leaves the point `q` of mesh `mesh`, whose
@@ -587,14 +585,14 @@ impl Senders {
 
     /// Node `j` as a microbuffer records it, at `offset` from the receiver, seen as `seen`.
     pub fn sender(&self, j: u32, offset: Vec3, seen: Seen) -> Sender {
-        let node = &self.nodes[j as usize];
-        let (radius, normal) = if node.is_leaf() {
-            let s = &self.surfels[node.surfel as usize];
+        let sender = &self.nodes[j as usize];
+        let (radius, normal) = if sender.is_leaf() {
+            let s = &self.surfels[sender.surfel as usize];
             ((s.area / std::f32::consts::PI).sqrt(), Vec3::from(s.n))
-        } else if node.cone_angle < FLAT_CONE {
-            (node.radius, node.axis)
+        } else if sender.node.cone_angle < FLAT_CONE {
+            (sender.node.radius, sender.node.axis)
         } else {
-            (node.radius, Vec3::ZERO)
+            (sender.node.radius, Vec3::ZERO)
         };
         Sender {
             offset,
@@ -608,8 +606,8 @@ impl Senders {
     /// The projected area of inner node `j` along `w` (cheaper than [`Senders::seen`]: the
     /// traversal tests it before it needs the radiance).
     pub fn projected_area(&self, j: u32, w: Vec3) -> f32 {
-        let node = &self.nodes[j as usize];
-        self.exact_projected(node, w).unwrap_or_else(|| {
+        let sender = &self.nodes[j as usize];
+        self.exact_projected(sender, w).unwrap_or_else(|| {
             let p = direction_to_square(w);
             self.projected[j as usize].eval(p.x, p.y).max(0.0)
         })
@@ -618,16 +616,16 @@ impl Senders {
     /// Σ A |n·ω| = |N·ω| when every normal below lies on one side of the plane ⊥ ω, i.e.
     /// when ω is more than the cone's angle away from the plane ⊥ the axis. The 8 × 8 map's
     /// texels (25° wide) would otherwise bias the coverage by a few percent.
-    fn exact_projected(&self, node: &SenderNode, w: Vec3) -> Option<f32> {
-        (node.axis.dot(w).abs() > node.sin_cone).then(|| node.area_normal.dot(w).abs())
+    fn exact_projected(&self, sender: &SenderNode, w: Vec3) -> Option<f32> {
+        (sender.node.axis.dot(w).abs() > sender.sin_cone).then(|| sender.area_normal.dot(w).abs())
     }
 
     /// Emitted radiance leaving node `j` along `w` (front faces only): a leaf's surfel's
     /// emission, an inner node's emitted intensity over its projected area.
     pub fn emitted_radiance(&self, j: u32, w: Vec3) -> Rgb {
-        let node = &self.nodes[j as usize];
-        if node.is_leaf() {
-            let s = &self.surfels[node.surfel as usize];
+        let sender = &self.nodes[j as usize];
+        if sender.is_leaf() {
+            let s = &self.surfels[sender.surfel as usize];
             return if Vec3::from(s.n).dot(w) > 0.0 {
                 Vec3::from(s.emitted)
             } else {
@@ -729,18 +727,14 @@ fn sender_nodes(
     let nodes: Vec<SenderNode> = records
         .iter()
         .map(|r| SenderNode {
-            center: Vec3::from(r.center),
-            radius: r.radius,
-            children: r.children,
-            surfel: if r.children[0] == NONE {
-                order.get(r.first as usize).copied().unwrap_or(NONE)
+            node: r.node,
+            surfel: if r.node.is_leaf() {
+                order.get(r.node.first as usize).copied().unwrap_or(NONE)
             } else {
                 NONE
             },
-            axis: Vec3::from(r.axis),
-            cone_angle: r.cone_angle,
-            sin_cone: if r.cone_angle < std::f32::consts::FRAC_PI_2 {
-                r.cone_angle.sin()
+            sin_cone: if r.node.cone_angle < std::f32::consts::FRAC_PI_2 {
+                r.node.cone_angle.sin()
             } else {
                 2.0
             },
@@ -790,24 +784,24 @@ fn rebuild<T: Coefficient + Send + Sync>(
     let mut out: Vec<SparseHaar<T>> = Vec::with_capacity(records.len());
     let mut start = 0;
     while start < records.len() {
-        let level = records[start].level;
+        let level = records[start].node.level;
         let end = start
             + records[start..]
                 .iter()
-                .take_while(|r| r.level == level)
+                .take_while(|r| r.node.level == level)
                 .count();
         let level_maps: Vec<SparseHaar<T>> = records[start..end]
             .par_iter()
             .enumerate()
             .map(|(i, r)| {
                 let j = (start + i) as u32;
-                if r.children[0] == NONE {
+                if r.node.children[0] == NONE {
                     return Ok(empty());
                 }
                 if let Some(g) = g(j)? {
                     return Ok(g);
                 }
-                let parent = r.parent as usize;
+                let parent = r.node.parent as usize;
                 if parent >= start {
                     return Err(bad("a node's parent does not come before it"));
                 }
@@ -816,7 +810,7 @@ fn rebuild<T: Coefficient + Send + Sync>(
                         "a node below the split level has no detail to rebuild it",
                     ));
                 };
-                let sign = if records[parent].children[0] == j {
+                let sign = if records[parent].node.children[0] == j {
                     1.0
                 } else {
                     -1.0
@@ -844,28 +838,21 @@ fn emitted_intensities(
     let mut dense: Vec<Option<Haar2d<Rgb>>> = vec![None; nodes.len()];
     // Children come after their parents: sum in reverse order.
     for j in (0..nodes.len()).rev() {
-        let node = &nodes[j];
-        if node.is_leaf() {
-            let s = &surfels[node.surfel as usize];
+        let sender = &nodes[j];
+        if sender.is_leaf() {
+            let s = &surfels[sender.surfel as usize];
             let le = Vec3::from(s.emitted);
             if le == Rgb::ZERO {
                 continue;
             }
-            let surfel = Surfel {
-                p: Vec3::from(s.p),
-                n: Vec3::from(s.n),
-                area: s.area,
-                mesh: s.mesh,
-                triangle: 0,
-                b: Vec2::ZERO,
-            };
-            let emission = match &maps[node.surfel as usize] {
+            let n = Vec3::from(s.n);
+            let emission = match &maps[sender.surfel as usize] {
                 None => SurfelRadiance::Rgb(le),
                 Some(m) => {
                     let own = m.levels();
                     let texels: Vec<Rgb> = crate::haar::texel_directions(own)
                         .iter()
-                        .map(|w| if w.dot(surfel.n) > 0.0 { le } else { Rgb::ZERO })
+                        .map(|w| if w.dot(n) > 0.0 { le } else { Rgb::ZERO })
                         .collect();
                     SurfelRadiance::Map(SparseHaar::compress(
                         &Haar2d::forward(&texels, 1 << own),
@@ -873,9 +860,9 @@ fn emitted_intensities(
                     ))
                 }
             };
-            dense[j] = Some(intensity_map(&surfel, &emission, true).to_dense());
+            dense[j] = Some(intensity_map(n, s.area, &emission, true).to_dense());
         } else {
-            let [l, r] = records[j].children.map(|c| dense[c as usize].as_ref());
+            let [l, r] = records[j].node.children.map(|c| dense[c as usize].as_ref());
             dense[j] = match (l, r) {
                 (Some(a), Some(b)) => Some(Haar2d::combine(a, 1.0, b, 1.0)),
                 (Some(a), None) | (None, Some(a)) => Some(a.clone()),

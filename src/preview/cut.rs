@@ -76,17 +76,19 @@ pub fn view_cut(senders: &Senders, view: &View, max_pixels: f32) -> Vec<u32> {
         vec![0u32]
     };
     while let Some(j) = stack.pop() {
-        let node = &senders.nodes[j as usize];
+        let sender = &senders.nodes[j as usize];
         // A footprint lies within twice its node's radius (see `SPLAT_RIM`: a leaf's radius
         // is its disc's, an inner node's at least its surfels').
-        if view.culls(node.center, 2.0 * node.radius) {
+        if view.culls(sender.node.center, 2.0 * sender.node.radius) {
             continue;
         }
-        if node.is_leaf() || view.pixels_across(node.center, node.radius) <= max_pixels {
+        if sender.is_leaf()
+            || view.pixels_across(sender.node.center, sender.node.radius) <= max_pixels
+        {
             cut.push(j);
             continue;
         }
-        let [a, b] = node.children;
+        let [a, b] = sender.node.children;
         stack.extend([b, a].into_iter().filter(|&c| c != NO_NODE));
     }
     cut
@@ -104,8 +106,8 @@ pub fn splats(
 ) -> Vec<Splat> {
     cut.par_iter()
         .map(|&j| {
-            let node = &senders.nodes[j as usize];
-            let w = view.towards_eye(node.center);
+            let sender = &senders.nodes[j as usize];
+            let w = view.towards_eye(sender.node.center);
             let radiance = match colouring {
                 Colouring::Reflected => senders.seen(j, w, EYE_MESH, false).radiance,
                 Colouring::Outgoing => {
@@ -114,27 +116,27 @@ pub fn splats(
                 Colouring::Emitted => senders.emitted_radiance(j, w),
                 Colouring::NodeId => node_colour(j),
             };
-            let (mut normal, flat) = if node.is_leaf() {
-                (Vec3::from(senders.surfels[node.surfel as usize].n), true)
+            let (mut normal, flat) = if sender.is_leaf() {
+                (Vec3::from(senders.surfels[sender.surfel as usize].n), true)
             } else {
-                (node.axis, node.cone_angle < FLAT_CONE)
+                (sender.node.axis, sender.node.cone_angle < FLAT_CONE)
             };
             let sides = if !flat {
                 0.0
-            } else if node.back_sided {
+            } else if sender.back_sided {
                 2.0
             } else {
                 1.0
             };
             let radius = match footprint {
-                Footprint::Splat => node.radius + SPLAT_RIM * disc_radius[j as usize],
-                Footprint::Disc => node.radius,
+                Footprint::Splat => sender.node.radius + SPLAT_RIM * disc_radius[j as usize],
+                Footprint::Disc => sender.node.radius,
             };
             if footprint == Footprint::Disc && !flat {
                 normal = w;
             }
             Splat {
-                sphere: node.center.extend(radius).to_array(),
+                sphere: sender.node.center.extend(radius).to_array(),
                 normal: normal.extend(sides).to_array(),
                 radiance: radiance.max(Vec3::ZERO).extend(0.0).to_array(),
             }

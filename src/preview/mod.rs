@@ -120,7 +120,7 @@ impl Preview {
         let disc_radius = cache
             .nodes
             .iter()
-            .map(|n| (n.area / (n.count.max(1) as f32 * std::f32::consts::PI)).sqrt())
+            .map(|n| (n.node.area / (n.node.count.max(1) as f32 * std::f32::consts::PI)).sqrt())
             .collect();
         Ok(Preview {
             senders,

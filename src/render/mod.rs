@@ -23,8 +23,8 @@ pub mod sparse;
 use crate::bsdf::{Bsdf, Diffuse};
 use crate::cache::store::BakedCache;
 use crate::error::{Error, Result};
-use crate::gather::fpbgi::{cluster, cluster_cut, member_buffer, ClusterReceivers};
-use crate::gather::{splat_cut, CutStats, Microbuffer, Senders};
+use crate::gather::fpbgi::{cluster, ClusterGather, ClusterReceivers};
+use crate::gather::{CutStats, Microbuffer, Senders};
 use crate::geometry::frame::Frame;
 use crate::image::Image;
 use crate::sampler::{sobol02, Sampler};
@@ -704,29 +704,28 @@ fn gather_set(
     value: &mut [Rgb],
     stats: &mut GatherStats,
 ) {
-    let root = [0u32];
-    let start: &[u32] = if senders.nodes.is_empty() { &[] } else { &root };
     let white = Bsdf::Diffuse(Diffuse {
         reflectance: Rgb::ONE,
     });
-    let shade = |k: usize, mb: &Microbuffer| {
-        let r = &receivers[k];
-        mb.convolve(if plan.eligible(k) { &white } else { &r.bsdf }, r.view)
-    };
-    let mut stack = Vec::new();
     let (clustered, alone): (Vec<usize>, Vec<usize>) = which.iter().partition(|&&k| {
         settings.gather == GatherMode::Fpbgi && !is_glossy(&receivers[k], settings)
     });
+    // Receiver `k`'s buffer filled by `gather`, then shaded into `value[k]`.
     let mut mb = Microbuffer::new(settings.mb_size, false, Frame::from_normal(Vec3::Z));
-    for k in alone {
+    let mut stack = Vec::new();
+    let mut gather_one = |gather: &mut ClusterGather, k: usize, stats: &mut GatherStats| {
         let r = &receivers[k];
         prepare_buffer(&mut mb, r, settings);
-        stats.receiver_cut += splat_cut(senders, r.p, r.mesh, &mut mb, start, &mut stack);
-        mb.resolve();
+        stats.receiver_cut += gather.fill(r.p, r.mesh, &mut mb, &mut stack);
         stats.pixels += mb.pixels.len() as u64;
-        value[k] = shade(k, &mb);
+        let bsdf = if plan.eligible(k) { &white } else { &r.bsdf };
+        value[k] = mb.convolve(bsdf, r.view);
+    };
+    let mut gather = ClusterGather::alone(senders);
+    for k in alone {
+        gather_one(&mut gather, k, stats);
     }
-    if clustered.is_empty() || start.is_empty() {
+    if clustered.is_empty() || senders.nodes.is_empty() {
         return;
     }
     let points: Vec<(Vec3, Vec3)> = clustered
@@ -744,29 +743,21 @@ fn gather_set(
     stats.clusters += clusters.len() as u64;
     for c in &clusters {
         let active = &receivers[clustered[c.active as usize]];
-        let cluster_receivers = ClusterReceivers {
-            p: active.p,
-            mesh: active.mesh,
-            frame: active.frame,
-            radius: c.radius,
-            plane_slope: c.cone.map(f32::sin),
-            record_links: false,
-        };
-        let mut cut = cluster_cut(
+        let cluster_receivers = ClusterReceivers::of(
+            c,
+            (active.p, active.mesh, active.frame),
+            active.bsdf.is_two_sided(),
+            false,
+        );
+        let mut gather = ClusterGather::shared(
             senders,
             &cluster_receivers,
             settings.far_eps,
             settings.mb_size,
         );
-        stats.cluster_cut += cut.stats;
+        stats.cluster_cut += gather.shared_stats();
         for &m in &c.members {
-            let k = clustered[m as usize];
-            let r = &receivers[k];
-            prepare_buffer(&mut mb, r, settings);
-            stats.receiver_cut +=
-                member_buffer(senders, &mut cut, r.p, r.mesh, &mut mb, &mut stack);
-            stats.pixels += mb.pixels.len() as u64;
-            value[k] = shade(k, &mb);
+            gather_one(&mut gather, clustered[m as usize], stats);
         }
     }
 }

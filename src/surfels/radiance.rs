@@ -8,6 +8,7 @@ use crate::bsdf::Bsdf;
 use crate::haar::{texel_directions, Haar2d, SparseHaar};
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
+use glam::Vec3;
 
 /// A surfel's direct-lit outgoing radiance.
 #[derive(Clone, Debug, PartialEq)]
@@ -72,13 +73,14 @@ pub fn intensity_of<'a>(
     move |i| {
         let s = &surfels[i as usize];
         let back = mesh_flags[s.mesh as usize] & SOLID == 0;
-        intensity_map(s, &radiance[i as usize], back)
+        intensity_map(s.n, s.area, &radiance[i as usize], back)
     }
 }
 
-/// A surfel's radiant intensity A |n·ω| L(ω) as a map at its own resolution (the diffuse
-/// cosine lobe's [`PROJECTED_AREA_LEVELS`], or its radiance map's); with `back` false, only
-/// towards the front hemisphere (see [`mesh_flags`]).
+/// The radiant intensity A |n·ω| L(ω) of a surfel of normal `n` and area `area` in radiance
+/// `r`, as a map at its own resolution (the diffuse cosine lobe's [`PROJECTED_AREA_LEVELS`],
+/// or its radiance map's); with `back` false, only towards the front hemisphere (see
+/// [`mesh_flags`]).
 ///
 /// The cosine is taken at the centre of the projected-area map's texel
 /// ([`PROJECTED_AREA_LEVELS`]) that holds each texel, L at the texel's own centre. A node's
@@ -90,7 +92,7 @@ pub fn intensity_of<'a>(
 /// The result is exact and sparse (every non-zero coefficient, no dense transform of a map):
 /// the cosine being constant on the 8² cells, L's finer details are scaled by it, and only
 /// the 8² means go through a transform ([`SparseHaar::scaled_by_cells`]).
-pub fn intensity_map(s: &Surfel, r: &SurfelRadiance, back: bool) -> SparseHaar<Rgb> {
+pub fn intensity_map(n: Vec3, area: f32, r: &SurfelRadiance, back: bool) -> SparseHaar<Rgb> {
     let coarse = match r {
         SurfelRadiance::Rgb(_) => PROJECTED_AREA_LEVELS,
         SurfelRadiance::Map(m) => m.levels().min(PROJECTED_AREA_LEVELS),
@@ -98,13 +100,13 @@ pub fn intensity_map(s: &Surfel, r: &SurfelRadiance, back: bool) -> SparseHaar<R
     let factors: Vec<f32> = texel_directions(coarse)
         .iter()
         .map(|w| {
-            let cos = w.dot(s.n);
+            let cos = w.dot(n);
             // Diffuse surfels radiate from the front only; maps carry their own lower half.
             let projected = match r {
                 SurfelRadiance::Map(_) if back => cos.abs(),
                 _ => cos.max(0.0),
             };
-            s.area * projected
+            area * projected
         })
         .collect();
     match r {

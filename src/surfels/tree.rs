@@ -7,13 +7,20 @@
 //! cache can load the top levels alone.
 
 use super::Surfel;
+use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
 /// No child / no parent.
 pub const NONE: u32 = u32::MAX;
 
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// One node of the tree: the one node record from the tree's build through the cache (where
+/// [`crate::cache::store::NodeRecord`] adds where its maps are) to the gather (where
+/// `gather::senders::SenderNode` adds what it sums from the surfels below). Plain 4-byte
+/// fields, so that the cache stores it as it is.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct Node {
+    /// Centre of the bounding sphere.
     pub center: Vec3,
     /// Radius of a sphere enclosing every surfel disc below.
     pub radius: f32,
@@ -26,6 +33,7 @@ pub struct Node {
     pub area: f32,
     /// Depth (the root is level 0).
     pub level: u32,
+    /// The parent node, or [`NONE`] for the root.
     pub parent: u32,
     /// `[left, right]`, or `[NONE, NONE]` for a leaf.
     pub children: [u32; 2],
@@ -35,6 +43,7 @@ pub struct Node {
 }
 
 impl Node {
+    /// Whether the node is a leaf (one surfel, no children).
     pub fn is_leaf(&self) -> bool {
         self.children[0] == NONE
     }

@@ -45,8 +45,7 @@ use crate::bake::baked::{Baked, Progress};
 use crate::bake::store::records_of;
 use crate::bsdf::Bsdf;
 use crate::error::{Error, Result};
-use crate::gather::cut::splat_cut;
-use crate::gather::fpbgi::{cluster_cut, member_buffer, Cluster, ClusterReceivers};
+use crate::gather::fpbgi::{Cluster, ClusterGather, ClusterReceivers};
 use crate::gather::microbuffer::Microbuffer;
 use crate::gather::senders::Senders;
 use crate::geometry::frame::Frame;
@@ -635,37 +634,28 @@ impl Gather<'_> {
             close_buffer(self.senders, (self.accel, self.scene), s, &mut mb);
             (i, mb)
         };
-        if let [i] = group.members[..] {
-            let s = &surfels[i as usize];
-            let mut mb = buffer(i);
-            splat_cut(self.senders, s.p, s.mesh, &mut mb, &[0], stack);
-            mb.resolve();
-            return vec![closed(i, mb)];
-        }
-        let a = &surfels[group.active as usize];
-        let spherical = self.bsdfs[group.active as usize].is_two_sided();
-        let receivers = ClusterReceivers {
-            p: a.p,
-            mesh: a.mesh,
-            frame: Frame::from_normal(a.n),
-            radius: group.radius,
-            plane_slope: group.cone.filter(|_| !spherical).map(f32::sin),
-            record_links: true,
+        let mut gather = if let [_] = group.members[..] {
+            ClusterGather::alone(self.senders)
+        } else {
+            let a = &surfels[group.active as usize];
+            let spherical = self.bsdfs[group.active as usize].is_two_sided();
+            let active = (a.p, a.mesh, Frame::from_normal(a.n));
+            let receivers = ClusterReceivers::of(group, active, spherical, true);
+            let n = group
+                .members
+                .iter()
+                .map(|&i| side(i))
+                .max()
+                .unwrap_or(Microbuffer::DEFAULT_SIDE);
+            ClusterGather::shared(self.senders, &receivers, VIEW_EPS, n)
         };
-        let n = group
-            .members
-            .iter()
-            .map(|&i| side(i))
-            .max()
-            .unwrap_or(Microbuffer::DEFAULT_SIDE);
-        let mut cut = cluster_cut(self.senders, &receivers, VIEW_EPS, n);
         group
             .members
             .iter()
             .map(|&i| {
                 let s = &surfels[i as usize];
                 let mut mb = buffer(i);
-                member_buffer(self.senders, &mut cut, s.p, s.mesh, &mut mb, stack);
+                gather.fill(s.p, s.mesh, &mut mb, stack);
                 closed(i, mb)
             })
             .collect()
