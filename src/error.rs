@@ -149,6 +149,15 @@ pub enum Error {
     #[error(transparent)]
     Cache(#[from] CacheError),
 
+    /// Worker threads that the system would not start.
+    #[error("cannot start {count} worker threads: {reason}")]
+    Threads {
+        /// How many were asked for.
+        count: usize,
+        /// Why, in the system's words.
+        reason: String,
+    },
+
     /// The bake or render was stopped by its cancel flag.
     #[error("cancelled")]
     Cancelled,

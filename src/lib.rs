@@ -60,6 +60,7 @@ pub mod haar;
 pub mod image;
 pub mod machine;
 pub mod preview;
+pub mod progress;
 pub mod reference;
 pub mod render;
 pub mod sampler;

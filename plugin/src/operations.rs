@@ -6,14 +6,15 @@ use crate::handles::{write_hash, WpbgiCache, WpbgiScene};
 use crate::settings::{WpbgiBakeSettings, WpbgiRenderSettings};
 use std::ffi::{c_char, c_void, CString};
 use std::path::Path;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{mpsc, Arc};
+use std::sync::atomic::AtomicBool;
+use std::sync::Arc;
 use wpbgi::bake::store::save;
 use wpbgi::bake::{bake_cancellable, BakeSettings, Baked};
 use wpbgi::cache::store::{bake_hash, BakedCache};
 use wpbgi::image::{write_exr, write_png, Image};
 use wpbgi::preview::device::Gpu;
 use wpbgi::preview::{bounds, framing_camera, Preview, Show, DEFAULT_CUT_PIXELS};
+use wpbgi::progress::{on_threads, relay, Progress};
 use wpbgi::render::render_final;
 use wpbgi::scene::{Camera, Scene};
 
@@ -24,18 +25,6 @@ pub type WpbgiProgressFn = Option<
     unsafe extern "C" fn(stage: *const c_char, fraction: f32, user_data: *mut c_void) -> i32,
 >;
 
-/// Run `work` on `threads` workers (0: the global pool of one per core).
-fn on_threads<R: Send>(threads: u32, work: impl FnOnce() -> R + Send) -> Result<R, Failure> {
-    if threads == 0 {
-        return Ok(work());
-    }
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads as usize)
-        .build()
-        .map_err(|e| Failure::Failed(format!("cannot start {threads} worker threads: {e}")))?;
-    Ok(pool.install(work))
-}
-
 /// Bake on a worker thread while this thread passes its progress to `progress`, so that the
 /// callback runs where the host called from.
 fn bake_reporting(
@@ -45,40 +34,24 @@ fn bake_reporting(
     progress: WpbgiProgressFn,
     user_data: *mut c_void,
 ) -> Result<Baked, Failure> {
-    let cancel = &AtomicBool::new(false);
-    let (sender, receiver) = mpsc::channel::<(String, f32)>();
-    std::thread::scope(|scope| {
-        // The worker owns the sender, so the channel closes when the bake returns.
-        let worker = scope.spawn(move || {
-            let report = move |stage: &str, fraction: f32| {
-                // The receiver outlives the bake; a failed send only means nobody listens.
-                let _ = sender.send((stage.to_owned(), fraction));
-            };
-            on_threads(threads, || {
-                bake_cancellable(scene, settings, &report, cancel)
-            })
-        });
-        // Ends when the bake returns.
-        for (stage, fraction) in receiver {
-            let Some(callback) = progress else { continue };
-            let stage = CString::new(stage).unwrap_or_default();
-            // SAFETY: the host's callback, called as its type declares.
-            if unsafe { callback(stage.as_ptr(), fraction, user_data) } != 0 {
-                cancel.store(true, Ordering::Relaxed);
-            }
-        }
-        let baked = match worker.join() {
-            Ok(result) => result??,
-            // Re-raised here, caught by `call`.
-            Err(panic) => std::panic::resume_unwind(panic),
+    let work =
+        |report: Progress, cancel: &AtomicBool| bake_cancellable(scene, settings, report, cancel);
+    let listen = |stage: &str, fraction: f32| {
+        let Some(callback) = progress else {
+            return false;
         };
-        // A cancel asked on the bake's last reports, after its last look at the flag, still
-        // holds: the host said it does not want this cache.
-        if cancel.load(Ordering::Relaxed) {
-            return Err(Failure::Cancelled);
-        }
-        Ok(baked)
-    })
+        let stage = CString::new(stage).unwrap_or_default();
+        // SAFETY: the host's callback, called as its type declares.
+        unsafe { callback(stage.as_ptr(), fraction, user_data) != 0 }
+    };
+    let (baked, cancelled) = relay(threads as usize, work, listen)?;
+    let baked = baked?;
+    // A cancel asked on the bake's last reports, after its last look at the flag, still
+    // holds: the host said it does not want this cache.
+    if cancelled {
+        return Err(Failure::Cancelled);
+    }
+    Ok(baked)
 }
 
 /// Bake `scene` with `settings` and write the cache to `cache_path` (atomically: a failed or
@@ -174,7 +147,7 @@ impl RenderJob<'_> {
         let settings = self.settings.to_final()?;
         // Only what the workers need crosses to them (the settings hold a C pointer).
         let (scene, cache, camera) = (self.scene, self.cache, &self.camera);
-        let out = on_threads(self.settings.threads, || {
+        let out = on_threads(self.settings.threads as usize, || {
             render_final(scene, cache, camera, &settings, &|_, _| {})
         })??;
         Ok(out.beauty)

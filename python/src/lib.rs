@@ -13,9 +13,9 @@ use pyo3::exceptions::PyException;
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
 use std::path::PathBuf;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::mpsc;
+use std::sync::atomic::AtomicBool;
 use wpbgi::bake::bounce::BounceSettings;
+use wpbgi::progress::{relay, Progress};
 use wpbgi::render::{render_final_cancellable, GatherMode};
 use wpbgi::scene::Camera;
 
@@ -92,62 +92,37 @@ impl Cache {
 }
 
 /// Run `work` with a progress report and a cancel flag, on `threads` workers (0: one per
-/// core), the GIL released; the reports reach `progress(stage, fraction)` on this thread.
+/// core), the GIL released; the reports reach `progress(stage, fraction)` on this thread, and
+/// a true answer (or Ctrl-C, or an exception it raises) stops the work.
 fn reporting<R: Send>(
     py: Python<'_>,
     threads: usize,
     progress: Option<PyObject>,
-    work: impl FnOnce(&(dyn Fn(&str, f32) + Sync), &AtomicBool) -> wpbgi::error::Result<R> + Send,
+    work: impl FnOnce(Progress, &AtomicBool) -> wpbgi::error::Result<R> + Send,
 ) -> PyResult<R> {
-    let pool = (threads > 0)
-        .then(|| rayon::ThreadPoolBuilder::new().num_threads(threads).build())
-        .transpose()
-        .map_err(|e| Error::new_err(format!("cannot start {threads} worker threads: {e}")))?;
-    let cancel = AtomicBool::new(false);
     let mut raised: Option<PyErr> = None;
-    let result = py.allow_threads(|| {
-        let (sender, receiver) = mpsc::channel::<(String, f32)>();
-        std::thread::scope(|scope| {
-            let cancel = &cancel;
-            let worker = scope.spawn(move || {
-                let report = move |stage: &str, fraction: f32| {
-                    let _ = sender.send((stage.to_owned(), fraction));
-                };
-                match &pool {
-                    Some(pool) => pool.install(|| work(&report, cancel)),
-                    None => work(&report, cancel),
-                }
-            });
-            for (stage, fraction) in receiver {
-                if raised.is_some() {
-                    continue;
-                }
-                let stop = Python::with_gil(|py| -> PyResult<bool> {
-                    py.check_signals()?;
-                    match &progress {
-                        Some(callback) => callback.call1(py, (stage, fraction))?.is_truthy(py),
-                        None => Ok(false),
-                    }
-                });
-                match stop {
-                    Ok(false) => {}
-                    Ok(true) => cancel.store(true, Ordering::Relaxed),
-                    Err(e) => {
-                        raised = Some(e);
-                        cancel.store(true, Ordering::Relaxed);
-                    }
-                }
+    let listen = |stage: &str, fraction: f32| {
+        if raised.is_some() {
+            return true;
+        }
+        let stop = Python::with_gil(|py| -> PyResult<bool> {
+            py.check_signals()?;
+            match &progress {
+                Some(callback) => callback.call1(py, (stage, fraction))?.is_truthy(py),
+                None => Ok(false),
             }
-            match worker.join() {
-                Ok(result) => result,
-                Err(panic) => std::panic::resume_unwind(panic),
-            }
+        });
+        stop.unwrap_or_else(|e| {
+            raised = Some(e);
+            true
         })
-    });
+    };
+    let relayed = py.allow_threads(|| relay(threads, work, listen));
     if let Some(e) = raised {
         return Err(e);
     }
-    if cancel.load(Ordering::Relaxed) {
+    let (result, cancelled) = relayed.map_err(to_py)?;
+    if cancelled {
         return Err(Cancelled::new_err("cancelled"));
     }
     result.map_err(to_py)

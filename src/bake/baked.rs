@@ -40,6 +40,3 @@ pub struct Baked {
     /// What the indirect bounces did, if any ran.
     pub bounces: Option<BounceReport>,
 }
-
-/// Which stage is running and how far it is (from 0 to 1), for progress display.
-pub type Progress<'a> = &'a (dyn Fn(&str, f32) + Sync);

@@ -9,7 +9,7 @@ pub mod plan;
 pub mod settings;
 pub mod store;
 
-pub use baked::{Baked, Progress};
+pub use baked::Baked;
 pub use direct::DirectLight;
 pub use pipeline::{bake, bake_cancellable};
 pub use plan::Plan;

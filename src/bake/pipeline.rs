@@ -5,7 +5,7 @@
 //! coded post-order, each leaf's radiant-intensity map A |n·ω| L(ω) being built on the fly
 //! from that compact form, so the uncompressed set never exists.
 
-use super::baked::{Baked, Progress};
+use super::baked::Baked;
 use super::direct::{DirectLight, NEAR_SPECULAR_ALPHA};
 use super::lightcuts::LightTree;
 use super::plan::Plan;
@@ -17,6 +17,7 @@ use crate::bsdf::Bsdf;
 use crate::emitters::EmitterSampler;
 use crate::error::{Error, Result};
 use crate::haar::{texel_directions, Haar2d, SparseHaar};
+use crate::progress::Progress;
 use crate::scene::{LightKind, Scene};
 use crate::spectrum::Rgb;
 use crate::surfels::coding::encode;

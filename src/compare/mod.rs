@@ -25,6 +25,7 @@ use crate::bake::{bake, BakeSettings, Quality};
 use crate::cache::store::BakedCache;
 use crate::error::{Error, Result};
 use crate::image::{error_against, srgb8, Image};
+use crate::progress::Progress;
 use crate::reference::{render, RenderOutput, RenderSettings};
 use crate::render::{render_final, FinalSettings};
 use crate::scene::{Camera, Scene};
@@ -182,7 +183,7 @@ pub fn compare(
     camera: &Camera,
     reference: Reference,
     settings: &CompareSettings,
-    progress: &(dyn Fn(&str, f32) + Sync),
+    progress: Progress,
 ) -> Result<Report> {
     settings.validate()?;
     let mut runs = Vec::new();
@@ -276,7 +277,7 @@ fn bake_preset(
     scene: &Scene,
     preset: Quality,
     settings: &CompareSettings,
-    progress: &(dyn Fn(&str, f32) + Sync),
+    progress: Progress,
 ) -> Result<(BakedCache, usize, f64)> {
     let bake_settings = BakeSettings {
         seed: settings.seed,

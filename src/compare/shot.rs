@@ -13,6 +13,7 @@
 use super::{bake_preset, denoise, errors, traced_seconds, CompareSettings, Method, Reference};
 use crate::error::{Error, Result};
 use crate::image::Image;
+use crate::progress::Progress;
 use crate::reference::{render_progressive, RenderOutput, RenderSettings};
 use crate::render::{render_final, FinalSettings};
 use crate::scene::{Camera, Scene};
@@ -196,7 +197,7 @@ pub fn shot(
     references: &[Reference],
     settings: &CompareSettings,
     orbit_degrees: f32,
-    progress: &(dyn Fn(&str, f32) + Sync),
+    progress: Progress,
 ) -> Result<ShotReport> {
     if settings.presets.is_empty() {
         return Err(Error::InvalidSetting(

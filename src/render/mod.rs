@@ -27,6 +27,7 @@ use crate::gather::fpbgi::{cluster, ClusterGather, ClusterReceivers};
 use crate::gather::{CutStats, Microbuffer, Senders};
 use crate::geometry::frame::Frame;
 use crate::image::Image;
+use crate::progress::Progress;
 use crate::sampler::{sobol02, Sampler};
 use crate::scene::{Camera, Scene};
 use crate::spectrum::Rgb;
@@ -295,7 +296,7 @@ pub fn render_final(
     cache: &BakedCache,
     camera: &Camera,
     settings: &FinalSettings,
-    progress: &(dyn Fn(&str, f32) + Sync),
+    progress: Progress,
 ) -> Result<FinalOutput> {
     render_final_cancellable(
         scene,
@@ -314,7 +315,7 @@ pub fn render_final_cancellable(
     cache: &BakedCache,
     camera: &Camera,
     settings: &FinalSettings,
-    progress: &(dyn Fn(&str, f32) + Sync),
+    progress: Progress,
     cancel: &AtomicBool,
 ) -> Result<FinalOutput> {
     let stop = || crate::error::check_cancel(cancel);
