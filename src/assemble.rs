@@ -29,8 +29,11 @@ type Tile = Image<Layer<AnyChannels<FlatSamples>>>;
 pub struct Assembled {
     /// The frame's size (its display window).
     pub width: usize,
+    /// See `width`.
     pub height: usize,
+    /// Tiles stitched.
     pub tiles: usize,
+    /// The channels written, in order.
     pub channels: Vec<String>,
 }
 

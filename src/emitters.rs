@@ -24,11 +24,15 @@ pub struct EmitterSample {
     pub value: Rgb,
     /// Solid-angle density of this sample, emitter selection included (0 for delta lights).
     pub pdf: f32,
+    /// Whether the emitter is a delta light (point, spot, directional), which BSDF sampling
+    /// cannot hit.
     pub delta: bool,
     /// For area emitters: the point and its rounding bound and geometric normal (for the
     /// shadow ray's far end).
     pub point: Vec3,
+    /// See `point`.
     pub point_err: Vec3,
+    /// See `point`.
     pub normal: Vec3,
 }
 
@@ -73,6 +77,8 @@ pub struct EmitterSampler {
 }
 
 impl EmitterSampler {
+    /// The sampler of every emitter of `scene`: emissive triangles, punctual lights and the
+    /// environment.
     pub fn new(scene: &Scene) -> Self {
         Self::with_punctual(scene, true)
     }
@@ -145,6 +151,7 @@ impl EmitterSampler {
         }
     }
 
+    /// Whether the scene emits nothing.
     pub fn is_empty(&self) -> bool {
         self.cdf.last().is_none_or(|&t| t <= 0.0)
     }

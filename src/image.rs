@@ -8,14 +8,18 @@ use crate::spectrum::Rgb;
 use std::path::Path;
 
 #[derive(Clone, Debug, PartialEq)]
+/// A float RGB image.
 pub struct Image {
+    /// Width in pixels.
     pub width: u32,
+    /// Height in pixels.
     pub height: u32,
     /// Row-major, top row first.
     pub pixels: Vec<Rgb>,
 }
 
 impl Image {
+    /// A black image.
     pub fn new(width: u32, height: u32) -> Self {
         Image {
             width,
@@ -25,6 +29,7 @@ impl Image {
     }
 
     #[inline]
+    /// The pixel at column `x`, row `y` (from the top).
     pub fn get(&self, x: u32, y: u32) -> Rgb {
         self.pixels[(y * self.width + x) as usize]
     }
@@ -117,6 +122,7 @@ pub enum ExrPrecision {
 /// An EXR's lossless compression (OpenEXR's names).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum ExrCompression {
+    /// Uncompressed.
     None,
     /// Run lengths: fast, large.
     Rle,
@@ -134,12 +140,15 @@ pub enum ExrCompression {
 /// compositing tools map to their alpha, depth and normal passes.
 #[derive(Clone, Debug)]
 pub struct ExrChannels<'a> {
+    /// The RGB image.
     pub beauty: &'a Image,
     /// Coverage, one value per pixel.
     pub alpha: Option<&'a [f32]>,
     /// Depth, one value per pixel.
     pub z: Option<&'a [f32]>,
+    /// Shading normals (N.X, N.Y, N.Z).
     pub normal: Option<&'a Image>,
+    /// Further RGB layers, by name.
     pub layers: Vec<(&'a str, &'a Image)>,
 }
 
@@ -159,12 +168,15 @@ impl<'a> ExrChannels<'a> {
 /// How an EXR is written: its samples, its windows and its header.
 #[derive(Clone, Debug, Default)]
 pub struct ExrOptions {
+    /// Half or full floats.
     pub precision: ExrPrecision,
+    /// The lossless compression.
     pub compression: ExrCompression,
     /// The display window's size: the whole image (the pixels written may be a part of it).
     pub display: (u32, u32),
     /// Where the pixels written lie in the display window: its data window's corner.
     pub origin: (u32, u32),
+    /// Header attributes.
     pub header: ExrHeader,
 }
 
@@ -186,6 +198,7 @@ pub struct ExrHeader {
     /// `worldToCamera` and `worldToNDC`: row-major, for row vectors (p · M), as OpenEXR
     /// stores Imath's M44f.
     pub world_to_camera: Option<[f32; 16]>,
+    /// See `world_to_camera`.
     pub world_to_ndc: Option<[f32; 16]>,
     /// `capDate` ("YYYY:MM:DD hh:mm:ss") and `utcOffset` (seconds, UTC − local).
     pub capture_date: Option<(String, f32)>,

@@ -41,6 +41,8 @@
 // `!(x > y)` is the idiom throughout for "fails unless x > y", which rejects NaN as well; the
 // `partial_cmp` form clippy suggests would hide that intent.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
+// Every public item says what it is: the crate is read as much as it is called.
+#![warn(missing_docs)]
 
 pub mod accel;
 pub mod assemble;

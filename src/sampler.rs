@@ -49,6 +49,7 @@ impl Sampler {
     }
 
     #[inline]
+    /// The next two dimensions.
     pub fn next_2d(&mut self) -> Vec2 {
         let x = self.next_1d();
         Vec2::new(x, self.next_1d())

@@ -14,12 +14,16 @@ use glam::{Vec2, Vec3, Vec3A};
 /// A scene ready to trace: its triangles' acceleration structure and its emitters' sampler,
 /// built once per render.
 pub struct Tracer<'a> {
+    /// The scene.
     pub scene: &'a Scene,
+    /// Its triangles' bounding volume hierarchy.
     pub accel: Accel,
+    /// Its emitters, for next-event estimation.
     pub emitters: EmitterSampler,
 }
 
 impl<'a> Tracer<'a> {
+    /// Build the acceleration structure and the emitter sampler of `scene`.
     pub fn new(scene: &'a Scene) -> Self {
         Tracer {
             scene,
@@ -31,6 +35,7 @@ impl<'a> Tracer<'a> {
 
 /// A ray–surface intersection with what shading needs.
 pub struct SurfaceHit {
+    /// The hit point (world space).
     pub p: Vec3,
     /// Rounding bound of `p`.
     pub err: Vec3,
@@ -39,9 +44,13 @@ pub struct SurfaceHit {
     /// Shading frame around the interpolated normal (or `ng` for flat meshes), tilted by the
     /// material's normal map.
     pub frame: Frame,
+    /// Texture coordinates there.
     pub uv: Vec2,
+    /// The mesh hit.
     pub mesh: u32,
+    /// The triangle hit, within the mesh.
     pub triangle: u32,
+    /// Distance along the ray (in units of its direction's length).
     pub t: f32,
 }
 

@@ -25,8 +25,11 @@ use std::time::Duration;
 /// A closest hit: which triangle, where along the ray, and its barycentrics.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Hit {
+    /// Distance along the ray.
     pub t: f32,
+    /// The mesh hit.
     pub mesh: u32,
+    /// The triangle hit, within the mesh.
     pub triangle: u32,
     /// Weights of the triangle's three vertices.
     pub b: [f32; 3],
@@ -147,6 +150,7 @@ impl Accel {
         self.ids.len()
     }
 
+    /// Whether the scene has no triangles.
     pub fn is_empty(&self) -> bool {
         self.ids.is_empty()
     }

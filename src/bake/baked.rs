@@ -15,9 +15,13 @@ use glam::Vec3;
 
 /// The result of a bake.
 pub struct Baked {
+    /// What the bake decided before the work (storage per material, emitters, memory).
     pub plan: Plan,
+    /// The settings it ran with.
     pub settings: BakeSettings,
+    /// The surfels, in the order the sampler placed them.
     pub surfels: Vec<Surfel>,
+    /// Each surfel's outgoing radiance (direct light and, after the bounces, indirect).
     pub radiance: Vec<SurfelRadiance>,
     /// The emitted radiance (front face) included in each surfel's `radiance`.
     pub emitted: Vec<Rgb>,
@@ -29,6 +33,7 @@ pub struct Baked {
     pub shading_normals: Vec<Vec3>,
     /// The BSDF operators built so far (the direct light's, for the bounces to reuse).
     pub operators: Operators,
+    /// The bounding-sphere tree over the surfels.
     pub tree: SurfelTree,
     /// Radiant intensity I(ω) of every node (RGB).
     pub coded: CodedTree<Rgb>,

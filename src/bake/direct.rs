@@ -38,11 +38,15 @@ use glam::{Vec3, Vec3A};
 
 /// What direct lighting needs of a scene.
 pub struct DirectLight<'a> {
+    /// The scene.
     pub scene: &'a Scene,
+    /// Its triangles' BVH (for shadow rays).
     pub accel: &'a Accel,
+    /// Its emitters.
     pub emitters: &'a EmitterSampler,
     /// Emitter samples per surfel.
     pub samples: u32,
+    /// Seed of the emitter samples.
     pub seed: u64,
     /// Point and spot lights through Lightcuts (then `emitters` must leave them out, see
     /// [`EmitterSampler::with_punctual`]); `None` samples them with the other emitters.

@@ -62,6 +62,7 @@ pub struct CutLight {
 /// What a cut cost.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct CutStats {
+    /// Clusters in the cut.
     pub clusters: usize,
 }
 
@@ -81,10 +82,12 @@ impl LightTree {
         LightTree { lights, nodes }
     }
 
+    /// Whether the tree has no lights.
     pub fn is_empty(&self) -> bool {
         self.lights.is_empty()
     }
 
+    /// How many lights it has.
     pub fn len(&self) -> usize {
         self.lights.len()
     }

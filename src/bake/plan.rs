@@ -22,6 +22,7 @@ pub struct Plan {
     /// Resolution of the tree's directional maps: the finest any material needs, and 3 (8²,
     /// enough for the cosine lobes of diffuse surfels) at least.
     pub map_levels: u32,
+    /// The plan as the cache records it and `wpbgi bake` prints it.
     pub json: Value,
 }
 

@@ -8,12 +8,15 @@ use crate::spectrum::Rgb;
 use glam::{Vec2, Vec3};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
+/// Mitsuba's `roughconductor`: a microfacet conductor with a complex index of refraction.
 pub struct RoughConductor {
+    /// The microfacet distribution.
     pub distr: Microfacet,
     /// Real part of the complex index of refraction, per channel.
     pub eta: Rgb,
     /// Imaginary part (extinction), per channel.
     pub k: Rgb,
+    /// Multiplies the Fresnel reflectance (Mitsuba's `specular_reflectance`, 1 for physical conductors).
     pub specular_reflectance: Rgb,
 }
 
@@ -22,6 +25,7 @@ impl RoughConductor {
         fresnel_conductor(cos_theta, self.eta, self.k) * self.specular_reflectance
     }
 
+    /// `f(wi, wo) · |cos θo|` in the local frame (see [`super::Bsdf::eval`]).
     pub fn eval(&self, wi: Vec3, wo: Vec3) -> Rgb {
         if !(wi.z > 0.0 && wo.z > 0.0) {
             return Rgb::ZERO;
@@ -64,6 +68,7 @@ impl RoughConductor {
         }
     }
 
+    /// Solid-angle density of [`RoughConductor::sample`] producing `wo`.
     pub fn pdf(&self, wi: Vec3, wo: Vec3) -> f32 {
         let m = (wo + wi).normalize();
         if !(wi.z > 0.0 && wo.z > 0.0 && wi.dot(m) > 0.0 && wo.dot(m) > 0.0) {
@@ -72,6 +77,7 @@ impl RoughConductor {
         self.distr.eval(m) * self.distr.smith_g1(wi, m) / (4.0 * wi.z)
     }
 
+    /// Sample `wo` by the distribution of visible normals; `None` when it falls below the horizon.
     pub fn sample(&self, wi: Vec3, u: Vec2) -> Option<BsdfSample> {
         if wi.z <= 0.0 {
             return None;

@@ -9,11 +9,15 @@ use crate::spectrum::Rgb;
 use glam::{Vec2, Vec3};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
+/// Mitsuba's `roughdielectric`: a microfacet interface between two indices of refraction.
 pub struct RoughDielectric {
+    /// The microfacet distribution.
     pub distr: Microfacet,
     /// Relative index `int_ior / ext_ior`.
     pub eta: f32,
+    /// Multiplies the reflected part (Mitsuba's `specular_reflectance`).
     pub specular_reflectance: Rgb,
+    /// Multiplies the transmitted part (Mitsuba's `specular_transmittance`).
     pub specular_transmittance: Rgb,
 }
 
@@ -28,6 +32,7 @@ impl RoughDielectric {
         (m, reflect, eta)
     }
 
+    /// `f(wi, wo) · |cos θo|` in the local frame, radiance or importance (see [`super::Bsdf::eval`]).
     pub fn eval(&self, wi: Vec3, wo: Vec3, mode: TransportMode) -> Rgb {
         let (m, reflect, eta) = self.half_vector(wi, wo);
         let d = self.distr.eval(m);
@@ -103,6 +108,7 @@ impl RoughDielectric {
         }
     }
 
+    /// Solid-angle density of `sample` producing `wo`.
     pub fn pdf(&self, wi: Vec3, wo: Vec3) -> f32 {
         let (m, reflect, eta) = self.half_vector(wi, wo);
         // The sides of micro- and macrosurface must agree (the same rule as in smith_g1).

@@ -28,7 +28,9 @@ pub const MIN_ALPHA: f32 = 1e-4;
 /// Which normal distribution function.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Distribution {
+    /// Beckmann's distribution.
     Beckmann,
+    /// Trowbridge–Reitz (GGX).
     Ggx,
 }
 
@@ -46,8 +48,11 @@ impl Distribution {
 /// An (an)isotropic microfacet distribution; `alpha_u` is along the local x axis.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Microfacet {
+    /// Which distribution.
     pub kind: Distribution,
+    /// Roughness along the local x axis.
     pub alpha_u: f32,
+    /// Roughness along the local y axis.
     pub alpha_v: f32,
 }
 

@@ -36,8 +36,11 @@ use glam::{Vec2, Vec3};
 /// A BSDF with every parameter resolved at one shading point (textures already looked up).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Bsdf {
+    /// Mitsuba's `diffuse`.
     Diffuse(Diffuse),
+    /// Mitsuba's `roughconductor`.
     Conductor(RoughConductor),
+    /// Mitsuba's `roughdielectric`.
     Dielectric(RoughDielectric),
     /// Not a Mitsuba plugin: glTF's thin-walled transmission (see [`thin`]).
     ThinDielectric(ThinDielectric),

@@ -18,18 +18,22 @@ pub enum TransportMode {
 /// Which lobe a sample came from.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Lobe {
+    /// Reflected to the side of `wi`.
     Reflection,
+    /// Transmitted to the other side.
     Transmission,
 }
 
 /// A sampled direction.
 #[derive(Clone, Copy, Debug)]
 pub struct BsdfSample {
+    /// The sampled direction, in the local frame.
     pub wo: Vec3,
     /// Solid-angle density, lobe selection included.
     pub pdf: f32,
     /// Relative index of refraction crossed (1 for reflection).
     pub eta: f32,
+    /// Which lobe it came from.
     pub lobe: Lobe,
     /// `eval / pdf`.
     pub weight: Rgb,

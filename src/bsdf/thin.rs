@@ -19,11 +19,15 @@ use crate::spectrum::Rgb;
 use glam::{Vec2, Vec3};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
+/// Mitsuba's `thindielectric` with rough faces: a slab thin enough that light leaves where it enters, unbent.
 pub struct ThinDielectric {
+    /// The microfacet distribution of its faces.
     pub distr: Microfacet,
     /// Relative index of the slab's material.
     pub eta: f32,
+    /// Multiplies the reflected part.
     pub specular_reflectance: Rgb,
+    /// Multiplies the transmitted part.
     pub specular_transmittance: Rgb,
 }
 
@@ -90,6 +94,7 @@ impl ThinDielectric {
         tint * (weight * d * g / (4.0 * wi_up.z))
     }
 
+    /// Solid-angle density of [`ThinDielectric::sample`] producing `wo`.
     pub fn pdf(&self, wi: Vec3, wo: Vec3) -> f32 {
         let Some((wi_up, wo_up, transmitted)) = Self::fold(wi, wo) else {
             return 0.0;
@@ -103,6 +108,7 @@ impl ThinDielectric {
         lobe * self.distr.eval(m) * self.distr.smith_g1(wi_up, m) / (4.0 * wi_up.z)
     }
 
+    /// Sample `wo`: `u0` chooses reflection or transmission, `u` the microfacet normal.
     pub fn sample(&self, wi: Vec3, u0: f32, u: Vec2) -> Option<BsdfSample> {
         if wi.z == 0.0 {
             return None;

@@ -160,18 +160,26 @@ impl Layout {
 /// One section of a read cache.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SectionInfo {
+    /// The section's name (`plan`, `nodes`, …).
     pub name: String,
+    /// Where it starts in the file (bytes).
     pub offset: u64,
+    /// Its length (bytes).
     pub length: u64,
+    /// Its XXH3-64 checksum.
     pub checksum: u64,
 }
 
 /// A cache file, fully validated.
 #[derive(Debug)]
 pub struct Cache {
+    /// The file it was read from.
     pub path: PathBuf,
+    /// The format version it was written in.
     pub version: u32,
+    /// The content hash of what made it (a bake's: the scene, the settings and the version).
     pub hash: [u8; 16],
+    /// Its sections, in file order.
     pub sections: Vec<SectionInfo>,
     bytes: CacheBytes,
 }
@@ -182,6 +190,7 @@ pub enum CacheBytes {
     /// Processes that map one file share its pages (the kernel's page cache): a node's
     /// render tasks hold one copy of the cache between them, not one each.
     Mapped(memmap2::Mmap),
+    /// Bytes made in memory (a bake not yet written, a test's).
     Owned(Vec<u8>),
 }
 
@@ -400,6 +409,7 @@ impl Cache {
         self.bytes.len()
     }
 
+    /// Whether the file has no bytes (never, for a valid cache).
     pub fn is_empty(&self) -> bool {
         self.bytes.is_empty()
     }

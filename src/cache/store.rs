@@ -24,8 +24,11 @@ pub const NO_NODE: u32 = crate::surfels::tree::NONE;
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]
 pub struct SurfelRecord {
+    /// Its centre.
     pub p: [f32; 3],
+    /// Its unit normal.
     pub n: [f32; 3],
+    /// Its disc's area.
     pub area: f32,
     /// The scene mesh it lies on.
     pub mesh: u32,
@@ -55,11 +58,14 @@ pub const BAKE_FORMAT: u32 = 3;
 pub struct NodeRecord {
     /// The node: bounds, normal cone, area and links.
     pub node: Node,
-    /// Indices into `map_index` of the stored G and H of the radiant intensity, or [`NO_MAP`].
+    /// Index into `map_index` of the stored G (the node's own map) of the radiant
+    /// intensity, or [`NO_MAP`].
     pub g: u32,
+    /// The same for its H (the detail between its children).
     pub h: u32,
-    /// The same for the projected area (scalar maps).
+    /// The same as `g` for the projected area (a scalar map).
     pub area_g: u32,
+    /// The same as `h` for the projected area.
     pub area_h: u32,
 }
 

@@ -43,7 +43,9 @@ pub struct CompareSettings {
     pub reference_spp: u32,
     /// The bakes' indirect bounces (`wpbgi bake`'s default: automatic).
     pub bounces: BounceSettings,
+    /// The cache's final render (its gather, samples, microbuffer).
     pub final_settings: FinalSettings,
+    /// Seed of the path tracer's samples.
     pub seed: u64,
 }
 

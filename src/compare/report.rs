@@ -9,11 +9,13 @@ use std::path::PathBuf;
 /// The image every run is measured against.
 #[derive(Clone, Debug)]
 pub struct Reference {
+    /// The reference image.
     pub image: Image,
     /// The file it was read from, or `None` when it was rendered here.
     pub path: Option<PathBuf>,
     /// For a rendered reference: its samples per pixel and seconds.
     pub spp: Option<u32>,
+    /// Its render time (a rendered reference).
     pub seconds: Option<f64>,
 }
 
@@ -21,12 +23,23 @@ pub struct Reference {
 #[derive(Clone, Debug, PartialEq)]
 pub enum Method {
     /// Bake at a preset, then the final render from the cache.
-    Cache { preset: Quality, points: usize },
+    Cache {
+        /// The bake's preset.
+        preset: Quality,
+        /// Its surfel count.
+        points: usize,
+    },
     /// The path tracer at `spp` samples per pixel (a point of its progressive render).
-    PathTracer { spp: u32 },
+    PathTracer {
+        /// Samples per pixel.
+        spp: u32,
+    },
     /// The same image denoised ([`crate::reference::RenderOutput::denoised`]); its seconds
     /// include the first hits' and the denoiser's.
-    Denoised { spp: u32 },
+    Denoised {
+        /// Samples per pixel before denoising.
+        spp: u32,
+    },
 }
 
 impl Method {
@@ -54,21 +67,29 @@ impl Method {
 /// One measured run.
 #[derive(Clone, Debug)]
 pub struct Run {
+    /// The method that made the image.
     pub method: Method,
+    /// Seconds spent baking (0 for the path tracers).
     pub bake_seconds: f64,
+    /// Seconds spent rendering the image.
     pub render_seconds: f64,
     /// Peak resident memory during the run (bytes), where the OS tells it.
     pub peak_memory: Option<u64>,
+    /// Mean squared error against the reference.
     pub mse: f64,
+    /// Relative MSE: the mean over pixels and channels of (x − ref)² / (ref² + 0.01).
     pub rel_mse: f64,
+    /// Mean structural similarity with the reference.
     pub mssim: f64,
 }
 
 impl Run {
+    /// Bake plus render.
     pub fn total_seconds(&self) -> f64 {
         self.bake_seconds + self.render_seconds
     }
 
+    /// The run's label (see [`Method::label`]).
     pub fn label(&self) -> String {
         self.method.label()
     }
@@ -99,10 +120,15 @@ impl Run {
 /// Every run of a comparison and what they were compared against.
 #[derive(Clone, Debug)]
 pub struct Report {
+    /// The scene compared on.
     pub scene: PathBuf,
+    /// Image width in pixels.
     pub width: u32,
+    /// Image height in pixels.
     pub height: u32,
+    /// Worker threads every run used.
     pub threads: usize,
+    /// What the runs are measured against.
     pub reference: Reference,
     /// The cache's runs (one per preset), then the path tracer's and the denoised path
     /// tracer's, each in the order of its samples.

@@ -65,7 +65,9 @@ pub struct FrameRun {
     /// Wall seconds of this frame's render (the denoised path tracer's include its first
     /// hits and the denoiser).
     pub render_seconds: f64,
+    /// Mean squared error against the frame's reference.
     pub mse: f64,
+    /// Relative MSE (see [`super::Run::rel_mse`]).
     pub rel_mse: f64,
 }
 
@@ -76,6 +78,7 @@ pub struct ShotRun {
     pub method: Method,
     /// The cache's bake (once for the shot); 0 for the path tracer.
     pub bake_seconds: f64,
+    /// Its frames, in order.
     pub frames: Vec<FrameRun>,
     /// Mean over consecutive frames of the mean squared difference of their errors.
     pub temporal_mse: f64,
@@ -88,6 +91,7 @@ impl ShotRun {
         (self.bake_seconds + rendering) / self.frames.len().max(1) as f64
     }
 
+    /// Mean relative MSE over the frames.
     pub fn mean_rel_mse(&self) -> f64 {
         self.frames.iter().map(|f| f.rel_mse).sum::<f64>() / self.frames.len().max(1) as f64
     }
@@ -117,15 +121,21 @@ impl ShotRun {
 /// A shot's every run.
 #[derive(Clone, Debug)]
 pub struct ShotReport {
+    /// The scene compared on.
     pub scene: PathBuf,
+    /// Image width in pixels.
     pub width: u32,
+    /// Image height in pixels.
     pub height: u32,
+    /// Worker threads every run used.
     pub threads: usize,
+    /// Frames in the shot.
     pub frames: usize,
     /// The camera's turn over the shot (see [`cameras`]).
     pub orbit_degrees: f32,
     /// For references rendered here: their samples per pixel and total seconds.
     pub reference_spp: Option<u32>,
+    /// See `reference_spp`.
     pub reference_seconds: Option<f64>,
     /// The cache's runs (one per preset), then the path tracer's and the denoised one's.
     pub runs: Vec<ShotRun>,

@@ -39,7 +39,9 @@ pub const COPLANAR: f32 = 0.01;
 /// What one traversal did (for the render statistics).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct CutStats {
+    /// Nodes visited.
     pub visited: u64,
+    /// Nodes splatted into the buffer.
     pub splats: u64,
     /// Near leaves split into pieces.
     pub split_leaves: u64,

@@ -134,8 +134,11 @@ pub fn cluster(points: &[(Vec3, Vec3)], k: usize) -> Vec<Cluster> {
 /// A cluster's shared part: its far nodes splatted into a spherical buffer around the active
 /// receiver, and the near nodes its members refine.
 pub struct ClusterCut {
+    /// The far nodes' spherical buffer.
     pub buffer: Microbuffer,
+    /// The near nodes, where the members' own traversals start.
     pub near: Vec<u32>,
+    /// What the cluster's traversal did.
     pub stats: CutStats,
     /// For the last few member buffer layouts (frame, spherical), the shared pixel along each
     /// member pixel's direction (or [`NO_PIXEL`]): members on one flat surface share a frame,
@@ -183,7 +186,9 @@ impl ClusterCut {
 pub struct ClusterReceivers {
     /// The active receiver's position, mesh and frame.
     pub p: Vec3,
+    /// See `p`.
     pub mesh: u32,
+    /// See `p`.
     pub frame: Frame,
     /// The largest distance from the active receiver to a member.
     pub radius: f32,

@@ -15,19 +15,35 @@ use glam::{Vec2, Vec3};
 pub enum Lookup {
     /// Nothing reaches the receiver (a hidden back face, a solid's inward light).
     Nothing,
-    /// The RGB radiance of surfel `surfel` (a diffuse surfel seen from its front).
-    SurfelRgb { surfel: u32 },
-    /// The map of surfel `surfel` at the texel holding `point` of its unit square; `front`:
-    /// seen from the front, where its emission (which the gather must not see) leaves.
-    SurfelMap {
+    /// The RGB radiance of a diffuse surfel seen from its front.
+    SurfelRgb {
+        /// The surfel.
         surfel: u32,
+    },
+    /// A surfel's map at one texel.
+    SurfelMap {
+        /// The surfel.
+        surfel: u32,
+        /// The point of the map's unit square whose texel is read.
         point: Vec2,
+        /// Seen from the front, where its emission (which the gather must not see) leaves.
         front: bool,
     },
-    /// Node `node`'s exact diffuse radiance S·`u`, per channel, with S = Σ A L n over its
-    /// surfels and `u` = ω/(N·ω) (every surfel below diffuse and facing ω).
-    NodeNormal { node: u32, u: Vec3 },
-    /// Node `node`'s radiant intensity at the texel holding `point`, times `scale` (one over
-    /// the projected area it is divided by).
-    NodeMap { node: u32, point: Vec2, scale: f32 },
+    /// A node's exact diffuse radiance S·`u`, per channel, with S = Σ A L n over its surfels
+    /// (every surfel below diffuse and facing ω).
+    NodeNormal {
+        /// The node.
+        node: u32,
+        /// ω/(N·ω), N = Σ A n over its surfels.
+        u: Vec3,
+    },
+    /// A node's radiant intensity at one texel, divided by its projected area.
+    NodeMap {
+        /// The node.
+        node: u32,
+        /// The point of the map's unit square whose texel is read.
+        point: Vec2,
+        /// One over the projected area.
+        scale: f32,
+    },
 }

@@ -141,9 +141,13 @@ pub const NO_SOURCE: u32 = u32::MAX;
 /// (coverage, compositing, closing), so the same links serve any light the tree sends.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PixelLink {
+    /// The buffer pixel.
     pub pixel: u32,
+    /// Index into [`Links::sources`].
     pub source: u32,
+    /// Weight of the source's radiance in the pixel's radiance.
     pub w: f32,
+    /// Its weight in the pixel's cosine-weighted radiance.
     pub w_cos: f32,
 }
 
@@ -172,10 +176,13 @@ impl Links {
 pub struct Microbuffer {
     /// Base pixels per side of each hemisphere's grid.
     pub n: u32,
+    /// Whether it covers the whole sphere (a transmitting receiver) or the hemisphere
+    /// above `frame.n`.
     pub spherical: bool,
     /// The receiver's shading frame (its normal is `frame.n`).
     pub frame: Frame,
     cells: Vec<Cell>,
+    /// Its pixels (directions and solid angles), coarse cells and refined ones alike.
     pub pixels: Vec<Pixel>,
     /// After [`Microbuffer::resolve`]: per pixel, the composited radiance (its mean over the
     /// pixel), the same weighted by each sender's own |cos θ| (what the convolution uses, so
@@ -183,8 +190,11 @@ pub struct Microbuffer {
     /// pixel's mean cosine), the distance to
     /// the nearest sender (∞ where none) and the covered fraction.
     pub radiance: Vec<Rgb>,
+    /// See `radiance`.
     pub cos_radiance: Vec<Rgb>,
+    /// See `radiance`.
     pub depth: Vec<f32>,
+    /// See `radiance`.
     pub alpha: Vec<f32>,
     /// After [`Microbuffer::resolve`]: per pixel, the coverage its radiance was summed over
     /// (up to [`MAX_LAYER_COVER`]; `alpha` is this clamped to 1).

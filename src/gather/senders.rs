@@ -98,11 +98,13 @@ pub const PLANAR_SLAB: f32 = 1e-3;
 
 /// The tree of senders.
 pub struct Senders {
+    /// The tree's nodes, breadth-first from the root.
     pub nodes: Vec<SenderNode>,
     /// Per mesh: whether it bounds a solid.
     solid_meshes: Vec<bool>,
     /// Per closed mesh: the bounds of its surfels' discs.
     closed_boxes: Vec<Option<[Vec3; 2]>>,
+    /// The surfels, as the cache records them.
     pub surfels: Vec<SurfelRecord>,
     /// Per inner node: G of the radiant intensity and of the projected area (leaves: empty).
     intensity: Vec<SparseHaar<Rgb>>,

@@ -8,8 +8,11 @@ use glam::Vec3;
 /// An orthonormal basis `(s, t, n)`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Frame {
+    /// Tangent.
     pub s: Vec3,
+    /// Bitangent.
     pub t: Vec3,
+    /// Normal.
     pub n: Vec3,
 }
 
@@ -26,11 +29,13 @@ impl Frame {
     }
 
     #[inline]
+    /// `v` in the frame's coordinates (world to local).
     pub fn to_local(&self, v: Vec3) -> Vec3 {
         Vec3::new(v.dot(self.s), v.dot(self.t), v.dot(self.n))
     }
 
     #[inline]
+    /// `v` from the frame's coordinates (local to world).
     pub fn to_world(&self, v: Vec3) -> Vec3 {
         self.s * v.x + self.t * v.y + self.n * v.z
     }

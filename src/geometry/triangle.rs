@@ -13,6 +13,7 @@ use glam::{Vec3A, Vec4};
 /// Per-ray constants of the shear transform.
 #[derive(Clone, Copy, Debug)]
 pub struct WatertightRay {
+    /// The ray's origin.
     pub origin: Vec3A,
     dir: Vec3A,
     kx: usize,
@@ -26,12 +27,14 @@ pub struct WatertightRay {
 /// Where a ray met a triangle.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TriangleHit {
+    /// Distance along the ray (in units of its direction's length).
     pub t: f32,
     /// Barycentric weights of the three vertices, summing to 1.
     pub b: [f32; 3],
 }
 
 impl WatertightRay {
+    /// The constants of the ray from `origin` along `dir`.
     pub fn new(origin: Vec3A, dir: Vec3A) -> Self {
         let a = dir.abs();
         let kz = if a.x > a.y {

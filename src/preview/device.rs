@@ -17,26 +17,33 @@ use std::sync::Mutex;
 use thiserror::Error;
 
 /// What can go wrong setting up or using Vulkan.
+/// Why the previewer has no Vulkan device, or what a Vulkan call refused.
 #[derive(Debug, Error)]
 pub enum VulkanError {
+    /// No Vulkan loader library (the loader's own message).
     #[error(
         "no Vulkan loader was found ({0}); install a loader and a driver, e.g. \
          `apt install libvulkan1 mesa-vulkan-drivers` for lavapipe (software Vulkan)"
     )]
     NoLoader(String),
+    /// No device with a graphics queue.
     #[error(
         "no Vulkan device with a graphics queue was found; install a driver, e.g. \
          `apt install mesa-vulkan-drivers` for lavapipe (software Vulkan)"
     )]
     NoDevice,
+    /// `WPBGI_VALIDATE=1` without the validation layer.
     #[error(
         "WPBGI_VALIDATE=1 asks for the Vulkan validation layer, which is not installed \
          (e.g. `apt install vulkan-validationlayers`)"
     )]
     NoValidationLayer,
+    /// A Vulkan call that failed.
     #[error("the Vulkan call {call} failed: {result}")]
     Call {
+        /// The call's name.
         call: &'static str,
+        /// What it returned.
         result: vk::Result,
     },
 }
@@ -53,12 +60,17 @@ pub(super) fn check<T>(call: &'static str, r: Result<T, vk::Result>) -> Result<T
 pub struct Gpu {
     /// The device's name and kind, as the driver reports them.
     pub name: String,
+    /// See `name`.
     pub kind: vk::PhysicalDeviceType,
     /// The queue family (graphics and compute) and its first queue.
     pub queue_family: u32,
+    /// See `queue_family`.
     pub queue: vk::Queue,
+    /// The logical device.
     pub device: ash::Device,
+    /// The physical device it runs on.
     pub physical: vk::PhysicalDevice,
+    /// The Vulkan instance.
     pub instance: ash::Instance,
     naming: Option<ash::ext::debug_utils::Device>,
     messenger: Option<(ash::ext::debug_utils::Instance, vk::DebugUtilsMessengerEXT)>,

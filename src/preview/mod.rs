@@ -36,10 +36,13 @@ use view::View;
 /// What went wrong previewing a cache.
 #[derive(Debug, thiserror::Error)]
 pub enum PreviewError {
+    /// The Vulkan device or a call to it.
     #[error(transparent)]
     Vulkan(#[from] VulkanError),
+    /// The cache previewed.
     #[error(transparent)]
     Cache(#[from] CacheError),
+    /// The window system (the message it gave).
     #[error("the preview window failed: {0}")]
     Window(String),
 }
@@ -86,11 +89,13 @@ pub fn framing_camera(bounds: (Vec3, Vec3), width: u32, height: u32) -> Option<C
 
 /// One drawn frame.
 pub struct Frame {
+    /// The frame read back.
     pub image: Image,
     /// Nodes in the cut (splats drawn).
     pub cut_size: usize,
     /// Seconds spent on the cut and its radiance (CPU), and drawing (GPU, with the readback).
     pub cut_seconds: f64,
+    /// See `cut_seconds`.
     pub draw_seconds: f64,
 }
 
@@ -228,6 +233,7 @@ impl Preview {
         self.renderer.gbuffer()
     }
 
+    /// The device it draws with.
     pub fn gpu(&self) -> &Gpu {
         self.renderer.gpu()
     }

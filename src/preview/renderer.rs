@@ -231,6 +231,7 @@ impl Renderer {
         })
     }
 
+    /// The device it draws with.
     pub fn gpu(&self) -> &Gpu {
         &self.objects.gpu
     }
@@ -240,6 +241,7 @@ impl Renderer {
         self.size
     }
 
+    /// The same, shared.
     pub fn gpu_arc(&self) -> Arc<Gpu> {
         self.objects.gpu.clone()
     }
@@ -562,6 +564,7 @@ fn upload_geometry(o: &mut Objects, scene: &Scene) -> Result<Geometry, VulkanErr
 
 /// A swapchain image to draw a frame into.
 pub struct PresentTarget {
+    /// The image.
     pub image: vk::Image,
     /// Signalled when the image is acquired; the frame waits for it.
     pub acquired: vk::Semaphore,

@@ -15,10 +15,15 @@ use glam::{Mat4, Vec3, Vec4};
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 pub struct FrameUniforms {
+    /// World to clip space.
     pub view_proj: [[f32; 4]; 4],
+    /// The eye (w = 1).
     pub eye: [f32; 4],
+    /// The camera's right, up and forward unit vectors (w = 0).
     pub right: [f32; 4],
+    /// See `right`.
     pub up: [f32; 4],
+    /// See `right`.
     pub forward: [f32; 4],
     /// Emission scale, splat scale, [`W_MIN`], [`W_MAX`].
     pub params: [f32; 4],
@@ -35,8 +40,11 @@ pub const W_MAX: f32 = 1e4;
 /// A camera for the previewer, with the depth range of what it looks at.
 #[derive(Clone, Debug)]
 pub struct View {
+    /// The camera.
     pub camera: Camera,
+    /// The near and far depth of what it looks at.
     pub near: f32,
+    /// See `near`.
     pub far: f32,
 }
 
@@ -66,6 +74,7 @@ impl View {
         }
     }
 
+    /// Whether the camera is a pinhole (not orthographic).
     pub fn is_perspective(&self) -> bool {
         matches!(self.camera.projection, Projection::Perspective { .. })
     }

@@ -36,22 +36,30 @@ pub const MOVING_COARSENESS: f32 = 8.0;
 /// What a windowed run does.
 #[derive(Clone, Debug)]
 pub struct WindowSettings {
+    /// What the splats show (the cache's light, or a diagnostic).
     pub show: Show,
+    /// The cut's target: the largest a node may look on screen, in pixels.
     pub cut_pixels: f32,
     /// A scripted run of this many frames (then refinement), instead of an interactive one.
     pub frames: Option<u32>,
     /// Read the last frame back from the swapchain into this PNG.
     pub screenshot: Option<PathBuf>,
+    /// Run under the Vulkan validation layer and collect its messages.
     pub validate: bool,
 }
 
 /// What a windowed run did.
 #[derive(Clone, Debug, Default)]
 pub struct WindowReport {
+    /// The device's name.
     pub device: String,
+    /// Frames drawn.
     pub frames: u32,
+    /// Splats in the last frame's cut.
     pub last_cut_size: usize,
+    /// Seconds the last cut took on the CPU.
     pub last_cut_seconds: f64,
+    /// Seconds the last frame took to draw.
     pub last_draw_seconds: f64,
     /// The validation layer's messages (with `validate`).
     pub validation: Vec<String>,

@@ -15,14 +15,23 @@ pub enum Transport {
     /// testing it: up to `chain` vertices smoother than `smooth_below` (no next-event
     /// estimation there), then a rough vertex lit directly and by one more vertex that is
     /// itself lit directly.
-    CacheOneBounce { smooth_below: f32, chain: u32 },
+    CacheOneBounce {
+        /// The roughness below which a vertex continues the chain.
+        smooth_below: f32,
+        /// The longest chain, in vertices.
+        chain: u32,
+    },
 }
 
 /// Everything the integrator needs, built once per render.
 pub struct RenderContext<'a> {
+    /// The scene, its BVH and its emitters.
     pub tracer: Tracer<'a>,
+    /// Longest path in segments (−1: unlimited), Mitsuba's `max_depth`.
     pub max_depth: i32,
+    /// The depth from which Russian roulette may end a path, Mitsuba's `rr_depth`.
     pub rr_depth: u32,
+    /// Which paths it sums.
     pub transport: Transport,
 }
 

@@ -102,9 +102,13 @@ impl Default for RenderSettings {
 /// bars and statistical tests), the samples taken and the wall time.
 #[derive(Clone, Debug)]
 pub struct RenderOutput {
+    /// The mean over the samples.
     pub mean: Image,
+    /// The per-pixel variance of a one-sample estimate.
     pub variance: Image,
+    /// Samples per pixel taken.
     pub spp: u32,
+    /// Wall seconds.
     pub seconds: f64,
     /// With [`RenderSettings::first_hits`]: what the same camera samples hit first.
     pub first_hits: Option<FirstHits>,
@@ -115,8 +119,11 @@ pub struct RenderOutput {
 /// environment's where the ray escapes), which a denoiser must not blur (the emitters' edges).
 #[derive(Clone, Debug)]
 pub struct FirstHits {
+    /// Mean albedo of the first hits.
     pub albedo: Image,
+    /// Mean shading normal of the first hits.
     pub normal: Image,
+    /// Mean emission seen directly.
     pub emission: Image,
     /// The seconds they took (one more closest-hit ray per camera sample), part of the
     /// render's.

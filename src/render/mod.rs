@@ -231,11 +231,15 @@ pub const EDGE_SIDE: u32 = 8;
 /// What the gather did, summed over the image.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct GatherStats {
+    /// Receivers gathered (rough hits the camera's paths reached).
     pub receivers: u64,
+    /// Of those, the ones gathered in clusters (FPBGI).
     pub clustered: u64,
+    /// Clusters made.
     pub clusters: u64,
     /// Nodes visited and splatted by receivers, and by clusters (shared).
     pub receiver_cut: CutStats,
+    /// See `receiver_cut`.
     pub cluster_cut: CutStats,
     /// Microbuffer pixels (after refinement) over all receivers.
     pub pixels: u64,

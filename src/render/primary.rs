@@ -24,14 +24,18 @@ pub struct Receiver {
     pub pixel: u32,
     /// Throughput from the camera sample to this point, over the pixel's sample count.
     pub weight: Rgb,
+    /// The surface point.
     pub p: Vec3,
-    /// The rounding bound of `p` and the hit triangle's geometric normal, to leave the
-    /// surface by ([`crate::geometry::offset::offset_origin`]).
+    /// The rounding bound of `p`, to leave the surface by with `ng`
+    /// ([`crate::geometry::offset::offset_origin`]).
     pub err: Vec3,
+    /// The hit triangle's geometric normal.
     pub ng: Vec3,
     /// The mesh it lies on.
     pub mesh: u32,
+    /// Its shading frame (shading normal and tangents).
     pub frame: Frame,
+    /// Its BSDF at this point (textures applied).
     pub bsdf: Bsdf,
     /// Direction towards the viewer, in `frame`.
     pub view: Vec3,
@@ -57,7 +61,9 @@ fn extend_chain(chain: u64, mesh: u32, branch: usize) -> u64 {
 pub struct PrimarySample {
     /// Emission and direct light.
     pub direct: Rgb,
+    /// The first hit's albedo (the BSDF's reflectance), the denoiser's guide.
     pub albedo: Rgb,
+    /// The first hit's shading normal, the denoiser's guide.
     pub normal: Vec3,
     /// Distance to the first hit (∞ for none).
     pub depth: f32,
@@ -69,6 +75,7 @@ pub struct PrimarySample {
 /// The settings the primary pass reads.
 #[derive(Clone, Copy, Debug)]
 pub struct PrimarySettings {
+    /// Longest path in segments, Mitsuba's `max_depth` (−1: unlimited).
     pub max_depth: i32,
     /// Emitter samples per pixel at each rough hit (and as many BSDF samples for glossy
     /// ones), shared among the pixel's camera samples ([`LightShare`]).
@@ -77,6 +84,7 @@ pub struct PrimarySettings {
     pub specular_below: f32,
     /// Longest specular chain, in vertices.
     pub chain_depth: u32,
+    /// Seed of the per-pixel random sequences.
     pub seed: u64,
 }
 
@@ -89,10 +97,15 @@ fn within(max_depth: i32, segments: u32) -> bool {
 /// (`None`: it gathers nothing, another sample of the pixel gathers for it).
 #[derive(Clone, Copy, Debug)]
 pub struct CameraSample {
+    /// Ray origin.
     pub o: Vec3,
+    /// Ray direction (unit).
     pub d: Vec3,
+    /// The pixel (row-major).
     pub pixel: u32,
+    /// Its weight in the pixel's mean.
     pub weight: Rgb,
+    /// The weight of the receivers it makes.
     pub gather_weight: Option<Rgb>,
     /// The quarter of the pixel it gathers for, when the pixel has several samples.
     pub quarter: Option<u8>,
@@ -111,8 +124,11 @@ pub struct CameraSample {
 /// of its share, so the pixel's mean stays unbiased.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct LightShare {
+    /// Index of its first sample among the pixel's.
     pub first: u32,
+    /// How many samples it takes.
     pub count: u32,
+    /// How many the pixel takes in all.
     pub total: u32,
 }
 

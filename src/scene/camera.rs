@@ -3,24 +3,41 @@
 
 use glam::{Quat, Vec2, Vec3};
 
+/// How a camera maps directions to the image.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Projection {
-    /// Vertical field of view in radians.
-    Perspective { yfov: f32 },
-    /// Half extents of the view in world units.
-    Orthographic { xmag: f32, ymag: f32 },
+    /// A pinhole.
+    Perspective {
+        /// Vertical field of view in radians.
+        yfov: f32,
+    },
+    /// Parallel rays.
+    Orthographic {
+        /// Half the view's width in world units.
+        xmag: f32,
+        /// Half its height.
+        ymag: f32,
+    },
 }
 
+/// A camera and the image it makes.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Camera {
+    /// Its name in the scene (a glTF node's name, a USD prim path), as `--camera` takes it.
     pub name: String,
+    /// The eye (world space).
     pub position: Vec3,
     /// Unit vectors: image right, image up, and the viewing direction.
     pub right: Vec3,
+    /// See `right`.
     pub up: Vec3,
+    /// See `right`.
     pub forward: Vec3,
+    /// Perspective or orthographic.
     pub projection: Projection,
+    /// Image width in pixels.
     pub width: u32,
+    /// Image height in pixels.
     pub height: u32,
 }
 
@@ -226,7 +243,9 @@ impl Camera {
 pub struct RenderProduct {
     /// The `RenderSettings` prim.
     pub settings: String,
+    /// The camera prim it names, if any.
     pub camera: Option<String>,
+    /// Its resolution (width, height), if it sets one.
     pub resolution: Option<(u32, u32)>,
     /// `productName`: the file the image goes to.
     pub name: Option<String>,

@@ -23,10 +23,12 @@ use std::path::Path;
 /// Radiance from every direction not blocked by the scene.
 #[derive(Clone, Debug)]
 pub struct Environment {
+    /// Its name in the scene (for errors and the bake plan).
     pub name: String,
     /// A latitude-longitude map of linear radiance (multiplied by `scale`); `None`: `scale`
     /// from every direction.
     pub map: Option<Texture>,
+    /// Multiplies the map (or is the radiance, without one).
     pub scale: Rgb,
     /// World directions to the environment's frame (a rotation).
     pub to_local: Mat3,

@@ -5,24 +5,35 @@
 use crate::spectrum::Rgb;
 use glam::Vec3;
 
+/// What shape of light a punctual light sends.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum LightKind {
+    /// The same intensity every way.
     Point,
-    /// Cosines of the inner and outer cone angles.
+    /// A cone with a smooth edge.
     Spot {
+        /// Cosine of the inner cone angle (full intensity inside).
         cos_inner: f32,
+        /// Cosine of the outer cone angle (nothing outside).
         cos_outer: f32,
     },
+    /// Parallel light from infinitely far.
     Directional,
 }
 
+/// A light of no extent (KHR_lights_punctual; UsdLux's distant lights).
 #[derive(Clone, Debug, PartialEq)]
 pub struct PunctualLight {
+    /// Its name in the scene (the node's or prim's).
     pub name: String,
+    /// Point, spot or directional.
     pub kind: LightKind,
+    /// Where it is (unused for directional lights).
     pub position: Vec3,
     /// Unit direction the light shines towards (the node's −Z axis).
     pub direction: Vec3,
+    /// `intensity × color`: radiant intensity (W/sr), or irradiance (W/m²) for a directional
+    /// light.
     pub intensity: Rgb,
 }
 

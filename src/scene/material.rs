@@ -25,15 +25,21 @@ pub const INDEX_MATCHED: f32 = 1e-6;
 /// glTF metallic-roughness parameters (with their textures).
 #[derive(Clone, Debug)]
 pub struct PbrParams {
+    /// Base colour (linear RGB).
     pub base_color: Rgb,
+    /// Multiplies `base_color` (sRGB-decoded).
     pub base_color_texture: Option<TexRef>,
+    /// Metalness, 0 (dielectric) to 1 (conductor).
     pub metallic: f32,
     /// Multiplies `metallic` (glTF: the B channel of the metallic-roughness image).
     pub metallic_texture: Option<ChannelRef>,
+    /// Perceptual roughness; the GGX α is its square.
     pub roughness: f32,
     /// Multiplies `roughness` (glTF: the G channel of the metallic-roughness image).
     pub roughness_texture: Option<ChannelRef>,
+    /// Fraction of light transmitted (KHR_materials_transmission).
     pub transmission: f32,
+    /// Multiplies `transmission` (the R channel).
     pub transmission_texture: Option<ChannelRef>,
     /// Index of refraction of the interior (KHR_materials_ior, default 1.5).
     pub ior: f32,
@@ -74,16 +80,22 @@ pub enum Scattering {
 /// Emitted radiance of a surface: `factor × strength`, times a texture if any.
 #[derive(Clone, Debug)]
 pub struct Emission {
+    /// Emitted radiance (linear RGB).
     pub radiance: Rgb,
+    /// Multiplies `radiance` (sRGB-decoded).
     pub texture: Option<TexRef>,
     /// Emits from both faces (glTF `doubleSided`); otherwise only from the front face.
     pub two_sided: bool,
 }
 
 #[derive(Clone, Debug)]
+/// A surface's material: how it scatters, what it emits, its cut-outs and normal map.
 pub struct Material {
+    /// The name in the scene file (errors and the bake plan name materials by it).
     pub name: String,
+    /// How it scatters light.
     pub scattering: Scattering,
+    /// What it emits, if anything.
     pub emission: Option<Emission>,
     /// Holes cut by the alpha channel (glTF `alphaMode: MASK`, USD `opacityThreshold`).
     pub cutout: Option<Cutout>,
@@ -96,8 +108,11 @@ pub struct Material {
 /// bake's surfels.
 #[derive(Clone, Copy, Debug)]
 pub struct Cutout {
+    /// Opacity (glTF `baseColorFactor` alpha, USD `opacity`).
     pub alpha: f32,
+    /// Multiplies `alpha` (the alpha channel).
     pub texture: Option<ChannelRef>,
+    /// The opacity below which the surface is a hole.
     pub cutoff: f32,
 }
 

@@ -6,12 +6,17 @@ use glam::{Vec2, Vec3};
 /// A triangle mesh in world space.
 #[derive(Clone, Debug)]
 pub struct Mesh {
+    /// Its name in the scene (a glTF mesh's, a USD prim path), for errors.
     pub name: String,
+    /// Vertex positions (world space).
     pub positions: Vec<Vec3>,
     /// Unit shading normals per vertex; `None` means flat shading with the face normal.
     pub normals: Option<Vec<Vec3>>,
+    /// Texture coordinates per vertex, if any.
     pub uvs: Option<Vec<Vec2>>,
+    /// Triangles as three vertex indices, counter-clockwise seen from the front.
     pub triangles: Vec<[u32; 3]>,
+    /// Index into the scene's materials.
     pub material: usize,
 }
 

@@ -24,6 +24,7 @@ use glam::{Vec2, Vec3};
 /// tangent frame (glTF: scale 2 and bias −1, x and y times `normalTexture.scale`).
 #[derive(Clone, Copy, Debug)]
 pub struct NormalMap {
+    /// The tangent-space normal image.
     pub texture: TexRef,
 }
 

@@ -6,8 +6,11 @@ use glam::{Affine2, Vec2, Vec4};
 /// How texture coordinates outside [0, 1] are folded back.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Wrap {
+    /// The image tiles the plane.
     Repeat,
+    /// Coordinates are clamped to the edge texels.
     Clamp,
+    /// The image tiles the plane, every other copy mirrored.
     Mirror,
     /// Texels outside the image are black (UsdUVTexture's `black`).
     Black,
@@ -17,17 +20,24 @@ pub enum Wrap {
 /// exceed 1).
 #[derive(Clone, Debug)]
 pub struct Texture {
+    /// The file or prim it came from, for errors.
     pub name: String,
+    /// Width in texels.
     pub width: u32,
+    /// Height in texels.
     pub height: u32,
+    /// RGBA texels, row by row from the top.
     pub texels: Vec<Vec4>,
 }
 
 /// A material's reference to a texture: which image, with which sampler and UV transform.
 #[derive(Clone, Copy, Debug)]
 pub struct TexRef {
+    /// Index into the scene's textures.
     pub texture: usize,
+    /// Wrap along u.
     pub wrap_s: Wrap,
+    /// Wrap along v.
     pub wrap_t: Wrap,
     /// From the mesh's texture coordinate to the image's, where (0, 0) is the top-left corner
     /// of the image (KHR_texture_transform; for USD, UsdTransform2d and the flip of t).
@@ -36,6 +46,7 @@ pub struct TexRef {
     pub srgb: bool,
     /// Applied to the linear value: `value × scale + bias` (UsdUVTexture; 1 and 0 for glTF).
     pub scale: Vec4,
+    /// See `scale`.
     pub bias: Vec4,
 }
 
@@ -43,12 +54,14 @@ pub struct TexRef {
 /// of one image, or a UsdUVTexture's `outputs:r`).
 #[derive(Clone, Copy, Debug)]
 pub struct ChannelRef {
+    /// The image and its sampler.
     pub texture: TexRef,
     /// 0 to 3 for r, g, b, a.
     pub channel: usize,
 }
 
 impl ChannelRef {
+    /// The channel's value at `uv`, bilinearly filtered.
     pub fn sample(&self, textures: &[Texture], uv: Vec2) -> f32 {
         self.texture.sample(textures, uv)[self.channel.min(3)]
     }

@@ -25,7 +25,10 @@ use crate::haar::{Coefficient, Haar2d, SparseHaar, SparseSum};
 /// What one node stores.
 #[derive(Clone, Debug, PartialEq)]
 pub struct NodeCoding<T> {
+    /// The node's own map G, stored at and above the split level.
     pub g: Option<SparseHaar<T>>,
+    /// The detail H between its two children (their maps are G/2 ± H), stored at and below
+    /// the split level.
     pub h: Option<SparseHaar<T>>,
 }
 
@@ -38,7 +41,9 @@ impl<T> Default for NodeCoding<T> {
 /// The coded tree: one [`NodeCoding`] per node of the [`SurfelTree`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct CodedTree<T> {
+    /// The split level ε (see the module docs).
     pub split_level: u32,
+    /// Per node, in the tree's order.
     pub nodes: Vec<NodeCoding<T>>,
 }
 

@@ -38,12 +38,15 @@ pub const CANDIDATES_PER_SURFEL: usize = 5;
 /// A surface sample.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Surfel {
+    /// Its centre, on the surface.
     pub p: Vec3,
     /// Unit geometric normal (the front face of the triangle).
     pub n: Vec3,
     /// Area of surface this surfel stands for.
     pub area: f32,
+    /// The mesh it lies on.
     pub mesh: u32,
+    /// The triangle of that mesh.
     pub triangle: u32,
     /// Barycentric weights of the triangle's vertices 1 and 2 (vertex 0 has 1 − b.x − b.y).
     pub b: Vec2,

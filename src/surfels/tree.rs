@@ -28,6 +28,7 @@ pub struct Node {
     /// π when the normals span the sphere) with `axis`. Kept as an angle: cones merge in
     /// angles, and acos of a stored cosine would lose half the digits of a narrow cone.
     pub axis: Vec3,
+    /// See `axis`.
     pub cone_angle: f32,
     /// Total surfel area below.
     pub area: f32,
@@ -39,6 +40,7 @@ pub struct Node {
     pub children: [u32; 2],
     /// The surfels below are `order[first .. first + count]` of the tree.
     pub first: u32,
+    /// See `first`.
     pub count: u32,
 }
 

@@ -114,6 +114,7 @@ pub struct Operators {
 /// A surfel's operator: its BSDF's untinted operator, shared, and its tints.
 #[derive(Clone, Debug)]
 pub struct SurfelOperator {
+    /// The untinted operator of its BSDF (shared by every surfel with the same lobe shape).
     pub shared: Arc<BsdfOperator>,
     /// `[reflected, transmitted]`, see [`Bsdf::untinted`].
     pub tints: [Rgb; 2],

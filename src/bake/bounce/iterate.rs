@@ -440,7 +440,9 @@ pub fn pixel_hits(
 /// What a pixel's centre ray hit.
 #[derive(Clone, Copy, Debug)]
 pub struct PixelHit {
+    /// The hit point.
     pub point: Vec3,
+    /// The mesh hit.
     pub mesh: u32,
     /// The hit triangle's geometric normal (its front face).
     pub normal: Vec3,

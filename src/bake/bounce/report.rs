@@ -30,11 +30,13 @@ pub struct TransportReport {
     pub bytes_unbounded: u64,
     /// Receiver groups kept, and gathered again in every bounce.
     pub kept_groups: usize,
+    /// See `kept_groups`.
     pub regathered_groups: usize,
     /// Surfels that gather (the others blend their light, see [`super::receivers`]).
     pub receivers: usize,
     /// Slots the receivers read, of all the tree's.
     pub read_slots: usize,
+    /// See `read_slots`.
     pub slots: u64,
     /// Bytes of the directional receivers' incident light summed over the bounces, and of
     /// one bounce's beside it: taken from the budget before the links.

@@ -154,6 +154,7 @@ pub struct SlotIndex {
 }
 
 impl SlotIndex {
+    /// An index over `slots` with none marked read yet.
     pub fn new(slots: &Slots) -> SlotIndex {
         SlotIndex {
             words: (0..slots.total.div_ceil(64))
@@ -189,6 +190,7 @@ impl SlotIndex {
         }
     }
 
+    /// Whether no slot is read.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
@@ -272,6 +274,7 @@ fn merge_by_slot(terms: &mut [Term], out: &mut Vec<Term>) {
 
 /// A receiver's recorded gather.
 pub struct ReceiverLinks {
+    /// The receiving surfel.
     pub surfel: u32,
     /// For a directional receiver, the end of each pixel's terms; empty for a diffuse one.
     pixel_ends: Box<[u32]>,
