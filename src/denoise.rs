@@ -20,7 +20,7 @@ use crate::spectrum::Rgb;
 use std::ffi::{c_char, c_int, c_void, CStr};
 
 /// The environment variable naming the library's path.
-pub const LIBRARY_VARIABLE: &str = "WPBGI_OIDN_LIBRARY";
+pub(crate) const LIBRARY_VARIABLE: &str = "WPBGI_OIDN_LIBRARY";
 
 /// The library's names on the search path, newest first.
 const NAMES: [&str; 2] = ["libOpenImageDenoise.so.2", "libOpenImageDenoise.so"];

@@ -39,7 +39,7 @@ pub struct EmitterSample {
 impl EmitterSample {
     /// Whether nothing blocks the segment from `origin` (already offset off its surface) to
     /// the sampled point, whose own end is offset off the emitter the same way.
-    pub fn visible_from(&self, accel: &Accel, origin: Vec3) -> bool {
+    pub(crate) fn visible_from(&self, accel: &Accel, origin: Vec3) -> bool {
         if !self.dist.is_finite() {
             return !accel.occluded(origin, self.wi, 0.0, f32::INFINITY);
         }
@@ -184,7 +184,7 @@ impl EmitterSampler {
 
     /// Solid-angle density with which [`EmitterSampler::sample`] would pick the environment
     /// along world direction `w` (0 without one).
-    pub fn pdf_environment(&self, scene: &Scene, w: Vec3) -> f32 {
+    pub(crate) fn pdf_environment(&self, scene: &Scene, w: Vec3) -> f32 {
         match (&self.environment, &scene.environment) {
             (Some(s), Some(env)) => self.selection_probability(self.cdf.len() - 1) * s.pdf(env, w),
             _ => 0.0,
@@ -201,7 +201,7 @@ impl EmitterSampler {
     /// sampled uniformly over it ([`SphericalTriangle`]): a bounded estimator for light
     /// sampling on its own. Its densities are not [`EmitterSampler::pdf_hit`]'s, so it does
     /// not serve multiple importance sampling.
-    pub fn sample_solid_angle(
+    pub(crate) fn sample_solid_angle(
         &self,
         scene: &Scene,
         p: Vec3,

@@ -259,7 +259,7 @@ pub fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
 
 /// `Err(Error::Cancelled)` once `cancel` is set: what the cancellable bake and render call
 /// between units of work.
-pub fn check_cancel(cancel: &std::sync::atomic::AtomicBool) -> Result<()> {
+pub(crate) fn check_cancel(cancel: &std::sync::atomic::AtomicBool) -> Result<()> {
     if cancel.load(std::sync::atomic::Ordering::Relaxed) {
         Err(Error::Cancelled)
     } else {

@@ -182,7 +182,7 @@ pub struct ExrOptions {
 
 impl ExrOptions {
     /// Float samples of the whole of `image`, no metadata.
-    pub fn lossless_float(image: &Image) -> Self {
+    pub(crate) fn lossless_float(image: &Image) -> Self {
         ExrOptions {
             display: (image.width, image.height),
             ..Default::default()
@@ -335,7 +335,7 @@ pub fn write_exr_channels(path: &Path, channels: &ExrChannels, options: &ExrOpti
 /// An image of one layer of flat channels, as wpbgi writes it: atomically, its blocks in
 /// increasing order (so that two writes of one image are the same bytes). The one writer of
 /// renders ([`write_exr_channels`]) and assembled tiles ([`crate::assemble`]).
-pub fn write_flat_layer(
+pub(crate) fn write_flat_layer(
     path: &Path,
     image: exr::prelude::Image<
         exr::prelude::Layer<exr::prelude::AnyChannels<exr::prelude::FlatSamples>>,
@@ -457,7 +457,7 @@ pub fn write_display(path: &Path, img: &Image, exposure: f32, view: ViewTransfor
 }
 
 /// Write 8-bit sRGB pixels (R, G, B per pixel, rows from the top) as a PNG.
-pub fn write_png_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<()> {
+pub(crate) fn write_png_rgb8(path: &Path, width: u32, height: u32, rgb: &[u8]) -> Result<()> {
     write_rgb8(path, width, height, rgb, image::ImageFormat::Png)
 }
 

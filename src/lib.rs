@@ -89,4 +89,4 @@ pub const VERSION: &str = env!("CARGO_PKG_VERSION");
 /// The README's Rust example, compiled as a doc test so that it stays true.
 #[cfg(doctest)]
 #[doc = include_str!("../README.md")]
-pub struct ReadmeDoctests;
+pub(crate) struct ReadmeDoctests;

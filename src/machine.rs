@@ -3,12 +3,12 @@
 //! are skipped, never guessed.
 
 /// Physical memory, in bytes.
-pub fn total_memory() -> Option<u64> {
+pub(crate) fn total_memory() -> Option<u64> {
     meminfo("MemTotal:")
 }
 
 /// Memory available to a new allocation without swapping (the kernel's estimate), in bytes.
-pub fn available_memory() -> Option<u64> {
+pub(crate) fn available_memory() -> Option<u64> {
     meminfo("MemAvailable:")
 }
 

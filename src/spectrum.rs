@@ -8,7 +8,7 @@ pub type Rgb = glam::Vec3;
 
 /// Largest component, the quantity Mitsuba uses for Russian roulette.
 #[inline]
-pub fn max_component(c: Rgb) -> f32 {
+pub(crate) fn max_component(c: Rgb) -> f32 {
     c.x.max(c.y).max(c.z)
 }
 

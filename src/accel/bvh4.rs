@@ -23,7 +23,7 @@ use std::mem::MaybeUninit;
 /// Four triangles side by side: `v[vertex][axis]` holds that coordinate of each lane's vertex.
 /// `id` is each lane's index into the accel's triangle list; `lanes` says how many are used.
 #[derive(Clone, Copy, Debug)]
-pub struct Packet {
+pub(crate) struct Packet {
     pub v: [[Vec4; 3]; 3],
     pub id: [u32; 4],
     pub lanes: u32,
@@ -77,13 +77,13 @@ impl Child {
 
 /// What a leaf visit tells the traversal: the (possibly shrunk) far bound for the boxes still to
 /// visit, or that the query is over.
-pub enum Visit {
+pub(crate) enum Visit {
     Bound(f32),
     Stop,
 }
 
 /// One query's ray, prepared for the box test.
-pub struct BoxRay {
+pub(crate) struct BoxRay {
     origin: Vec3A,
     inv: Vec3A,
     /// Per axis, whether the ray runs towards −axis (the sign bit of `inv`).
@@ -166,7 +166,7 @@ impl Node {
 }
 
 /// The tree: inner nodes, leaf packets and the root reference.
-pub struct Bvh4 {
+pub(crate) struct Bvh4 {
     nodes: Vec<Node>,
     pub packets: Vec<Packet>,
     root: u64,
@@ -191,7 +191,7 @@ const INLINE_STACK: usize = 192;
 impl Bvh4 {
     /// Collapse obvhs's binary tree over `triangles` (`[v0, v1, v2]` each) into four-wide
     /// nodes and packets.
-    pub fn from_bvh2(bvh2: &Bvh2, triangles: &[[Vec3A; 3]]) -> Bvh4 {
+    pub(crate) fn from_bvh2(bvh2: &Bvh2, triangles: &[[Vec3A; 3]]) -> Bvh4 {
         let mut out = Bvh4 {
             nodes: Vec::new(),
             packets: Vec::new(),

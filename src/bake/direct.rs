@@ -60,7 +60,7 @@ pub struct DirectLight<'a> {
 pub const NEAR_SPECULAR_ALPHA: f32 = 0.01;
 
 /// Lightcuts' relative error target (docs/design.md §5.2).
-pub const LIGHTCUT_ERROR: f32 = 0.02;
+pub(crate) const LIGHTCUT_ERROR: f32 = 0.02;
 
 /// One unoccluded emitter sample as seen from a surfel.
 struct Arrival {
@@ -139,7 +139,7 @@ impl DirectLight<'_> {
     /// [`DirectLight::radiance_map`] of a near-specular BSDF, through its operator `op`: the
     /// emitter samples binned into the operator's grid, D = V·C, and the result read onto the
     /// map by nearest texel, as a bounce turns gathered light into a map.
-    pub fn radiance_map_through(
+    pub(crate) fn radiance_map_through(
         &self,
         (s, shading): (&Surfel, Vec3),
         id: u64,

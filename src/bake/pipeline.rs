@@ -32,7 +32,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Instant;
 
 /// Scenes with more point and spot lights than this use a light tree (Lightcuts).
-pub const LIGHT_TREE_FROM: usize = 16;
+pub(crate) const LIGHT_TREE_FROM: usize = 16;
 
 /// Each mesh's relative surfel density from the per-material factors of `densities`
 /// (material name, factor, whose range [`BakeSettings::validate`] checked): a name that is

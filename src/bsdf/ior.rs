@@ -9,7 +9,7 @@
 use crate::spectrum::Rgb;
 
 /// Mitsuba's named dielectric indices (`int_ior`/`ext_ior` strings).
-pub const DIELECTRIC_IORS: &[(&str, f32)] = &[
+pub(crate) const DIELECTRIC_IORS: &[(&str, f32)] = &[
     ("vacuum", 1.0),
     ("helium", 1.000036),
     ("hydrogen", 1.000132),
@@ -36,7 +36,7 @@ pub const DIELECTRIC_IORS: &[(&str, f32)] = &[
 ];
 
 /// `(name, eta, k)` of every named conductor, in Mitsuba's RGB mode.
-pub const CONDUCTOR_IORS: &[(&str, [f32; 3], [f32; 3])] = &[
+pub(crate) const CONDUCTOR_IORS: &[(&str, [f32; 3], [f32; 3])] = &[
     (
         "Ag",
         [0.15527619, 0.11672796, 0.13838764],
@@ -379,7 +379,7 @@ pub const CONDUCTOR_IORS: &[(&str, [f32; 3], [f32; 3])] = &[
 ];
 
 /// Look up a named dielectric index (exact name, as Mitsuba).
-pub fn dielectric_ior(name: &str) -> Option<f32> {
+pub(crate) fn dielectric_ior(name: &str) -> Option<f32> {
     DIELECTRIC_IORS
         .iter()
         .find(|(n, _)| *n == name)
@@ -387,7 +387,7 @@ pub fn dielectric_ior(name: &str) -> Option<f32> {
 }
 
 /// Look up a named conductor's RGB `(eta, k)`; `none` is the perfect mirror `(0, 1)`.
-pub fn conductor_ior(name: &str) -> Option<(Rgb, Rgb)> {
+pub(crate) fn conductor_ior(name: &str) -> Option<(Rgb, Rgb)> {
     if name == "none" {
         return Some((Rgb::ZERO, Rgb::ONE));
     }

@@ -70,7 +70,7 @@ impl Microfacet {
     /// many normals vectorises ([`crate::bsdf::Bsdf::eval_lanes`]); [`Microfacet::eval`] of a
     /// GGX distribution is this.
     #[inline(always)]
-    pub fn ggx_d(&self, mx: f32, my: f32, mz: f32) -> f32 {
+    pub(crate) fn ggx_d(&self, mx: f32, my: f32, mz: f32) -> f32 {
         let alpha_uv = self.alpha_u * self.alpha_v;
         let (sx, sy) = (mx / self.alpha_u, my / self.alpha_v);
         let q = sx * sx + sy * sy + mz * mz;
@@ -86,7 +86,7 @@ impl Microfacet {
     /// GGX's G1 for the direction `v` with `v_m` = v·m, without branches as
     /// [`Microfacet::ggx_d`]; [`Microfacet::smith_g1`] of a GGX distribution is this.
     #[inline(always)]
-    pub fn ggx_smith_g1(&self, [vx, vy, vz]: [f32; 3], v_m: f32) -> f32 {
+    pub(crate) fn ggx_smith_g1(&self, [vx, vy, vz]: [f32; 3], v_m: f32) -> f32 {
         let (ax, ay) = (self.alpha_u * vx, self.alpha_v * vy);
         let xy_alpha_2 = ax * ax + ay * ay;
         let tan_theta_alpha_2 = xy_alpha_2 / (vz * vz);

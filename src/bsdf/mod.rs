@@ -165,7 +165,7 @@ impl Bsdf {
 
     /// The surface's colour, as a denoiser's albedo guide takes it: the diffuse reflectance,
     /// a conductor's reflectance at normal incidence, a dielectric's transmittance.
-    pub fn albedo_estimate(&self) -> Rgb {
+    pub(crate) fn albedo_estimate(&self) -> Rgb {
         match self {
             Bsdf::Diffuse(d) => d.reflectance,
             Bsdf::Conductor(c) => {
@@ -190,7 +190,7 @@ impl Bsdf {
     /// The directions a glossy lobe is centred on for light leaving along `wo` (local frame):
     /// the mirror direction, and for transmitting BSDFs the straight or refracted one (`None`
     /// under total internal reflection).
-    pub fn lobe_centres(&self, wo: Vec3) -> [Option<Vec3>; 2] {
+    pub(crate) fn lobe_centres(&self, wo: Vec3) -> [Option<Vec3>; 2] {
         let mirror = Some(Vec3::new(-wo.x, -wo.y, wo.z));
         let through = match self {
             Bsdf::Diffuse(_) | Bsdf::Conductor(_) => None,

@@ -34,7 +34,7 @@ use std::path::{Path, PathBuf};
 use xxhash_rust::xxh3::{xxh3_128, xxh3_64};
 
 /// The first eight bytes of every cache file.
-pub const MAGIC: [u8; 8] = [0x89, b'W', b'P', b'C', 0x0d, 0x0a, 0x1a, 0x0a];
+pub(crate) const MAGIC: [u8; 8] = [0x89, b'W', b'P', b'C', 0x0d, 0x0a, 0x1a, 0x0a];
 /// The format version this build writes and the newest it reads.
 pub const FORMAT_VERSION: u32 = 1;
 const BYTE_ORDER_MARK: u32 = 0x0102_0304;
@@ -43,7 +43,7 @@ const ENTRY_LEN: usize = 40;
 /// Sections start on multiples of this.
 pub const ALIGNMENT: usize = 64;
 /// Longest section name.
-pub const NAME_LEN: usize = 16;
+pub(crate) const NAME_LEN: usize = 16;
 
 pub use crate::error::CacheError;
 
@@ -381,7 +381,7 @@ impl Cache {
     }
 
     /// Refuse the cache as stale unless it was baked from content with hash `expected`.
-    pub fn check_fresh(&self, expected: [u8; 16]) -> Result<(), CacheError> {
+    pub(crate) fn check_fresh(&self, expected: [u8; 16]) -> Result<(), CacheError> {
         if self.hash == expected {
             Ok(())
         } else {

@@ -18,7 +18,7 @@ pub const NO_MAP: u32 = u32::MAX;
 
 /// No node: a leaf's children, the root's parent, as the records store them (the surfel
 /// tree's own sentinel, so that readers of a cache need not import the bake).
-pub const NO_NODE: u32 = crate::surfels::tree::NONE;
+pub(crate) const NO_NODE: u32 = crate::surfels::tree::NONE;
 
 /// One surfel in the `surfels` section.
 #[repr(C)]
@@ -49,7 +49,7 @@ pub struct SurfelRecord {
 pub use crate::surfels::radiance::{BACK_SIDED, CLOSED, SOLID};
 
 /// The layout of the bake's sections; caches of another layout are refused (bake again).
-pub const BAKE_FORMAT: u32 = 3;
+pub(crate) const BAKE_FORMAT: u32 = 3;
 
 /// One tree node in the `nodes` section: the surfel tree's node as the build made it, and
 /// where its maps are in `map_index`.
@@ -164,7 +164,7 @@ impl BakedCache {
 
     /// The side, in texels, of the finest directional map the tree holds (none recorded: a
     /// cache of diffuse surfels only).
-    pub fn map_resolution(&self) -> Option<u32> {
+    pub(crate) fn map_resolution(&self) -> Option<u32> {
         self.plan["plan"]["map_resolution"]
             .as_u64()
             .and_then(|r| u32::try_from(r).ok())

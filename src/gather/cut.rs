@@ -27,14 +27,14 @@ use glam::{Vec2, Vec3};
 pub const NEAR_RADII: f32 = 4.0;
 
 /// The most pieces per side of a split leaf.
-pub const MAX_PIECES: u32 = 64;
+pub(crate) const MAX_PIECES: u32 = 64;
 
 /// Pieces per pixel width of a split leaf.
-pub const PIECES_PER_PIXEL: f32 = 1.0;
+pub(crate) const PIECES_PER_PIXEL: f32 = 1.0;
 
 /// How far from a receiver's plane, in disc radii, a parallel disc of another mesh still
 /// counts as the receiver's own surface (coplanar meshes, to rounding).
-pub const COPLANAR: f32 = 0.01;
+pub(crate) const COPLANAR: f32 = 0.01;
 
 /// What one traversal did (for the render statistics).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

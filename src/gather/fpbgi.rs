@@ -32,7 +32,7 @@ pub const KMEANS_ITERATIONS: u32 = 16;
 
 /// The far threshold's factor for nodes made mostly of directional (glossy) surfels (see the
 /// module docs for the measured trade-off).
-pub const DIRECTIONAL_FAR: f32 = 0.3;
+pub(crate) const DIRECTIONAL_FAR: f32 = 0.3;
 
 /// One cluster of receivers: the render's k-means clusters of primary hits ([`cluster`]) and
 /// the bake's receiver groups of surfels (`bounce::view_tree`) alike.
@@ -256,7 +256,7 @@ impl<'a> ClusterGather<'a> {
     }
 
     /// What the shared cut cost (nothing for receivers alone).
-    pub fn shared_stats(&self) -> CutStats {
+    pub(crate) fn shared_stats(&self) -> CutStats {
         self.shared
             .as_ref()
             .map_or_else(CutStats::default, |c| c.stats)

@@ -133,7 +133,7 @@ struct Splat {
 }
 
 /// A splat whose buffer records no links.
-pub const NO_SOURCE: u32 = u32::MAX;
+pub(crate) const NO_SOURCE: u32 = u32::MAX;
 
 /// One term of a pixel's light in a buffer that records links: pixel `pixel`'s radiance is
 /// Σ `w` · L(`source`) over its links, and its cosine-weighted radiance Σ `w_cos` · L(`source`),
@@ -389,7 +389,7 @@ impl Microbuffer {
 
     /// The solid angle of the pixel that sees world direction `w` (unit), or `None` below the
     /// horizon of a hemispherical buffer. A uniform buffer needs no pixel lookup.
-    pub fn solid_angle_towards(&self, w: Vec3) -> Option<f32> {
+    pub(crate) fn solid_angle_towards(&self, w: Vec3) -> Option<f32> {
         if !self.is_refined() {
             let below = !self.spherical && self.frame.n.dot(w) < 0.0;
             return (!below).then(|| self.pixel_solid_angle());
@@ -778,7 +778,7 @@ impl Microbuffer {
 
     /// Set pixel `k` to full coverage by radiance `l` (a pixel no splat reached, filled from
     /// what a ray through it hits).
-    pub fn fill_pixel(&mut self, k: usize, l: Rgb) {
+    pub(crate) fn fill_pixel(&mut self, k: usize, l: Rgb) {
         self.radiance[k] = l;
         self.cos_radiance[k] = l * self.mean_cos(k);
         self.alpha[k] = 1.0;
@@ -787,7 +787,7 @@ impl Microbuffer {
 
     /// [`Microbuffer::fill_pixel`] with the radiance at `lookup`: in a buffer that records
     /// links, pixel `k`'s links become that one lookup at full weight.
-    pub fn fill_pixel_from(&mut self, k: usize, l: Rgb, lookup: Lookup) {
+    pub(crate) fn fill_pixel_from(&mut self, k: usize, l: Rgb, lookup: Lookup) {
         self.fill_pixel(k, l);
         let cos = self.mean_cos(k);
         let source = self.source_of(lookup);
@@ -809,7 +809,7 @@ impl Microbuffer {
     /// the member pixel's) times their radiance weight. No-op unless both record links.
     ///
     /// [`member_buffer`]: super::fpbgi::member_buffer
-    pub fn composite_links(
+    pub(crate) fn composite_links(
         &mut self,
         own: &[(f32, f32)],
         shared: &Microbuffer,
@@ -863,7 +863,7 @@ impl Microbuffer {
 /// The indices `0..n` of items on the pixels of a buffer of `pixels`, grouped by their
 /// `pixel` (a counting sort, keeping index order within a pixel), into `order`; `ends[k]` is
 /// then the end of pixel k's run, which begins where pixel k − 1's ends.
-pub fn group_by_pixel(
+pub(crate) fn group_by_pixel(
     n: usize,
     pixels: usize,
     pixel: impl Fn(usize) -> u32,

@@ -18,7 +18,7 @@ const LEAF: usize = 8;
 
 /// Per mesh, an implicit k-d tree over its surfels' positions (see the module docs).
 #[derive(Clone, Debug, Default)]
-pub struct NearestSurfel {
+pub(crate) struct NearestSurfel {
     /// Surfel indices, grouped by mesh, each group in k-d tree order.
     order: Vec<u32>,
     /// The positions of `order`'s surfels, in the same order.

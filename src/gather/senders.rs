@@ -35,7 +35,7 @@ use std::sync::OnceLock;
 
 /// Nodes whose normals lie within this angle (radians) of their axis are flat enough to
 /// have a plane, which tells the surface they lie on from occluders (30°).
-pub const FLAT_CONE: f32 = std::f32::consts::FRAC_PI_6;
+pub(crate) const FLAT_CONE: f32 = std::f32::consts::FRAC_PI_6;
 
 /// One node of the tree, as traversal needs it: the cache's node, and what the gather sums
 /// from the surfels below it.
@@ -376,7 +376,7 @@ impl Senders {
 
     /// Where [`Senders::seen`] reads node `j`'s radiance along `w`, and its projected area:
     /// geometry alone (see [`Lookup`]).
-    pub fn seen_lookup(
+    pub(crate) fn seen_lookup(
         &self,
         j: u32,
         w: Vec3,
@@ -607,7 +607,7 @@ impl Senders {
 
     /// The projected area of inner node `j` along `w` (cheaper than [`Senders::seen`]: the
     /// traversal tests it before it needs the radiance).
-    pub fn projected_area(&self, j: u32, w: Vec3) -> f32 {
+    pub(crate) fn projected_area(&self, j: u32, w: Vec3) -> f32 {
         let sender = &self.nodes[j as usize];
         self.exact_projected(sender, w).unwrap_or_else(|| {
             let p = direction_to_square(w);
@@ -624,7 +624,7 @@ impl Senders {
 
     /// Emitted radiance leaving node `j` along `w` (front faces only): a leaf's surfel's
     /// emission, an inner node's emitted intensity over its projected area.
-    pub fn emitted_radiance(&self, j: u32, w: Vec3) -> Rgb {
+    pub(crate) fn emitted_radiance(&self, j: u32, w: Vec3) -> Rgb {
         let sender = &self.nodes[j as usize];
         if sender.is_leaf() {
             let s = &self.surfels[sender.surfel as usize];

@@ -43,7 +43,7 @@ impl Frame {
 
 /// `(sin φ, cos φ)` of a local direction; `(0, 1)` on the pole, as in Mitsuba's `Frame3f::sincos_phi`.
 #[inline]
-pub fn sincos_phi(v: Vec3) -> (f32, f32) {
+pub(crate) fn sincos_phi(v: Vec3) -> (f32, f32) {
     let sin_theta_2 = v.x * v.x + v.y * v.y;
     if sin_theta_2 <= 4.0 * f32::EPSILON * 0.5 {
         return (0.0, 1.0);

@@ -14,7 +14,7 @@ pub fn erf(x: f32) -> f32 {
 /// approximation Dr.Jit (and so Mitsuba 3) uses, so Beckmann visible-normal samples agree with
 /// Mitsuba's to float precision.
 #[inline]
-pub fn erfinv(x: f32) -> f32 {
+pub(crate) fn erfinv(x: f32) -> f32 {
     let mut w = -((1.0 - x) * (1.0 + x)).ln();
     let p = if w < 5.0 {
         w -= 2.5;
@@ -44,13 +44,13 @@ pub fn erfinv(x: f32) -> f32 {
 
 /// `sqrt(max(x, 0))`: square root of a quantity that is non-negative up to rounding.
 #[inline]
-pub fn safe_sqrt(x: f32) -> f32 {
+pub(crate) fn safe_sqrt(x: f32) -> f32 {
     x.max(0.0).sqrt()
 }
 
 /// `|a| * sign(b)`, with the sign of `b` taken from its sign bit (so `-0.0` counts as negative).
 #[inline]
-pub fn mulsign(a: f32, b: f32) -> f32 {
+pub(crate) fn mulsign(a: f32, b: f32) -> f32 {
     if b.is_sign_negative() {
         -a
     } else {

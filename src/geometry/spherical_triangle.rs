@@ -15,14 +15,14 @@ use std::f64::consts::PI;
 
 /// Below this solid angle (sr) area sampling is as good and the excess loses digits (pbrt-v4's
 /// bound).
-pub const MIN_SOLID_ANGLE: f64 = 3e-4;
+pub(crate) const MIN_SOLID_ANGLE: f64 = 3e-4;
 
 /// Above this (sr), nearly a hemisphere, the construction degenerates (pbrt-v4's bound).
-pub const MAX_SOLID_ANGLE: f64 = 6.22;
+pub(crate) const MAX_SOLID_ANGLE: f64 = 6.22;
 
 /// A triangle as seen from a point.
 #[derive(Clone, Copy, Debug)]
-pub struct SphericalTriangle {
+pub(crate) struct SphericalTriangle {
     p: DVec3,
     v: [DVec3; 3],
     /// Unit directions from the point to the vertices.

@@ -12,7 +12,7 @@ use glam::{Vec3A, Vec4};
 
 /// Per-ray constants of the shear transform.
 #[derive(Clone, Copy, Debug)]
-pub struct WatertightRay {
+pub(crate) struct WatertightRay {
     /// The ray's origin.
     pub origin: Vec3A,
     dir: Vec3A,
@@ -26,7 +26,7 @@ pub struct WatertightRay {
 
 /// Where a ray met a triangle.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct TriangleHit {
+pub(crate) struct TriangleHit {
     /// Distance along the ray (in units of its direction's length).
     pub t: f32,
     /// Barycentric weights of the three vertices, summing to 1.

@@ -5,7 +5,7 @@ use std::f32::consts::{FRAC_1_PI, FRAC_PI_2, FRAC_PI_4};
 
 /// Shirley–Chiu concentric map with Cline's reduced branching, as in Mitsuba.
 #[inline]
-pub fn square_to_uniform_disk_concentric(u: Vec2) -> Vec2 {
+pub(crate) fn square_to_uniform_disk_concentric(u: Vec2) -> Vec2 {
     let x = 2.0 * u.x - 1.0;
     let y = 2.0 * u.y - 1.0;
     if x == 0.0 && y == 0.0 {
@@ -26,7 +26,7 @@ pub fn square_to_uniform_disk_concentric(u: Vec2) -> Vec2 {
 /// coordinate over the larger, in [−1, 1], where `atan_unit` needs no range reduction (the
 /// microbuffer looks up every splat here, and libm's `atan2` took 10 % of a render).
 #[inline]
-pub fn uniform_disk_to_square_concentric(p: Vec2) -> Vec2 {
+pub(crate) fn uniform_disk_to_square_concentric(p: Vec2) -> Vec2 {
     let r = p.length();
     let scale = r * (1.0 / FRAC_PI_4);
     let (a, b) = if p.x.abs() >= p.y.abs() {
@@ -98,13 +98,13 @@ pub fn square_to_cosine_hemisphere(u: Vec2) -> Vec3 {
 
 /// Density of [`square_to_cosine_hemisphere`] per unit solid angle.
 #[inline]
-pub fn square_to_cosine_hemisphere_pdf(v: Vec3) -> f32 {
+pub(crate) fn square_to_cosine_hemisphere_pdf(v: Vec3) -> f32 {
     FRAC_1_PI * v.z
 }
 
 /// Uniform barycentric coordinates `(b1, b2)` on a triangle (Heitz's low-distortion map).
 #[inline]
-pub fn square_to_uniform_triangle(u: Vec2) -> Vec2 {
+pub(crate) fn square_to_uniform_triangle(u: Vec2) -> Vec2 {
     if u.y > u.x {
         let b0 = u.x * 0.5;
         let b1 = u.y - b0;

@@ -212,7 +212,7 @@ impl<T: Coefficient> SparseHaar<T> {
     /// The map with `f` applied to every stored coefficient (the scaling one and the
     /// details; a zero detail stays zero, so `f` must map zero to zero): a scaling per
     /// channel, say.
-    pub fn map_coefficients(mut self, f: impl Fn(T) -> T) -> Self {
+    pub(crate) fn map_coefficients(mut self, f: impl Fn(T) -> T) -> Self {
         self.scale = f(self.scale);
         for node in &mut self.nodes {
             for c in &mut node.details {
@@ -368,11 +368,6 @@ impl<T: Coefficient> SparseHaar<T> {
         assert!(levels >= self.levels, "refining to a coarser grid");
         self.levels = levels;
         self
-    }
-
-    /// Stored detail triples (nodes), for memory accounting.
-    pub fn node_count(&self) -> usize {
-        self.nodes.len()
     }
 
     /// Non-zero coefficients kept, the scaling coefficient included.

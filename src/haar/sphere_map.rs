@@ -63,7 +63,7 @@ pub fn texel_centre(t: u32, n: u32) -> Vec2 {
 }
 
 /// Finest map resolution with a shared direction table.
-pub const MAX_TABLE_LEVELS: u32 = 10;
+pub(crate) const MAX_TABLE_LEVELS: u32 = 10;
 
 /// The directions of the texel centres of the `2^levels × 2^levels` map (row-major), computed
 /// once per resolution and shared: every surfel of a bake needs the same ones.

@@ -68,7 +68,7 @@ pub enum Footprint {
 
 /// The nodes of the cut for `view`: the coarsest whose bounding spheres span at most
 /// `max_pixels` on screen (leaves whatever their size), depth-first, left to right.
-pub fn view_cut(senders: &Senders, view: &View, max_pixels: f32) -> Vec<u32> {
+pub(crate) fn view_cut(senders: &Senders, view: &View, max_pixels: f32) -> Vec<u32> {
     let mut cut = Vec::new();
     let mut stack = if senders.nodes.is_empty() {
         vec![]

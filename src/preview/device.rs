@@ -129,7 +129,7 @@ impl Gpu {
 
     /// [`Gpu::new`] for a window: the instance extensions of its display's surfaces and the
     /// device's `VK_KHR_swapchain`.
-    pub fn for_window(
+    pub(crate) fn for_window(
         validate: bool,
         display: raw_window_handle::RawDisplayHandle,
     ) -> Result<Gpu, VulkanError> {

@@ -252,7 +252,11 @@ impl Preview {
     }
 
     /// Draw frames of another size from now on.
-    pub fn resize(&mut self, size: (u32, u32), scene: Option<&Scene>) -> Result<(), VulkanError> {
+    pub(crate) fn resize(
+        &mut self,
+        size: (u32, u32),
+        scene: Option<&Scene>,
+    ) -> Result<(), VulkanError> {
         let gpu = self.renderer.gpu_arc();
         self.reduced = Renderer::new(gpu.clone(), reduced_size(size), scene)?;
         self.renderer = Renderer::new(gpu, size, scene)?;

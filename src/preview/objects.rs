@@ -28,7 +28,7 @@ enum Owned {
 
 /// A host-visible, coherent buffer, mapped for its lifetime.
 #[derive(Clone, Copy, Debug)]
-pub struct Buffer {
+pub(crate) struct Buffer {
     pub handle: vk::Buffer,
     memory: vk::DeviceMemory,
     pub size: u64,
@@ -67,7 +67,7 @@ pub struct Image {
 }
 
 /// The owner of a set of Vulkan objects of one device.
-pub struct Objects {
+pub(crate) struct Objects {
     pub gpu: Arc<Gpu>,
     owned: Vec<Owned>,
 }
@@ -243,7 +243,7 @@ impl Objects {
     }
 
     /// Destroy `buffer` now (a buffer that is outgrown).
-    pub fn release_buffer(&mut self, buffer: Buffer) {
+    pub(crate) fn release_buffer(&mut self, buffer: Buffer) {
         for o in [Owned::Buffer(buffer.handle), Owned::Memory(buffer.memory)] {
             if let Some(i) = self.owned.iter().position(|&x| x == o) {
                 self.owned.remove(i);

@@ -14,23 +14,23 @@ mod spirv {
             include_bytes!(concat!(env!("OUT_DIR"), "/", $name, ".spv"))
         };
     }
-    pub const GBUFFER_VERT: &[u8] = shader!("gbuffer.vert");
-    pub const GBUFFER_FRAG: &[u8] = shader!("gbuffer.frag");
-    pub const SPLAT_VERT: &[u8] = shader!("splat.vert");
-    pub const SPLAT_FRAG: &[u8] = shader!("splat.frag");
-    pub const DISK_VERT: &[u8] = shader!("disk.vert");
-    pub const DISK_FRAG: &[u8] = shader!("disk.frag");
-    pub const RESOLVE_VERT: &[u8] = shader!("resolve.vert");
-    pub const RESOLVE_FRAG: &[u8] = shader!("resolve.frag");
+    pub(crate) const GBUFFER_VERT: &[u8] = shader!("gbuffer.vert");
+    pub(crate) const GBUFFER_FRAG: &[u8] = shader!("gbuffer.frag");
+    pub(crate) const SPLAT_VERT: &[u8] = shader!("splat.vert");
+    pub(crate) const SPLAT_FRAG: &[u8] = shader!("splat.frag");
+    pub(crate) const DISK_VERT: &[u8] = shader!("disk.vert");
+    pub(crate) const DISK_FRAG: &[u8] = shader!("disk.frag");
+    pub(crate) const RESOLVE_VERT: &[u8] = shader!("resolve.vert");
+    pub(crate) const RESOLVE_FRAG: &[u8] = shader!("resolve.frag");
 }
 
 /// The G-buffer's, the accumulation's and the output's format.
-pub const FLOAT4: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
-pub const DEPTH: vk::Format = vk::Format::D32_SFLOAT;
-pub const COLOR: vk::ImageAspectFlags = vk::ImageAspectFlags::COLOR;
+pub(crate) const FLOAT4: vk::Format = vk::Format::R32G32B32A32_SFLOAT;
+pub(crate) const DEPTH: vk::Format = vk::Format::D32_SFLOAT;
+pub(crate) const COLOR: vk::ImageAspectFlags = vk::ImageAspectFlags::COLOR;
 
 /// What the device can do with [`FLOAT4`] images (optimal tiling).
-pub fn float4_features(o: &Objects) -> vk::FormatFeatureFlags {
+pub(crate) fn float4_features(o: &Objects) -> vk::FormatFeatureFlags {
     // SAFETY: a plain query of the physical device.
     unsafe {
         o.gpu
@@ -43,7 +43,7 @@ pub fn float4_features(o: &Objects) -> vk::FormatFeatureFlags {
 /// A one-subpass render pass over colour attachments of `formats` (cleared; left in
 /// `final_layout`) and, with `depth`, a depth attachment. Its dependencies order it after the
 /// previous pass's reads and writes and before the next pass's reads and the copies.
-pub fn render_pass(
+pub(crate) fn render_pass(
     o: &mut Objects,
     name: &str,
     formats: &[vk::Format],
@@ -123,7 +123,7 @@ pub fn render_pass(
 
 /// Binding 0: the frame's uniforms; 1–3: the G-buffer's position, normal and emission; 4: the
 /// splat accumulation; 5: a nearest sampler. Push constants: a mesh's emission (32 bytes).
-pub fn pipeline_layout(
+pub(crate) fn pipeline_layout(
     o: &mut Objects,
 ) -> Result<(vk::PipelineLayout, vk::DescriptorSetLayout), VulkanError> {
     let fragment = vk::ShaderStageFlags::FRAGMENT;
@@ -164,7 +164,7 @@ pub fn pipeline_layout(
     Ok((layout, set_layout))
 }
 
-pub fn descriptor_set(
+pub(crate) fn descriptor_set(
     o: &mut Objects,
     layout: vk::DescriptorSetLayout,
 ) -> Result<vk::DescriptorSet, VulkanError> {
@@ -201,7 +201,7 @@ pub fn descriptor_set(
 
 /// Point `set` at the frame's uniforms, the G-buffer's three images and the accumulation
 /// (`images`, in binding order) and the sampler.
-pub fn write_descriptors(
+pub(crate) fn write_descriptors(
     o: &Objects,
     set: vk::DescriptorSet,
     uniforms: &Buffer,
@@ -254,7 +254,7 @@ pub fn write_descriptors(
 }
 
 /// How one pipeline is built.
-pub struct PipelineDesc {
+pub(crate) struct PipelineDesc {
     name: &'static str,
     vertex: &'static [u8],
     fragment: &'static [u8],
@@ -268,7 +268,7 @@ pub struct PipelineDesc {
 }
 
 impl PipelineDesc {
-    pub const GBUFFER: PipelineDesc = PipelineDesc {
+    pub(crate) const GBUFFER: PipelineDesc = PipelineDesc {
         name: "G-buffer pipeline",
         vertex: spirv::GBUFFER_VERT,
         fragment: spirv::GBUFFER_FRAG,
@@ -279,7 +279,7 @@ impl PipelineDesc {
         blend_add: false,
         colour_targets: 3,
     };
-    pub const SPLAT: PipelineDesc = PipelineDesc {
+    pub(crate) const SPLAT: PipelineDesc = PipelineDesc {
         name: "splat pipeline",
         vertex: spirv::SPLAT_VERT,
         fragment: spirv::SPLAT_FRAG,
@@ -290,7 +290,7 @@ impl PipelineDesc {
         blend_add: true,
         colour_targets: 1,
     };
-    pub const DISK: PipelineDesc = PipelineDesc {
+    pub(crate) const DISK: PipelineDesc = PipelineDesc {
         name: "disc pipeline",
         vertex: spirv::DISK_VERT,
         fragment: spirv::DISK_FRAG,
@@ -298,7 +298,7 @@ impl PipelineDesc {
         blend_add: false,
         ..PipelineDesc::SPLAT
     };
-    pub const RESOLVE: PipelineDesc = PipelineDesc {
+    pub(crate) const RESOLVE: PipelineDesc = PipelineDesc {
         name: "resolve pipeline",
         vertex: spirv::RESOLVE_VERT,
         fragment: spirv::RESOLVE_FRAG,

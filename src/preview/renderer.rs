@@ -242,7 +242,7 @@ impl Renderer {
     }
 
     /// The same, shared.
-    pub fn gpu_arc(&self) -> Arc<Gpu> {
+    pub(crate) fn gpu_arc(&self) -> Arc<Gpu> {
         self.objects.gpu.clone()
     }
 

@@ -7,7 +7,7 @@ use raw_window_handle::{RawDisplayHandle, RawWindowHandle};
 use std::sync::Arc;
 
 /// The swapchain of one window.
-pub struct Swapchain {
+pub(crate) struct Swapchain {
     gpu: Arc<Gpu>,
     surface_fn: ash::khr::surface::Instance,
     swapchain_fn: ash::khr::swapchain::Device,
@@ -80,7 +80,7 @@ impl Swapchain {
     }
 
     /// Build the swapchain anew for a window of `size` (after a resize).
-    pub fn recreate(&mut self, size: (u32, u32)) -> Result<(), VulkanError> {
+    pub(crate) fn recreate(&mut self, size: (u32, u32)) -> Result<(), VulkanError> {
         let gpu = &self.gpu;
         // SAFETY: plain queries of a live surface.
         let (caps, formats) = unsafe {
@@ -184,7 +184,7 @@ impl Swapchain {
 
     /// The next image to draw into; `None` when the swapchain no longer fits the window
     /// (recreate it).
-    pub fn acquire(&self) -> Result<Option<u32>, VulkanError> {
+    pub(crate) fn acquire(&self) -> Result<Option<u32>, VulkanError> {
         // SAFETY: the swapchain and semaphore are ours; the semaphore has no pending signal
         // (the previous frame's submit waited for it, and that submit completed).
         match unsafe {

@@ -8,7 +8,7 @@ const COLOR: vk::ImageAspectFlags = vk::ImageAspectFlags::COLOR;
 
 /// A barrier that moves `image` from layout `from` to `to`, ordering `src` accesses before
 /// `dst` ones.
-pub fn layout_barrier(
+pub(crate) fn layout_barrier(
     image: vk::Image,
     (from, src): (vk::ImageLayout, vk::AccessFlags),
     (to, dst): (vk::ImageLayout, vk::AccessFlags),

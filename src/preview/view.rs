@@ -14,7 +14,7 @@ use glam::{Mat4, Vec3, Vec4};
 /// `frame.glsl`'s `Frame` block (std140: every member a vec4 or a column-major mat4).
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
-pub struct FrameUniforms {
+pub(crate) struct FrameUniforms {
     /// World to clip space.
     pub view_proj: [[f32; 4]; 4],
     /// The eye (w = 1).
@@ -75,12 +75,12 @@ impl View {
     }
 
     /// Whether the camera is a pinhole (not orthographic).
-    pub fn is_perspective(&self) -> bool {
+    pub(crate) fn is_perspective(&self) -> bool {
         matches!(self.camera.projection, Projection::Perspective { .. })
     }
 
     /// World to clip space.
-    pub fn view_proj(&self) -> Mat4 {
+    pub(crate) fn view_proj(&self) -> Mat4 {
         let c = &self.camera;
         let aspect = c.width as f32 / c.height as f32;
         let row = |axis: Vec3, scale: f32, offset: f32| {
@@ -113,7 +113,7 @@ impl View {
 
     /// The uniforms of a frame that shows `emission` times the emitters and `splats` times
     /// the splatted radiance.
-    pub fn uniforms(&self, emission: f32, splats: f32) -> FrameUniforms {
+    pub(crate) fn uniforms(&self, emission: f32, splats: f32) -> FrameUniforms {
         let c = &self.camera;
         FrameUniforms {
             view_proj: self.view_proj().to_cols_array_2d(),
@@ -129,7 +129,7 @@ impl View {
     }
 
     /// The unit direction from `p` towards the eye.
-    pub fn towards_eye(&self, p: Vec3) -> Vec3 {
+    pub(crate) fn towards_eye(&self, p: Vec3) -> Vec3 {
         if self.is_perspective() {
             (self.camera.position - p).normalize_or(-self.camera.forward)
         } else {
@@ -139,7 +139,7 @@ impl View {
 
     /// How many pixels the diameter of a sphere (`centre`, `radius`) covers on screen, at
     /// most; infinite when the eye is inside it.
-    pub fn pixels_across(&self, centre: Vec3, radius: f32) -> f32 {
+    pub(crate) fn pixels_across(&self, centre: Vec3, radius: f32) -> f32 {
         let c = &self.camera;
         match c.projection {
             Projection::Perspective { yfov } => {
@@ -155,7 +155,7 @@ impl View {
     }
 
     /// Whether a sphere lies wholly outside the view frustum's sides or behind the eye.
-    pub fn culls(&self, centre: Vec3, radius: f32) -> bool {
+    pub(crate) fn culls(&self, centre: Vec3, radius: f32) -> bool {
         let c = &self.camera;
         let v = centre - c.position;
         let (x, y, z) = (c.right.dot(v), c.up.dot(v), c.forward.dot(v));

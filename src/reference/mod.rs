@@ -186,7 +186,7 @@ pub fn render(
 /// The budget counts the path tracing; a checkpoint's `seconds` count that and its first hits
 /// (`FirstHits::seconds`), not the time `checkpoint` itself takes. `settings.spp` and
 /// `time_limit` are not read.
-pub fn render_progressive(
+pub(crate) fn render_progressive(
     scene: &Scene,
     camera: &Camera,
     settings: &RenderSettings,

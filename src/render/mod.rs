@@ -226,7 +226,7 @@ pub fn grid_crop(
 
 /// Edge pixels take EDGE_SIDE² samples of a (0, 2)-sequence for primary hits and direct
 /// light (an emitter's edge needs them); one in each quarter of the pixel gathers.
-pub const EDGE_SIDE: u32 = 8;
+pub(crate) const EDGE_SIDE: u32 = 8;
 
 /// What the gather did, summed over the image.
 #[derive(Clone, Copy, Debug, Default)]

@@ -29,7 +29,7 @@ const GATHER_STREAMS: u64 = 1 << 40;
 /// The indirect light receiver `r` sends towards its viewer (times its weight), from `spp`
 /// rays into the cache. `index` tells the receiver apart from the others of its pixel (its
 /// place in its tile), which keys its random numbers.
-pub fn path_gather(
+pub(crate) fn path_gather(
     ctx: &Tracer,
     senders: &Senders,
     r: &Receiver,

@@ -58,7 +58,7 @@ fn extend_chain(chain: u64, mesh: u32, branch: usize) -> u64 {
 
 /// What one camera sample contributes directly, and the first hit's AOVs.
 #[derive(Clone, Copy, Debug, Default)]
-pub struct PrimarySample {
+pub(crate) struct PrimarySample {
     /// Emission and direct light.
     pub direct: Rgb,
     /// The first hit's albedo (the BSDF's reflectance), the denoiser's guide.
@@ -96,7 +96,7 @@ fn within(max_depth: i32, segments: u32) -> bool {
 /// A camera sample: its ray, pixel, weight in the pixel, and the weight of its receivers
 /// (`None`: it gathers nothing, another sample of the pixel gathers for it).
 #[derive(Clone, Copy, Debug)]
-pub struct CameraSample {
+pub(crate) struct CameraSample {
     /// Ray origin.
     pub o: Vec3,
     /// Ray direction (unit).
@@ -143,11 +143,11 @@ impl LightShare {
     /// one run: the primary pass took 0.74, 3.45 and 4.85 s on cbox-diffuse, cbox-glossy and
     /// cbox-mirror at eight (0.61, 2.55, 3.30 at two; 1.22, 9.43, 12.48 with 32 at every
     /// camera sample), relMSE against Mitsuba within 0.02 % of the 32-each render's.
-    pub const LEAST: u32 = 8;
+    pub(crate) const LEAST: u32 = 8;
 
     /// The share of camera sample `sample` of a pixel of `samples`, for `light_samples` per
     /// pixel (at least 1; `render_final` refuses 0): at least [`LightShare::LEAST`] each.
-    pub fn of_sample(light_samples: u32, sample: u32, samples: u32) -> Self {
+    pub(crate) fn of_sample(light_samples: u32, sample: u32, samples: u32) -> Self {
         let count = light_samples
             .div_ceil(samples.max(1))
             .max(Self::LEAST.min(light_samples));
@@ -160,7 +160,7 @@ impl LightShare {
 }
 
 /// Trace camera sample `cs`, pushing its receivers.
-pub fn trace_primary(
+pub(crate) fn trace_primary(
     ctx: &Tracer,
     settings: &PrimarySettings,
     cs: CameraSample,

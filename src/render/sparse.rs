@@ -55,7 +55,7 @@ const SAME_NORMAL: f32 = 0.95;
 const SAME_PLANE: f32 = 0.1;
 
 /// Which of a tile's receivers gather, and how the others are interpolated.
-pub struct SparsePlan {
+pub(crate) struct SparsePlan {
     /// Per receiver: diffuse, alone in its pixel's layer and quarter, and not a quarter of a
     /// geometric edge (see the module docs).
     eligible: Vec<bool>,

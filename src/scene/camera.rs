@@ -103,7 +103,7 @@ impl Camera {
 
     /// The point to orbit around: on the view axis, level with `centre` (the scene's), or
     /// one unit ahead where `centre` is behind the camera.
-    pub fn orbit_target(&self, centre: Vec3) -> Vec3 {
+    pub(crate) fn orbit_target(&self, centre: Vec3) -> Vec3 {
         let reach = self.forward.dot(centre - self.position);
         self.position + self.forward * if reach > 0.0 { reach } else { 1.0 }
     }

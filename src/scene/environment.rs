@@ -191,7 +191,7 @@ pub struct EnvironmentSampler {
 
 impl EnvironmentSampler {
     /// Whether the environment has no radiance anywhere.
-    pub fn is_black(&self) -> bool {
+    pub(crate) fn is_black(&self) -> bool {
         self.grid.total <= 0.0
     }
 

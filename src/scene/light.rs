@@ -39,7 +39,7 @@ pub struct PunctualLight {
 
 impl PunctualLight {
     /// Angular falloff of a spot light for emission direction `w` (glTF's smooth falloff).
-    pub fn falloff(&self, w: Vec3) -> f32 {
+    pub(crate) fn falloff(&self, w: Vec3) -> f32 {
         match self.kind {
             LightKind::Spot {
                 cos_inner,

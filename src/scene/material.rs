@@ -20,7 +20,7 @@ use glam::Vec2;
 
 /// How close to 1 a relative index of refraction is taken as index-matched (a float32 ulp at 1
 /// is 1.2e-7; 1.0001, a stiff but real case, stays glass).
-pub const INDEX_MATCHED: f32 = 1e-6;
+pub(crate) const INDEX_MATCHED: f32 = 1e-6;
 
 /// glTF metallic-roughness parameters (with their textures).
 #[derive(Clone, Debug)]
@@ -132,7 +132,7 @@ impl Cutout {
 impl Material {
     /// Clear, non-emitting glass of relative index 1 everywhere: it neither reflects nor bends
     /// nor tints light, so it is invisible.
-    pub fn is_index_matched(&self) -> bool {
+    pub(crate) fn is_index_matched(&self) -> bool {
         let matched = |eta: f32| (eta - 1.0).abs() <= INDEX_MATCHED;
         let glass = match &self.scattering {
             Scattering::Explicit(Bsdf::Dielectric(d)) => {

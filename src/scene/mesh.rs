@@ -67,7 +67,7 @@ impl Mesh {
 
     /// The unit interpolated vertex normal at barycentric weights `b` of triangle `tri`, or
     /// `None` for a flat mesh (or normals that cancel there).
-    pub fn normal_at(&self, tri: u32, b: [f32; 3]) -> Option<Vec3> {
+    pub(crate) fn normal_at(&self, tri: u32, b: [f32; 3]) -> Option<Vec3> {
         let n = self.normals.as_ref()?;
         let t = self.triangles[tri as usize];
         (b[0] * n[t[0] as usize] + b[1] * n[t[1] as usize] + b[2] * n[t[2] as usize])

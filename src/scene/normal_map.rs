@@ -32,7 +32,7 @@ impl NormalMap {
     /// The shading normal at texture coordinate `uv` on `triangle` of `mesh`, whose
     /// interpolated (or geometric) normal is `ns`: tilted by the map, or `ns` where the
     /// triangle has no usable texture coordinates or the map's normal is degenerate.
-    pub fn shading_normal(
+    pub(crate) fn shading_normal(
         &self,
         textures: &[Texture],
         mesh: &Mesh,

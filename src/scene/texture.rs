@@ -69,7 +69,7 @@ impl ChannelRef {
 
 impl Texture {
     /// Turn sRGB-encoded colour channels into linear ones (alpha stays as it is).
-    pub fn linearise_srgb(&mut self) {
+    pub(crate) fn linearise_srgb(&mut self) {
         for t in &mut self.texels {
             *t = Vec4::new(
                 srgb_to_linear(t.x),

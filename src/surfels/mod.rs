@@ -33,7 +33,7 @@ use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 
 /// Candidates drawn per surfel kept (Yuksel's recommendation is 3–5).
-pub const CANDIDATES_PER_SURFEL: usize = 5;
+pub(crate) const CANDIDATES_PER_SURFEL: usize = 5;
 
 /// A surface sample.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -60,7 +60,7 @@ impl Surfel {
 
     /// Its position on its triangle of `scene` and the bound on that position's rounding
     /// error, from which rays leave it (see [`crate::geometry::offset::offset_origin`]).
-    pub fn position_with_error(&self, scene: &Scene) -> (Vec3A, Vec3A) {
+    pub(crate) fn position_with_error(&self, scene: &Scene) -> (Vec3A, Vec3A) {
         let m = &scene.meshes[self.mesh as usize];
         let t = m.triangles[self.triangle as usize];
         let v = t.map(|k| Vec3A::from(m.positions[k as usize]));

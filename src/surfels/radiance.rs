@@ -65,7 +65,7 @@ pub fn mesh_flags(scene: &Scene) -> Vec<u32> {
 /// Surfel `i`'s [`intensity_map`] in the light `radiance` (one per surfel), the lower half
 /// of a map kept where its mesh is not a closed solid (`mesh_flags`): the tree's leaf
 /// functions, for the cache's coding and the bounces' node sums alike.
-pub fn intensity_of<'a>(
+pub(crate) fn intensity_of<'a>(
     surfels: &'a [Surfel],
     mesh_flags: &'a [u32],
     radiance: &'a [SurfelRadiance],
@@ -131,7 +131,7 @@ pub const PROJECTED_AREA_LEVELS: u32 = 3;
 
 /// A surfel's projected area A |n·ω| on the 8 × 8 map. Both sides count: a disc occludes from
 /// behind as from the front (its radiance there, I/P, is simply what it emits backwards).
-pub fn projected_area_map(s: &Surfel) -> Haar2d<f32> {
+pub(crate) fn projected_area_map(s: &Surfel) -> Haar2d<f32> {
     let texels: Vec<f32> = texel_directions(PROJECTED_AREA_LEVELS)
         .iter()
         .map(|w| s.area * w.dot(s.n).abs())

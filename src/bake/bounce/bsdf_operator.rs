@@ -66,7 +66,7 @@ use rayon::prelude::*;
 use std::sync::Arc;
 
 /// BSDF samples per incoming texel for the flux each column of K is scaled to.
-pub const ALBEDO_SAMPLES: u32 = 256;
+pub(crate) const ALBEDO_SAMPLES: u32 = 256;
 
 /// Incoming coefficients below this fraction of their norm are dropped before D = V·C.
 pub const INCOMING_TAU: f32 = 1e-3;

@@ -406,7 +406,7 @@ fn coded_for(baked: &Baked) -> CodedTree<Rgb> {
 /// What the ray through the centre of each pixel `k` of `mb` for which `wanted(k)` holds,
 /// from surfel `s`, hits first: the point, its mesh and geometric normal (`None` for a miss
 /// or a pixel not wanted).
-pub fn pixel_hits(
+pub(crate) fn pixel_hits(
     accel: &Accel,
     scene: &Scene,
     s: &Surfel,
@@ -439,7 +439,7 @@ pub fn pixel_hits(
 
 /// What a pixel's centre ray hit.
 #[derive(Clone, Copy, Debug)]
-pub struct PixelHit {
+pub(crate) struct PixelHit {
     /// The hit point.
     pub point: Vec3,
     /// The mesh hit.

@@ -67,7 +67,7 @@ impl Receivers {
     /// The receivers of `surfels` (tree `tree`) at about one in `stride` (1: every surfel
     /// gathers). `kind[i]` tells which surfels may blend each other's light: surfels of one
     /// mesh with the same kind (the map resolution, or `None` for RGB).
-    pub fn choose(
+    pub(crate) fn choose(
         tree: &SurfelTree,
         surfels: &[Surfel],
         kind: &[Option<u32>],

@@ -8,7 +8,7 @@ use crate::gather::senders::SenderNode;
 use crate::validate::{in_range, require};
 
 /// The default [`BounceSettings::receiver_stride`] (see docs/bounces.md for its measure).
-pub const RECEIVER_STRIDE: u32 = 16;
+pub(crate) const RECEIVER_STRIDE: u32 = 16;
 
 /// How many bounces to run.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -46,7 +46,7 @@ pub fn default_transport_budget() -> u64 {
 /// `levels`, hold besides the bake itself, with no transport kept: the tree as senders (a
 /// node record and a sender node per node, a surfel record per surfel, two nodes per surfel)
 /// and the bitmap of the transport's slots.
-pub fn memory_floor(points: u64, levels: u32) -> u64 {
+pub(crate) fn memory_floor(points: u64, levels: u32) -> u64 {
     let nodes = 2 * points;
     let senders = nodes * (size_of::<NodeRecord>() + size_of::<SenderNode>()) as u64
         + points * size_of::<SurfelRecord>() as u64;
@@ -55,7 +55,7 @@ pub fn memory_floor(points: u64, levels: u32) -> u64 {
 
 /// Refuse bounces whose transport slots cannot be numbered in 32 bits, before any work (see
 /// [`Slots`]), naming the largest point count that fits.
-pub fn check_slots(points: u64, levels: u32) -> Result<()> {
+pub(crate) fn check_slots(points: u64, levels: u32) -> Result<()> {
     let slots = Slots::fewest(points, levels);
     if slots < u64::from(u32::MAX) {
         return Ok(());

@@ -99,7 +99,7 @@ impl Slots {
     /// The fewest slots a tree of `points` surfels with maps of `levels` has: one per surfel,
     /// and S's three and I's texels per inner node (a binary tree of one surfel per leaf has
     /// `points − 1`).
-    pub fn fewest(points: u64, levels: u32) -> u64 {
+    pub(crate) fn fewest(points: u64, levels: u32) -> u64 {
         points + points.saturating_sub(1) * (3 + (1u64 << (2 * levels)))
     }
 
@@ -169,7 +169,7 @@ impl SlotIndex {
     }
 
     /// Number the marked slots in slot order.
-    pub fn freeze(&mut self) {
+    pub(crate) fn freeze(&mut self) {
         let mut count = 0u32;
         self.ranks = self
             .words
@@ -183,16 +183,11 @@ impl SlotIndex {
     }
 
     /// How many slots are read.
-    pub fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         match (self.ranks.last(), self.words.last()) {
             (Some(&r), Some(w)) => (r + w.load(Ordering::Relaxed).count_ones()) as usize,
             _ => 0,
         }
-    }
-
-    /// Whether no slot is read.
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
     }
 
     /// The index of marked slot `slot` among the read ones.
@@ -369,7 +364,7 @@ impl ReceiverLinks {
 
     /// The same links with the directional receiver's map texels (see
     /// [`ReceiverLinks::map_texels`]).
-    pub fn with_map_texels(mut self, texels: Vec<u16>) -> ReceiverLinks {
+    pub(crate) fn with_map_texels(mut self, texels: Vec<u16>) -> ReceiverLinks {
         self.map_texels = texels.into_boxed_slice();
         self
     }
@@ -388,7 +383,7 @@ impl ReceiverLinks {
     }
 
     /// Renumber the slots among the read ones (after [`SlotIndex::freeze`]).
-    pub fn compact(&mut self, index: &SlotIndex) {
+    pub(crate) fn compact(&mut self, index: &SlotIndex) {
         for t in self.terms.iter_mut() {
             t.slot = index.compact(t.slot);
         }
@@ -404,14 +399,14 @@ impl ReceiverLinks {
 
     /// Σ w·L over the terms of a diffuse receiver (light from `values`, indexed by compact
     /// slot): its outgoing radiance over ρ.
-    pub fn diffuse_sum(&self, values: &[Rgb]) -> Rgb {
+    pub(crate) fn diffuse_sum(&self, values: &[Rgb]) -> Rgb {
         self.terms
             .iter()
             .fold(Rgb::ZERO, |a, t| a + values[t.slot as usize] * t.w)
     }
 
     /// Each pixel's radiance, for a directional receiver.
-    pub fn pixel_radiance(&self, values: &[Rgb]) -> Vec<Rgb> {
+    pub(crate) fn pixel_radiance(&self, values: &[Rgb]) -> Vec<Rgb> {
         let mut begin = 0;
         self.pixel_ends
             .iter()
@@ -447,7 +442,7 @@ pub fn read_nodes(slots: &Slots, index: &SlotIndex, tree: &SurfelTree) -> Vec<bo
 /// compact slot order, into `values` (whose memory is reused from bounce to bounce). Node
 /// intensities are read from `sums`, the exact intensity G of every node of `tree` whose
 /// texels are read ([`read_nodes`]).
-pub fn slot_values(
+pub(crate) fn slot_values(
     slots: &Slots,
     index: &SlotIndex,
     (tree, sums): (&SurfelTree, &[Option<SparseHaar<Rgb>>]),

@@ -46,7 +46,7 @@ pub const VIEW_EPS: f32 = 0.1;
 /// The receiver groups of `tree` (see the module docs), covering every surfel once: clusters
 /// of surfel indices whose active member is the one nearest the node's centre and whose cone
 /// is the node's normal cone.
-pub fn receiver_groups(tree: &SurfelTree, surfels: &[Surfel]) -> Vec<Cluster> {
+pub(crate) fn receiver_groups(tree: &SurfelTree, surfels: &[Surfel]) -> Vec<Cluster> {
     cells(tree, surfels, GROUP_SURFELS, GROUP_CONE)
         .into_iter()
         .map(|(j, active)| {
@@ -59,7 +59,12 @@ pub fn receiver_groups(tree: &SurfelTree, surfels: &[Surfel]) -> Vec<Cluster> {
 
 /// The receiver group of `members` around its `active` member: its radius is the farthest
 /// member's distance from the active one; `cone` is the group's normal cone.
-pub fn group_of(members: Vec<u32>, active: u32, surfels: &[Surfel], cone: Option<f32>) -> Cluster {
+pub(crate) fn group_of(
+    members: Vec<u32>,
+    active: u32,
+    surfels: &[Surfel],
+    cone: Option<f32>,
+) -> Cluster {
     let pa = surfels[active as usize].p;
     let radius = members
         .iter()
