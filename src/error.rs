@@ -149,6 +149,15 @@ pub enum Error {
     #[error(transparent)]
     Cache(#[from] CacheError),
 
+    /// A scene edit (`wpbgi relight --set`) that cannot be parsed or applied.
+    #[error("edit \"{edit}\": {reason}")]
+    Edit {
+        /// The edit as given.
+        edit: String,
+        /// Why, in words (naming what the scene or the target has).
+        reason: String,
+    },
+
     /// Worker threads that the system would not start.
     #[error("cannot start {count} worker threads: {reason}")]
     Threads {

@@ -6,6 +6,7 @@ pub mod direct;
 pub mod lightcuts;
 pub mod pipeline;
 pub mod plan;
+pub mod relight;
 pub mod settings;
 pub mod store;
 

@@ -157,6 +157,72 @@ impl BakeSettings {
         self.bounces.validate()
     }
 
+    /// The settings [`BakeSettings::to_json`] wrote (a cache's), or the field that is missing
+    /// or malformed. The transport's memory budget, which changes no cache, is the default.
+    pub fn from_json(json: &serde_json::Value) -> std::result::Result<BakeSettings, String> {
+        let field =
+            |v: &serde_json::Value, name: &str| -> std::result::Result<serde_json::Value, String> {
+                v.get(name).cloned().ok_or_else(|| format!("no \"{name}\""))
+            };
+        let uint = |v: &serde_json::Value, name: &str| {
+            field(v, name)?
+                .as_u64()
+                .ok_or_else(|| format!("\"{name}\" is not a whole number"))
+        };
+        let float = |v: &serde_json::Value, name: &str| {
+            field(v, name)?
+                .as_f64()
+                .map(|x| x as f32)
+                .ok_or_else(|| format!("\"{name}\" is not a number"))
+        };
+        let narrow =
+            |x: u64, name: &str| u32::try_from(x).map_err(|_| format!("\"{name}\" is too large"));
+        let bounces = field(json, "bounces")?;
+        let split_level = match field(json, "split_level")? {
+            serde_json::Value::Null => None,
+            v => Some(narrow(
+                v.as_u64().ok_or("\"split_level\" is not a whole number")?,
+                "split_level",
+            )?),
+        };
+        let surfel_density = match json.get("surfel_density") {
+            None => Vec::new(),
+            Some(list) => list
+                .as_array()
+                .ok_or("\"surfel_density\" is not a list")?
+                .iter()
+                .map(|pair| match pair.as_array().map(Vec::as_slice) {
+                    Some([name, w]) => match (name.as_str(), w.as_f64()) {
+                        (Some(name), Some(w)) => Ok((name.to_string(), w as f32)),
+                        _ => Err("a \"surfel_density\" entry is not [name, factor]".to_string()),
+                    },
+                    _ => Err("a \"surfel_density\" entry is not [name, factor]".to_string()),
+                })
+                .collect::<std::result::Result<_, _>>()?,
+        };
+        Ok(BakeSettings {
+            points: usize::try_from(uint(json, "points")?)
+                .map_err(|_| "\"points\" is too large")?,
+            light_samples: narrow(uint(json, "light_samples")?, "light_samples")?,
+            tau: float(json, "tau")?,
+            split_level,
+            seed: uint(json, "seed")?,
+            max_cut: usize::try_from(uint(json, "max_cut")?)
+                .map_err(|_| "\"max_cut\" is too large")?,
+            bounces: BounceSettings {
+                max: narrow(uint(&bounces, "max")?, "max")?,
+                tolerance: float(&bounces, "tolerance")?,
+                operator_tau: float(&bounces, "operator_tau")?,
+                view_tree: field(&bounces, "view_tree")?
+                    .as_bool()
+                    .ok_or("\"view_tree\" is not true or false")?,
+                receiver_stride: narrow(uint(&bounces, "receiver_stride")?, "receiver_stride")?,
+                transport_budget: None,
+            },
+            surfel_density,
+        })
+    }
+
     /// A canonical text of the settings, for the content hash and the cache's plan.
     pub fn to_json(&self) -> serde_json::Value {
         let mut json = serde_json::json!({

@@ -7,6 +7,7 @@ use crate::cache::store::{bake_hash, BakedCache, NodeRecord, SurfelRecord, BAKE_
 use crate::cache::{self, CacheError};
 use crate::haar::{Coefficient, SparseHaar};
 use crate::scene::Scene;
+use crate::spectrum::Rgb;
 use crate::surfels::radiance::SurfelRadiance;
 use serde_json::{json, Value};
 use std::path::Path;
@@ -177,6 +178,67 @@ impl Sections {
             order,
         })
     }
+}
+
+/// Write `cache` to `path` atomically, every radiance it records multiplied by `k` per
+/// channel (the tree's intensity maps, the surfels' radiance, maps and emission; projected
+/// areas stay), under `hash`, with `plan` as its plan section. The maps keep the order a bake
+/// writes them in.
+pub(crate) fn write_scaled(
+    path: &Path,
+    hash: [u8; 16],
+    cache: &BakedCache,
+    k: Rgb,
+    plan: &Value,
+) -> Result<(), CacheError> {
+    let mut pool = MapPool::default();
+    let scaled = |pool: &mut MapPool, index: u32| -> Result<u32, CacheError> {
+        if index == NO_MAP {
+            return Ok(NO_MAP);
+        }
+        let map: SparseHaar<Rgb> = cache.map(index)?;
+        Ok(pool.push(&map.map_coefficients(|c| c * k)))
+    };
+    let kept = |pool: &mut MapPool, index: u32| -> Result<u32, CacheError> {
+        if index == NO_MAP {
+            return Ok(NO_MAP);
+        }
+        Ok(pool.push(&cache.map::<f32>(index)?))
+    };
+    let mut nodes = Vec::with_capacity(cache.nodes.len());
+    for r in &cache.nodes {
+        nodes.push(NodeRecord {
+            node: r.node,
+            g: scaled(&mut pool, r.g)?,
+            h: scaled(&mut pool, r.h)?,
+            area_g: kept(&mut pool, r.area_g)?,
+            area_h: kept(&mut pool, r.area_h)?,
+        });
+    }
+    let mut surfels = Vec::with_capacity(cache.surfels.len());
+    for s in &cache.surfels {
+        surfels.push(SurfelRecord {
+            rgb: (Rgb::from(s.rgb) * k).to_array(),
+            emitted: (Rgb::from(s.emitted) * k).to_array(),
+            map: scaled(&mut pool, s.map)?,
+            ..*s
+        });
+    }
+    let werr = |reason: String| CacheError::Write {
+        path: path.to_path_buf(),
+        reason,
+    };
+    let plan = serde_json::to_vec_pretty(plan).map_err(|e| werr(e.to_string()))?;
+    let map_index: Vec<u8> = pool.index.iter().flat_map(|o| o.to_le_bytes()).collect();
+    let parts = Sections {
+        plan,
+        nodes,
+        map_index,
+        maps: pool.bytes,
+        surfels,
+        order: cache.cache.section("order")?.to_vec(),
+    };
+    cache::write(path, hash, &parts.list())
 }
 
 /// The cache that [`write()`] would write of `baked`, read back, without a file (`path` only

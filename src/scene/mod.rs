@@ -2,6 +2,7 @@
 //! for every importer (glTF now, USD later), validated on import (docs/design.md §4).
 
 pub mod camera;
+pub mod edit;
 pub mod environment;
 mod gltf;
 pub mod light;

@@ -26,6 +26,7 @@ mod compare_cmd;
 mod frames;
 mod interrupt;
 mod preview_cmd;
+mod relight_cmd;
 mod render_cmd;
 mod verbosity;
 
@@ -61,6 +62,16 @@ struct Cli {
     /// stale without it (the environment is part of the cache's hash).
     #[arg(long, global = true, value_name = "FILE|R,G,B")]
     env: Option<String>,
+    /// Edit the scene as loaded: NAME.PARAMETER=VALUE sets, NAME.PARAMETER*=VALUE multiplies
+    /// (NAME a material, light or the environment; VALUE one number or r,g,b). Parameters:
+    /// emission (any material), reflectance (diffuse), specular_reflectance and alpha
+    /// (roughconductor), specular_reflectance, specular_transmittance and alpha
+    /// (roughdielectric), base_color, metallic and roughness (glTF metallic-roughness),
+    /// intensity (a light, the environment). Repeatable, applied in order. The edits are part
+    /// of the scene, so of a cache's hash: `relight --set` makes the cache that `render --set`
+    /// with the same edits accepts.
+    #[arg(long = "set", global = true, value_name = "EDIT", value_parser = parse_edit)]
+    edits: Vec<wpbgi::scene::edit::Edit>,
     /// Multiplies --env's image.
     #[arg(long, global = true, default_value_t = 1.0)]
     env_intensity: f32,
@@ -91,12 +102,18 @@ enum Command {
     /// 3's path-traced render (max_depth 8, DIR/mitsuba_reference.exr), and draw the cache
     /// with the Vulkan previewer, headless, to DIR/preview.png.
     Demo(DemoArgs),
-    /// Bake a scene's direct light into a cache: Poisson-disk surfels, their outgoing radiance
-    /// (RGB for diffuse surfaces, Haar wavelets over directions otherwise), and the surfel tree
-    /// with hierarchical wavelet coding. Prints the bake plan first.
+    /// Bake a scene's light into a cache: Poisson-disk surfels, their direct light, then the
+    /// indirect bounces (until they fade, unless --bounces says otherwise); their outgoing
+    /// radiance (RGB for diffuse surfaces, Haar wavelets over directions otherwise) in the
+    /// surfel tree with hierarchical wavelet coding. Prints the bake plan first.
     Bake(bake_cmd::BakeArgs),
     /// Check a cache and print its header, plan, sections and statistics.
     Inspect(bake_cmd::InspectArgs),
+    /// Make a cache for the scene with its materials and lights edited (--set
+    /// 'light.emission*=2'): edits that scale every emitter by one factor rescale the cache in
+    /// the time of copying it; others bake the edited scene again with the cache's settings.
+    /// The new cache is fresh for the edited scene and stale for the original.
+    Relight(relight_cmd::RelightArgs),
     /// Render the final image from a cache: primary hits and direct light by ray tracing,
     /// indirect light gathered from the cache through microbuffers (FPBGI clusters by
     /// default), glossy receivers through BSDF-refined buffers, mirrors and clear glass by
@@ -368,6 +385,19 @@ pub(crate) fn pick_camera(scene: &Scene, args: &CameraArgs) -> Result<Camera> {
 /// The `--time-code` of this run.
 static TIME_CODE: std::sync::OnceLock<Option<f64>> = std::sync::OnceLock::new();
 
+/// The run's `--set` edits.
+static EDITS: std::sync::OnceLock<Vec<wpbgi::scene::edit::Edit>> = std::sync::OnceLock::new();
+
+/// The run's `--set` edits (`relight` applies them itself; every other command loads the
+/// scene with them applied).
+pub(crate) fn edits() -> &'static [wpbgi::scene::edit::Edit] {
+    EDITS.get().map_or(&[], Vec::as_slice)
+}
+
+fn parse_edit(s: &str) -> std::result::Result<wpbgi::scene::edit::Edit, String> {
+    s.parse().map_err(|e: wpbgi::Error| e.to_string())
+}
+
 /// The run's `--env`, read once.
 static ENVIRONMENT: std::sync::OnceLock<Option<wpbgi::scene::Environment>> =
     std::sync::OnceLock::new();
@@ -385,13 +415,27 @@ fn environment_of(cli: &Cli) -> Result<Option<wpbgi::scene::Environment>> {
     Ok(Some(env))
 }
 
-/// Load a scene at the run's `--time-code`.
+/// Load a scene at the run's `--time-code`, with its `--set` edits.
 pub(crate) fn load_scene(path: &Path) -> Result<Scene> {
     load_scene_at(path, None)
 }
 
-/// Load a scene at time code `time` (a frame's), or without one at the run's `--time-code`.
+/// Load a scene at time code `time` (a frame's), or without one at the run's `--time-code`,
+/// with the run's `--set` edits.
 pub(crate) fn load_scene_at(path: &Path, time: Option<f64>) -> Result<Scene> {
+    let mut scene = load_unedited_at(path, time)?;
+    for e in edits() {
+        e.apply(&mut scene)?;
+    }
+    Ok(scene)
+}
+
+/// Load a scene at the run's `--time-code`, without its `--set` edits (`relight`'s original).
+pub(crate) fn load_unedited(path: &Path) -> Result<Scene> {
+    load_unedited_at(path, None)
+}
+
+fn load_unedited_at(path: &Path, time: Option<f64>) -> Result<Scene> {
     let mut scene = Scene::load_at(path, time.or(TIME_CODE.get().copied().flatten()))?;
     if let Some(env) = ENVIRONMENT.get().cloned().flatten() {
         if let Some(own) = &scene.environment {
@@ -625,6 +669,7 @@ fn main() {
         std::process::exit(2);
     }
     let _ = TIME_CODE.set(cli.time_code);
+    let _ = EDITS.set(cli.edits.clone());
     match environment_of(&cli) {
         Ok(env) => {
             let _ = ENVIRONMENT.set(env);
@@ -651,6 +696,7 @@ fn main() {
         Command::Reference(a) => a.json,
         Command::Bake(a) => a.json,
         Command::Inspect(a) => a.json,
+        Command::Relight(a) => a.json,
         Command::Preview(a) => a.json,
         Command::Compare(a) => a.json,
         Command::Demo(a) => a.json,
@@ -661,6 +707,7 @@ fn main() {
         Command::Demo(a) => demo(a),
         Command::Bake(a) => bake_cmd::bake_command(a),
         Command::Inspect(a) => bake_cmd::inspect_command(a),
+        Command::Relight(a) => relight_cmd::relight_command(a),
         Command::Render(a) => render_cmd::render_command(a),
         Command::Preview(a) => preview_cmd::preview_command(a),
         Command::Compare(a) => compare_cmd::compare_command(a),

@@ -1,0 +1,78 @@
+//! `wpbgi relight`: a cache for a scene whose materials and lights were edited after the bake
+//! (the run's global `--set` edits, which every other command applies to the scene it loads).
+
+use anyhow::Result;
+use clap::Args;
+use serde_json::json;
+use std::path::PathBuf;
+use wpbgi::bake::relight::{relight, Relighting};
+use wpbgi::cache::store::BakedCache;
+
+#[derive(Args)]
+pub struct RelightArgs {
+    /// The cache, a fresh bake of --scene.
+    cache: PathBuf,
+    /// The scene the cache was baked from, before the edits.
+    #[arg(long)]
+    scene: PathBuf,
+    /// The relit cache to write (.wpc), atomically.
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Print the result as one JSON document on standard output (a failure as
+    /// {"error": ..., "exit": ...}).
+    #[arg(long)]
+    pub(crate) json: bool,
+}
+
+pub fn relight_command(a: RelightArgs) -> Result<()> {
+    let edits = crate::edits();
+    if edits.is_empty() {
+        anyhow::bail!("relight needs at least one --set EDIT (e.g. --set 'light.emission*=2')");
+    }
+    let scene = crate::load_unedited(&a.scene)?;
+    crate::warn(&scene);
+    let cache = BakedCache::read(&a.cache, None)?;
+    let bar = (!a.json).then(|| crate::StagedBar::new("re-baking"));
+    let progress = |stage: &str, f: f32| {
+        if let Some(b) = &bar {
+            b.update(stage, f);
+        }
+    };
+    crate::interrupt::guard_outputs([a.output.clone()]);
+    let relit = relight(
+        &scene,
+        &cache,
+        edits,
+        &a.output,
+        &progress,
+        crate::interrupt::flag(),
+    )?;
+    bar.as_ref().map(crate::StagedBar::finish);
+    let (how, detail) = match &relit.how {
+        Relighting::Rescaled { factor } => ("rescaled", json!({"factor": factor.to_array()})),
+        Relighting::Rebaked { why } => ("rebaked", json!({"why": why})),
+    };
+    if a.json {
+        println!(
+            "{}",
+            json!({"output": a.output, "how": how, "detail": detail, "seconds": relit.seconds})
+        );
+    } else {
+        match &relit.how {
+            Relighting::Rescaled { factor } => say!(
+                "relit {} in {:.2} s: every emitter ×({}, {}, {}), the cache rescaled",
+                a.output.display(),
+                relit.seconds,
+                factor.x,
+                factor.y,
+                factor.z
+            ),
+            Relighting::Rebaked { why } => say!(
+                "relit {} in {:.1} s by baking the edited scene again: {why}",
+                a.output.display(),
+                relit.seconds
+            ),
+        }
+    }
+    Ok(())
+}
