@@ -22,6 +22,21 @@ assert cache.hash == report["hash"] == wpbgi.bake_hash(scene, quality="draft", p
 image = wpbgi.render(scene, cache, 48, 32, light_samples=8)
 assert image.shape == (32, 48, 3) and image.dtype == numpy.float32, (image.shape, image.dtype)
 image.astype("<f4").tofile(out_path)
+# Relighting: a warmer light rescales the cache, fresh for the edited scene only.
+warm = ["light.emission*=1.25,1,0.75"]
+relit = wpbgi.relight(scene, cache_path, cache_path + ".warm", warm)
+assert relit["how"] == "rescaled" and relit["factor"] == [1.25, 1.0, 0.75], relit
+wpbgi.Cache(scene.edited(warm), cache_path + ".warm")
+try:
+    wpbgi.Cache(scene, cache_path + ".warm")
+    raise SystemExit("the relit cache was not refused for the original scene")
+except wpbgi.Error as e:
+    assert "stale" in str(e), e
+try:
+    scene.edited(["lamp.emission=1"])
+    raise SystemExit("an edit that names nothing was not refused")
+except wpbgi.Error as e:
+    assert "lamp" in str(e), e
 # A setting out of range is refused, naming it; a callback returning True cancels.
 try:
     wpbgi.render(scene, cache, 8, 8, max_depth=0)

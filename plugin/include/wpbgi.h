@@ -120,6 +120,19 @@ int32_t wpbgi_scene_load_at(const char *path, double time_code, WpbgiScene **sce
 // NULL or a NUL-terminated string.
 int32_t wpbgi_scene_set_environment(WpbgiScene *scene, const char *spec, float intensity, float rotate_degrees);
 
+// Edit `scene` in place as the command line's `--set` does: `edit` is
+// `NAME.PARAMETER=VALUE` or `NAME.PARAMETER*=VALUE` (NAME a material, light or the
+// environment; VALUE one number or `r,g,b`; the parameters are those of `wpbgi --help`). The
+// edit is part of the scene, so of the bake's hash: a cache from `wpbgi_relight` with the same
+// edits opens for the edited scene. An edit that names nothing is refused with
+// WPBGI_INVALID_ARGUMENT, the message saying what the scene has. Call it before sharing
+// `scene` between threads.
+//
+// # Safety
+// `scene` must be NULL or a live handle that no other thread uses during the call; `edit`
+// NULL or a NUL-terminated string.
+int32_t wpbgi_scene_edit(WpbgiScene *scene, const char *edit);
+
 // Free a scene (NULL is allowed and does nothing).
 //
 // # Safety
@@ -157,6 +170,20 @@ void wpbgi_cache_free(WpbgiCache *cache);
 // `scene` must be NULL or a live handle; `settings` NULL or an initialised struct;
 // `cache_path` NULL or a NUL-terminated string; `progress` NULL or a function of its type.
 int32_t wpbgi_bake(const WpbgiScene *scene, const WpbgiBakeSettings *settings, const char *cache_path, WpbgiProgressFn progress, void *user_data);
+
+// Relight `cache`, a fresh bake of `scene`, for `scene` with `edits` applied (`edit_count`
+// strings in the syntax of `wpbgi_scene_edit`), and write the new cache to `output_path`
+// atomically: where the edits multiply every emitter by one factor, the cache rescaled (in
+// the time of copying it, `*rescaled_out` = 1); otherwise the edited scene baked again with
+// the cache's settings (`*rescaled_out` = 0; `progress` and `user_data` as for `wpbgi_bake`).
+// The new cache opens for a scene given the same edits (`wpbgi_scene_edit`) and is refused
+// for `scene`. `rescaled_out` may be NULL.
+//
+// # Safety
+// `scene`, `cache` must be NULL or live handles; `edits` NULL or `edit_count` pointers to
+// NUL-terminated strings; `output_path` NULL or a NUL-terminated string; `progress` NULL or
+// a function of its type; `rescaled_out` NULL or writable.
+int32_t wpbgi_relight(const WpbgiScene *scene, const WpbgiCache *cache, const char *const *edits, size_t edit_count, const char *output_path, uint32_t threads, WpbgiProgressFn progress, void *user_data, int32_t *rescaled_out);
 
 // The content hash a bake of `scene` with `settings` would have: 32 hexadecimal digits and a
 // NUL written to `hash_out` (`size` ≥ 33 bytes). Equal to `wpbgi_cache_hash` of a cache

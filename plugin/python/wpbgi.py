@@ -121,12 +121,18 @@ def _load():
             [ctypes.c_char_p, ctypes.c_double, ctypes.POINTER(_HANDLE)],
             ctypes.c_int32,
         ),
+        "wpbgi_scene_edit": ([_HANDLE, ctypes.c_char_p], ctypes.c_int32),
         "wpbgi_scene_free": ([_HANDLE], None),
         "wpbgi_cache_open": ([_HANDLE, ctypes.c_char_p, ctypes.POINTER(_HANDLE)], ctypes.c_int32),
         "wpbgi_cache_hash": ([_HANDLE, ctypes.c_char_p, ctypes.c_size_t], ctypes.c_int32),
         "wpbgi_cache_free": ([_HANDLE], None),
         "wpbgi_bake": (
             [_HANDLE, ctypes.POINTER(_BakeSettings), ctypes.c_char_p, _PROGRESS, ctypes.c_void_p],
+            ctypes.c_int32,
+        ),
+        "wpbgi_relight": (
+            [_HANDLE, _HANDLE, ctypes.POINTER(ctypes.c_char_p), ctypes.c_size_t, ctypes.c_char_p,
+             ctypes.c_uint32, _PROGRESS, ctypes.c_void_p, ctypes.POINTER(ctypes.c_int32)],
             ctypes.c_int32,
         ),
         "wpbgi_bake_hash": (
@@ -222,6 +228,11 @@ class Scene(_Handle):
             )
         )
 
+    def edit(self, edit):
+        """Edit the scene as the command line's --set: "NAME.PARAMETER=VALUE" or
+        "NAME.PARAMETER*=VALUE". The edit is part of the scene, so of the bake's hash."""
+        _check(_lib.wpbgi_scene_edit(self._handle, edit.encode()))
+
 
 class Cache(_Handle):
     """A baked cache. With a scene, it is refused unless it was baked from that scene as it is."""
@@ -275,17 +286,37 @@ def bake(scene, cache_path, quality=None, points=0, light_samples=0, bounces=Non
     default (that of `wpbgi bake`: the preview preset, automatic bounces); 0 means the preset's
     value for points and light_samples, and one thread per core for threads."""
     s = _bake_settings(quality, points, light_samples, bounces, seed, threads)
+    _reporting(progress, lambda callback: _lib.wpbgi_bake(
+        scene._handle, ctypes.byref(s), _path(cache_path), callback, None))
+
+
+def relight(scene, cache, edits, output, threads=0, progress=None):
+    """Relight `cache` (a fresh bake of `scene`) for `scene` with `edits` applied (each as
+    Scene.edit takes it) and write the new cache to `output`. Returns True where the cache was
+    rescaled (every emitter changed by one factor), False where the edited scene was baked
+    again. The new cache opens for a scene given the same edits."""
+    texts = (ctypes.c_char_p * len(edits))(*[e.encode() for e in edits])
+    rescaled = ctypes.c_int32(-1)
+    _reporting(progress, lambda callback: _lib.wpbgi_relight(
+        scene._handle, cache._handle, texts, len(edits), _path(output), threads, callback, None,
+        ctypes.byref(rescaled)))
+    return rescaled.value == 1
+
+
+def _reporting(progress, call):
+    """Run `call(callback)`, `callback` passing the library's reports to `progress(stage,
+    fraction)` on this thread: True stops the work (Cancelled is raised), and an exception it
+    raises stops the work and is raised here after the call returns."""
     failure = []
 
     def report(stage, fraction, _user):
         try:
             return 1 if progress(stage.decode(), fraction) else 0
-        except BaseException as e:  # stop the bake, re-raise here after it returns
+        except BaseException as e:
             failure.append(e)
             return 1
 
-    callback = _PROGRESS(report) if progress else _PROGRESS()
-    status = _lib.wpbgi_bake(scene._handle, ctypes.byref(s), _path(cache_path), callback, None)
+    status = call(_PROGRESS(report) if progress else _PROGRESS())
     if failure:
         raise failure[0]
     _check(status)

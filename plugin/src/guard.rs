@@ -22,7 +22,9 @@ impl From<wpbgi::Error> for Failure {
     fn from(e: wpbgi::Error) -> Failure {
         match e {
             wpbgi::Error::Cancelled => Failure::Cancelled,
-            wpbgi::Error::InvalidSetting(_) => Failure::InvalidArgument(e.to_string()),
+            wpbgi::Error::InvalidSetting(_) | wpbgi::Error::Edit { .. } => {
+                Failure::InvalidArgument(e.to_string())
+            }
             e => Failure::Failed(e.to_string()),
         }
     }
@@ -188,6 +190,25 @@ pub(crate) unsafe fn checked_buffer<'a, T>(
     }
     // SAFETY: the caller's contract for `len` elements; NULL and misalignment refused.
     Ok(unsafe { std::slice::from_raw_parts_mut(p, len) })
+}
+
+/// A caller's list of `len` elements, read only.
+///
+/// # Safety
+/// A non-NULL `p` must point to `len` readable elements that nothing changes during the call.
+pub(crate) unsafe fn checked_list<'a, T>(
+    p: *const T,
+    len: usize,
+    what: &str,
+) -> Result<&'a [T], Failure> {
+    if p.is_null() {
+        return Err(invalid(format!("{what} is NULL")));
+    }
+    if !p.is_aligned() {
+        return Err(invalid(format!("{what} is not aligned for its type")));
+    }
+    // SAFETY: the caller's contract for `len` elements; NULL and misalignment refused.
+    Ok(unsafe { std::slice::from_raw_parts(p, len) })
 }
 
 #[cfg(test)]

@@ -122,6 +122,29 @@ pub unsafe extern "C" fn wpbgi_scene_set_environment(
     })
 }
 
+/// Edit `scene` in place as the command line's `--set` does: `edit` is
+/// `NAME.PARAMETER=VALUE` or `NAME.PARAMETER*=VALUE` (NAME a material, light or the
+/// environment; VALUE one number or `r,g,b`; the parameters are those of `wpbgi --help`). The
+/// edit is part of the scene, so of the bake's hash: a cache from `wpbgi_relight` with the same
+/// edits opens for the edited scene. An edit that names nothing is refused with
+/// WPBGI_INVALID_ARGUMENT, the message saying what the scene has. Call it before sharing
+/// `scene` between threads.
+///
+/// # Safety
+/// `scene` must be NULL or a live handle that no other thread uses during the call; `edit`
+/// NULL or a NUL-terminated string.
+#[no_mangle]
+pub unsafe extern "C" fn wpbgi_scene_edit(scene: *mut WpbgiScene, edit: *const c_char) -> i32 {
+    call(|| {
+        // SAFETY: the caller's contract; NULL is refused.
+        let scene = unsafe { checked_mut(scene, "scene") }?;
+        // SAFETY: the caller's contract; NULL is refused.
+        let edit: wpbgi::scene::edit::Edit = unsafe { checked_str(edit, "edit") }?.parse()?;
+        edit.apply(&mut scene.scene)?;
+        Ok(())
+    })
+}
+
 /// Free a scene (NULL is allowed and does nothing).
 ///
 /// # Safety

@@ -25,11 +25,12 @@ mod settings;
 
 pub use guard::wpbgi_last_error;
 pub use handles::{
-    wpbgi_cache_free, wpbgi_cache_hash, wpbgi_cache_open, wpbgi_scene_free, wpbgi_scene_load,
-    wpbgi_scene_load_at, wpbgi_scene_set_environment, WpbgiCache, WpbgiScene,
+    wpbgi_cache_free, wpbgi_cache_hash, wpbgi_cache_open, wpbgi_scene_edit, wpbgi_scene_free,
+    wpbgi_scene_load, wpbgi_scene_load_at, wpbgi_scene_set_environment, WpbgiCache, WpbgiScene,
 };
 pub use operations::{
-    wpbgi_bake, wpbgi_bake_hash, wpbgi_preview, wpbgi_render, wpbgi_render_to_file, WpbgiProgressFn,
+    wpbgi_bake, wpbgi_bake_hash, wpbgi_preview, wpbgi_relight, wpbgi_render, wpbgi_render_to_file,
+    WpbgiProgressFn,
 };
 pub use settings::{
     wpbgi_bake_settings_init, wpbgi_render_settings_init, WpbgiBakeSettings, WpbgiRenderSettings,

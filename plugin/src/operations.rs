@@ -1,15 +1,19 @@
 //! The work: bake (progress on the caller's thread, cancel from the callback), the bake's hash,
 //! the final render to a buffer or a file, and the headless preview.
 
-use crate::guard::{call, checked_buffer, checked_path, checked_ref, checked_settings, Failure};
+use crate::guard::{
+    call, checked_buffer, checked_list, checked_path, checked_ref, checked_settings, checked_str,
+    Failure,
+};
 use crate::handles::{write_hash, WpbgiCache, WpbgiScene};
 use crate::settings::{WpbgiBakeSettings, WpbgiRenderSettings};
 use std::ffi::{c_char, c_void, CString};
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
 use std::sync::Arc;
+use wpbgi::bake::bake_cancellable;
+use wpbgi::bake::relight::{relight, Relighting};
 use wpbgi::bake::store::save;
-use wpbgi::bake::{bake_cancellable, BakeSettings, Baked};
 use wpbgi::cache::store::{bake_hash, BakedCache};
 use wpbgi::image::{write_exr, write_png, Image};
 use wpbgi::preview::device::Gpu;
@@ -25,17 +29,14 @@ pub type WpbgiProgressFn = Option<
     unsafe extern "C" fn(stage: *const c_char, fraction: f32, user_data: *mut c_void) -> i32,
 >;
 
-/// Bake on a worker thread while this thread passes its progress to `progress`, so that the
-/// callback runs where the host called from.
-fn bake_reporting(
-    scene: &Scene,
-    settings: &BakeSettings,
+/// Run `work` on `threads` workers while this thread passes its progress to `progress`, so
+/// that the callback runs where the host called from; a non-zero answer cancels.
+fn reporting<R: Send>(
     threads: u32,
     progress: WpbgiProgressFn,
     user_data: *mut c_void,
-) -> Result<Baked, Failure> {
-    let work =
-        |report: Progress, cancel: &AtomicBool| bake_cancellable(scene, settings, report, cancel);
+    work: impl FnOnce(Progress, &AtomicBool) -> wpbgi::error::Result<R> + Send,
+) -> Result<R, Failure> {
     let listen = |stage: &str, fraction: f32| {
         let Some(callback) = progress else {
             return false;
@@ -44,14 +45,14 @@ fn bake_reporting(
         // SAFETY: the host's callback, called as its type declares.
         unsafe { callback(stage.as_ptr(), fraction, user_data) != 0 }
     };
-    let (baked, cancelled) = relay(threads as usize, work, listen)?;
-    let baked = baked?;
-    // A cancel asked on the bake's last reports, after its last look at the flag, still
-    // holds: the host said it does not want this cache.
+    let (result, cancelled) = relay(threads as usize, work, listen)?;
+    let result = result?;
+    // A cancel asked on the last reports, after the work's last look at the flag, still
+    // holds: the host said it does not want the result.
     if cancelled {
         return Err(Failure::Cancelled);
     }
-    Ok(baked)
+    Ok(result)
 }
 
 /// Bake `scene` with `settings` and write the cache to `cache_path` (atomically: a failed or
@@ -76,14 +77,70 @@ pub unsafe extern "C" fn wpbgi_bake(
         let settings = unsafe { checked_settings(settings, "settings") }?;
         let path = unsafe { checked_path(cache_path, "cache_path") }?;
         let library = settings.to_library()?;
-        let baked = bake_reporting(
-            &scene.scene,
-            &library,
-            settings.threads,
-            progress,
-            user_data,
-        )?;
+        let baked = reporting(settings.threads, progress, user_data, |report, cancel| {
+            bake_cancellable(&scene.scene, &library, report, cancel)
+        })?;
         save(&path, &scene.scene, &baked)?;
+        Ok(())
+    })
+}
+
+/// Relight `cache`, a fresh bake of `scene`, for `scene` with `edits` applied (`edit_count`
+/// strings in the syntax of `wpbgi_scene_edit`), and write the new cache to `output_path`
+/// atomically: where the edits multiply every emitter by one factor, the cache rescaled (in
+/// the time of copying it, `*rescaled_out` = 1); otherwise the edited scene baked again with
+/// the cache's settings (`*rescaled_out` = 0; `progress` and `user_data` as for `wpbgi_bake`).
+/// The new cache opens for a scene given the same edits (`wpbgi_scene_edit`) and is refused
+/// for `scene`. `rescaled_out` may be NULL.
+///
+/// # Safety
+/// `scene`, `cache` must be NULL or live handles; `edits` NULL or `edit_count` pointers to
+/// NUL-terminated strings; `output_path` NULL or a NUL-terminated string; `progress` NULL or
+/// a function of its type; `rescaled_out` NULL or writable.
+#[no_mangle]
+#[allow(clippy::too_many_arguments)]
+pub unsafe extern "C" fn wpbgi_relight(
+    scene: *const WpbgiScene,
+    cache: *const WpbgiCache,
+    edits: *const *const c_char,
+    edit_count: usize,
+    output_path: *const c_char,
+    threads: u32,
+    progress: WpbgiProgressFn,
+    user_data: *mut c_void,
+    rescaled_out: *mut i32,
+) -> i32 {
+    call(|| {
+        // SAFETY: the caller's contract; NULL is refused.
+        let scene = unsafe { checked_ref(scene, "scene") }?;
+        // SAFETY: the caller's contract; NULL is refused.
+        let cache = unsafe { checked_ref(cache, "cache") }?;
+        // SAFETY: the caller's contract; NULL is refused.
+        let output = unsafe { checked_path(output_path, "output_path") }?;
+        if edit_count == 0 {
+            return Err(Failure::InvalidArgument(
+                "edit_count is 0: there is nothing to relight".into(),
+            ));
+        }
+        // SAFETY: the caller's contract: `edit_count` pointers; NULL is refused.
+        let list = unsafe { checked_list(edits, edit_count, "edits") }?;
+        let edits = list
+            .iter()
+            .enumerate()
+            .map(|(i, &e)| {
+                // SAFETY: the caller's contract; NULL is refused.
+                let text = unsafe { checked_str(e, &format!("edits[{i}]")) }?;
+                Ok(text.parse::<wpbgi::scene::edit::Edit>()?)
+            })
+            .collect::<Result<Vec<_>, Failure>>()?;
+        let (scene, cache) = (&scene.scene, &cache.cache);
+        let relit = reporting(threads, progress, user_data, |report, cancel| {
+            relight(scene, cache, &edits, &output, report, cancel)
+        })?;
+        // SAFETY: the caller's contract; NULL means not wanted.
+        if let Some(out) = unsafe { rescaled_out.as_mut() } {
+            *out = i32::from(matches!(relit.how, Relighting::Rescaled { .. }));
+        }
         Ok(())
     })
 }

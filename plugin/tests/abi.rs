@@ -110,6 +110,12 @@ fn bake_to(scene: &Scene, settings: &WpbgiBakeSettings, path: &std::path::Path) 
     unsafe { wpbgi_bake(scene.0, settings, path_c(path).as_ptr(), None, null_mut()) }
 }
 
+/// Bake `scene` to `path` and open the cache for it.
+fn baked(scene: &Scene, settings: &WpbgiBakeSettings, path: &std::path::Path) -> Cache {
+    assert_eq!(bake_to(scene, settings, path), WPBGI_OK, "{}", last_error());
+    Cache::open(scene, path).expect("the fresh cache opens")
+}
+
 /// The hash a bake of `scene` with `settings` would have (`wpbgi_bake_hash`).
 fn hash_of(scene: &Scene, settings: &WpbgiBakeSettings) -> String {
     let mut text = [0 as c_char; 40];
@@ -138,13 +144,7 @@ fn bake_and_render_equal_the_rust_api_byte_for_byte() {
     // Two worker threads here; the Rust API's reference ran on the global pool.
     let mut settings = bake_settings(POINTS, BOUNCES);
     settings.threads = 2;
-    assert_eq!(
-        bake_to(&scene, &settings, &cache_path),
-        WPBGI_OK,
-        "{}",
-        last_error()
-    );
-    let cache = Cache::open(&scene, &cache_path).expect("the fresh cache opens");
+    let cache = baked(&scene, &settings, &cache_path);
 
     let mut rgb = vec![f32::NAN; (SIZE * SIZE * 3) as usize];
     let mut rs = render_settings(SIZE);
@@ -692,4 +692,90 @@ fn an_environment_lights_an_unlit_scene() {
     // SAFETY: NULL is refused.
     let status = unsafe { wpbgi_scene_set_environment(cube.0, null(), 1.0, 0.0) };
     assert_eq!(status, WPBGI_INVALID_ARGUMENT);
+}
+
+/// `wpbgi_relight` and `wpbgi_scene_edit`: a brighter light rescales the cache, which opens
+/// for a scene given the same edit and is refused for the original; an edit of a reflectance
+/// bakes again; edits that name nothing, no edits and a NULL list are refused with a message.
+#[test]
+fn relight_and_edited_scenes() {
+    let dir = scratch("relight");
+    let scene = Scene::load(&scene_path());
+    let cache_path = dir.join("original.wpc");
+    let settings = bake_settings(POINTS, BOUNCES);
+    let cache = baked(&scene, &settings, &cache_path);
+    let relight = |edits: &[&str], output: &std::path::Path| -> (i32, i32) {
+        let texts: Vec<CString> = edits.iter().map(|e| c(e)).collect();
+        let pointers: Vec<*const c_char> = texts.iter().map(|t| t.as_ptr()).collect();
+        let mut rescaled = -1;
+        // SAFETY: live handles, `pointers.len()` valid strings, a valid path, no callback.
+        let status = unsafe {
+            wpbgi_relight(
+                scene.0,
+                cache.0,
+                pointers.as_ptr(),
+                pointers.len(),
+                path_c(output).as_ptr(),
+                0,
+                None,
+                null_mut(),
+                &mut rescaled,
+            )
+        };
+        (status, rescaled)
+    };
+    let edited_scene = |edits: &[&str]| {
+        let s = Scene::load(&scene_path());
+        for e in edits {
+            // SAFETY: a live handle used by this thread alone, a valid string.
+            let status = unsafe { wpbgi_scene_edit(s.0, c(e).as_ptr()) };
+            assert_eq!(status, WPBGI_OK, "{}", last_error());
+        }
+        s
+    };
+    for (edits, rescaled) in [
+        (&["light.emission*=2"][..], 1),
+        (&["white.reflectance=0.5", "light.emission*=2"][..], 0),
+    ] {
+        let output = dir.join(format!("relit-{rescaled}.wpc"));
+        assert_eq!(
+            relight(edits, &output),
+            (WPBGI_OK, rescaled),
+            "{}",
+            last_error()
+        );
+        assert!(
+            Cache::open(&edited_scene(edits), &output).is_ok(),
+            "{edits:?}"
+        );
+        let refused = Cache::open(&scene, &output)
+            .err()
+            .expect("stale for the original");
+        assert_eq!(refused.0, WPBGI_FAILED);
+    }
+    // SAFETY: a live handle, a valid string.
+    let status = unsafe { wpbgi_scene_edit(scene.0, c("lamp.emission=1").as_ptr()) };
+    assert_eq!(status, WPBGI_INVALID_ARGUMENT);
+    assert!(last_error().contains("\"lamp\""), "{}", last_error());
+    assert_eq!(
+        relight(&[], &dir.join("none.wpc")).0,
+        WPBGI_INVALID_ARGUMENT
+    );
+    assert!(last_error().contains("edit_count"), "{}", last_error());
+    // SAFETY: NULL is refused.
+    let status = unsafe {
+        wpbgi_relight(
+            scene.0,
+            cache.0,
+            null(),
+            1,
+            path_c(&dir.join("x.wpc")).as_ptr(),
+            0,
+            None,
+            null_mut(),
+            null_mut(),
+        )
+    };
+    assert_eq!(status, WPBGI_INVALID_ARGUMENT);
+    assert!(last_error().contains("edits"), "{}", last_error());
 }

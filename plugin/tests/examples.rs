@@ -158,6 +158,22 @@ cube.set_environment("0.5,1,2")
 grey = wpbgi.bake_hash(cube)
 cube.set_environment("1")
 assert wpbgi.bake_hash(cube) != grey
+# A brighter light rescales the cache; it opens for a scene given the same edit only.
+original = wpbgi.Cache(out + "/python.wpc", scene)
+assert wpbgi.relight(scene, original, ["light.emission*=2"], out + "/bright.wpc")
+bright = wpbgi.Scene(scene_path)
+bright.edit("light.emission*=2")
+wpbgi.Cache(out + "/bright.wpc", bright).close()
+try:
+    wpbgi.Cache(out + "/bright.wpc", scene)
+    raise SystemExit("the relit cache opened for the original scene")
+except wpbgi.Error as e:
+    assert "stale" in str(e), str(e)
+try:
+    bright.edit("lamp.emission=1")
+    raise SystemExit("an edit that names nothing was accepted")
+except wpbgi.Error as e:
+    assert e.status == wpbgi.INVALID_ARGUMENT and "lamp" in str(e), str(e)
 print("python errors ok")
 "#;
     let log = run(Command::new(&python)

@@ -67,6 +67,19 @@ impl Scene {
     fn cameras(&self) -> Vec<String> {
         self.inner.cameras.iter().map(|c| c.name.clone()).collect()
     }
+
+    /// This scene with `edits` applied in order, each in the syntax of `wpbgi --set`
+    /// ("NAME.PARAMETER=VALUE" or "NAME.PARAMETER*=VALUE"); an edit that names nothing raises
+    /// `wpbgi.Error` naming it.
+    fn edited(&self, edits: Vec<String>) -> PyResult<Scene> {
+        let inner = self.inner.edited(&parse_edits(&edits)?).map_err(to_py)?;
+        Ok(Scene { inner })
+    }
+}
+
+/// `edits` in the syntax of `wpbgi --set`, parsed.
+fn parse_edits(edits: &[String]) -> PyResult<Vec<wpbgi::scene::edit::Edit>> {
+    edits.iter().map(|e| e.parse().map_err(to_py)).collect()
 }
 
 /// A baked cache, refused unless it was baked from `scene` as it is now.
@@ -247,6 +260,42 @@ fn bake(
     Ok(report.unbind())
 }
 
+/// Relight the cache at `cache_path`, a fresh bake of `scene`, for `scene` with `edits`
+/// applied (see `Scene.edited`), writing the new cache to `output`: rescaled where every
+/// emitter changes by one factor, baked again otherwise. Returns {"how": "rescaled" or
+/// "rebaked", "factor" or "why", "seconds"}; the new cache is fresh for `scene.edited(edits)`.
+#[pyfunction]
+#[pyo3(signature = (scene, cache_path, output, edits, *, threads=0, progress=None))]
+fn relight(
+    py: Python<'_>,
+    scene: &Scene,
+    cache_path: PathBuf,
+    output: PathBuf,
+    edits: Vec<String>,
+    threads: usize,
+    progress: Option<PyObject>,
+) -> PyResult<Py<PyDict>> {
+    let edits = parse_edits(&edits)?;
+    let cache = wpbgi::Cache::read(&cache_path, None).map_err(|e| to_py(wpbgi::Error::Cache(e)))?;
+    let scene = &scene.inner;
+    let relit = reporting(py, threads, progress, |report, cancel| {
+        wpbgi::bake::relight::relight(scene, &cache, &edits, &output, report, cancel)
+    })?;
+    let out = PyDict::new(py);
+    match &relit.how {
+        wpbgi::bake::relight::Relighting::Rescaled { factor } => {
+            out.set_item("how", "rescaled")?;
+            out.set_item("factor", factor.to_array().to_vec())?;
+        }
+        wpbgi::bake::relight::Relighting::Rebaked { why } => {
+            out.set_item("how", "rebaked")?;
+            out.set_item("why", why)?;
+        }
+    }
+    out.set_item("seconds", relit.seconds)?;
+    Ok(out.unbind())
+}
+
 /// The content hash a bake of `scene` with these settings would have (equal to `Cache.hash`
 /// of its cache), without baking.
 #[pyfunction]
@@ -370,6 +419,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(bake, m)?)?;
     m.add_function(wrap_pyfunction!(bake_hash, m)?)?;
     m.add_function(wrap_pyfunction!(render, m)?)?;
+    m.add_function(wrap_pyfunction!(relight, m)?)?;
     m.add("Error", m.py().get_type::<Error>())?;
     m.add("Cancelled", m.py().get_type::<Cancelled>())?;
     m.add("__version__", wpbgi::VERSION)?;

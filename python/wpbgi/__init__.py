@@ -18,6 +18,12 @@ Settings are keyword arguments named as the library's fields: for ``bake``, ``qu
 ``clusters``, ``far_eps``, ``spp``, ``sparse``, ``seed``. What is not given keeps the default of
 the ``wpbgi`` command; a value out of range raises ``wpbgi.Error`` naming it.
 
+Lights and materials change after the bake through edits in the syntax of ``wpbgi --set``::
+
+    warm = ["key.emission*=1.2,1,0.8"]
+    wpbgi.relight(scene, "scene.wpc", "warm.wpc", warm)     # rescaled, or baked again
+    image = wpbgi.render(scene.edited(warm), wpbgi.Cache(scene.edited(warm), "warm.wpc"))
+
 ``progress(stage, fraction)`` is called on the calling thread; returning True (or raising, or
 Ctrl-C) cancels the work, which raises ``wpbgi.Cancelled`` (or what the callback raised).
 ``threads`` picks the worker count (0: one per core); the results do not depend on it.
@@ -26,9 +32,9 @@ Ctrl-C) cancels the work, which raises ``wpbgi.Cancelled`` (or what the callback
 import numpy
 
 from . import _native
-from ._native import Cache, Cancelled, Error, Scene, __version__, bake, bake_hash
+from ._native import Cache, Cancelled, Error, Scene, __version__, bake, bake_hash, relight
 
-__all__ = ["Scene", "Cache", "bake", "bake_hash", "render", "Error", "Cancelled", "__version__"]
+__all__ = ["Scene", "Cache", "bake", "bake_hash", "render", "relight", "Error", "Cancelled", "__version__"]
 
 
 def render(scene, cache, width=None, height=None, camera=None, *, threads=0, progress=None, **settings):
