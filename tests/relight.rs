@@ -96,7 +96,7 @@ fn an_edit_of_scattering_bakes_again_and_says_why() {
     let dir = scratch("rebake");
     let original = Scene::load(&common::mitsuba_data("cbox-rough.gltf")).expect("scene");
     let cache = common::bake_to_cache(&original, &settings(), &dir.join("original.wpc"));
-    let edits = edits(&["white.reflectance=0.5", "gold-a0.2.alpha*=1.5"]);
+    let edits = edits(&["white.reflectance=0.5", "gold-a0.2.alpha=0.02"]);
     let output = dir.join("relit.wpc");
     let relit = relight(
         &original,
@@ -108,7 +108,16 @@ fn an_edit_of_scattering_bakes_again_and_says_why() {
     )
     .expect("relight");
     match &relit.how {
-        Relighting::Rebaked { why } => assert!(why.contains("\"white\""), "{why}"),
+        Relighting::Rebaked { why } => {
+            assert!(why.contains("\"white\""), "{why}");
+            // α 0.02 needs the finest maps, 64², where the cache's α 0.2 chose 16².
+            assert!(
+                why.contains(
+                    "\"gold-a0.2\" now needs 64² directional maps where the cache has 16²"
+                ),
+                "{why}"
+            );
+        }
         other => panic!("expected a re-bake, got {other:?}"),
     }
     let edited = original.edited(&edits).expect("edited");

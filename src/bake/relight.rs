@@ -31,6 +31,8 @@ use crate::progress::Progress;
 use crate::scene::edit::Edit;
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
+use crate::surfels::radiance::map_levels;
+use glam::Vec2;
 use serde_json::json;
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
@@ -89,6 +91,7 @@ pub fn relight(
             Relighting::Rescaled { factor }
         }
         Err(why) => {
+            let why = why + &finer_maps(original, &scene, cache.map_resolution());
             let settings = BakeSettings::from_json(cache.settings()).map_err(|what| {
                 CacheError::Malformed {
                     path: cache.cache.path.clone(),
@@ -105,6 +108,31 @@ pub fn relight(
         scene,
         seconds: start.elapsed().as_secs_f64(),
     })
+}
+
+/// Where an edit makes a material smoother than the cache's directional maps resolve (`side`
+/// texels a side; see [`map_levels`]): a note saying so, else nothing. Only a bake can give it
+/// finer maps; the note says why the new cache's plan differs.
+fn finer_maps(original: &Scene, edited: &Scene, side: Option<u32>) -> String {
+    let side = side.unwrap_or(0);
+    let needs = |scene: &Scene, m: &crate::scene::Material| {
+        map_levels(&m.bsdf_at(&scene.textures, Vec2::ZERO)).map_or(0, |l| 1u32 << l)
+    };
+    let notes: Vec<String> = original
+        .materials
+        .iter()
+        .zip(&edited.materials)
+        .filter_map(|(o, e)| {
+            let n = needs(edited, e);
+            (n > side && n > needs(original, o)).then(|| {
+                format!(
+                    "; material \"{}\" now needs {n}² directional maps where the cache has {side}²",
+                    e.name
+                )
+            })
+        })
+        .collect();
+    notes.concat()
 }
 
 /// How far two factors may differ and count as one (float rounding of the edits' products).
