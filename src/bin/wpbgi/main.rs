@@ -724,13 +724,29 @@ fn main() {
             }
             interrupt::exit_interrupted();
         }
+        let message = one_sentence(&e);
         if json_errors {
-            println!(
-                "{}",
-                serde_json::json!({"error": format!("{e:#}"), "exit": 1})
-            );
+            println!("{}", serde_json::json!({"error": message, "exit": 1}));
         }
-        eprintln!("error: {e:#}");
+        eprintln!("error: {message}");
         std::process::exit(1);
     }
+}
+
+/// An error and its causes in one line, outermost first, leaving out a cause that the
+/// message before it already says (a library error that names its OS error and also returns
+/// it as its source read "… (os error 2): No such file or directory (os error 2)").
+fn one_sentence(e: &anyhow::Error) -> String {
+    let mut out = String::new();
+    for cause in e.chain() {
+        let text = cause.to_string();
+        if out.contains(&text) {
+            continue;
+        }
+        if !out.is_empty() {
+            out.push_str(": ");
+        }
+        out.push_str(&text);
+    }
+    out
 }
