@@ -101,6 +101,54 @@ fn window_under_xvfb_matches_headless_frame() {
     assert!(lit * 3 >= (160 * 120), "only {lit} lit pixels");
 }
 
+/// An edit typed into the window (scripted by --window-edit, through the same path as the key
+/// e) shows what previewing the relit cache of the edited scene shows: the two screenshots are
+/// equal byte for byte, and differ from the unedited scene's.
+#[test]
+fn an_edit_in_the_window_shows_the_relit_cache() {
+    let d = dir("edit");
+    let cache = bake(&d);
+    let relit = d.join("relit.wpc");
+    let edit = "light.emission*=1.5,1.2,0.8";
+    let s = scene();
+    let s = s.to_str().expect("utf-8");
+    run(Command::new(WPBGI).args([
+        "relight",
+        cache.to_str().expect("utf-8"),
+        "--scene",
+        s,
+        "-o",
+        relit.to_str().expect("utf-8"),
+        "--set",
+        edit,
+    ]));
+    let shot = |name: &str, args: &[&str]| {
+        let path = d.join(name);
+        let mut c = Command::new("xvfb-run");
+        c.args(["-a", "-s", "-screen 0 640x480x24", WPBGI, "preview"])
+            .args(args)
+            .args(["--scene", s, "--size", "160x120", "--frames", "4"])
+            .args(["--screenshot", path.to_str().expect("utf-8")])
+            .env("WPBGI_VALIDATE", "1");
+        let out = run(&mut c);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!stderr.contains("validation:"), "{stderr}");
+        std::fs::read(&path).expect("screenshot")
+    };
+    let c = cache.to_str().expect("utf-8");
+    let in_window = shot("typed.png", &[c, "--window-edit", edit]);
+    let relit_shot = shot(
+        "relit.png",
+        &[relit.to_str().expect("utf-8"), "--set", edit],
+    );
+    let unedited = shot("unedited.png", &[c]);
+    assert!(
+        in_window == relit_shot,
+        "the window's edit differs from the relit cache"
+    );
+    assert!(in_window != unedited, "the edit changed nothing");
+}
+
 /// Headless PNG and EXR of the point-cloud view (no scene), and one-sentence errors.
 #[test]
 fn headless_cli_and_errors() {

@@ -53,6 +53,19 @@ pub enum Relighting {
     },
 }
 
+impl std::fmt::Display for Relighting {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Relighting::Rescaled { factor } => write!(
+                f,
+                "every emitter ×({:.4}, {:.4}, {:.4}), the cache rescaled",
+                factor.x, factor.y, factor.z
+            ),
+            Relighting::Rebaked { why } => write!(f, "baked again: {why}"),
+        }
+    }
+}
+
 /// What [`relight`] did.
 #[derive(Clone, Debug)]
 pub struct Relit {

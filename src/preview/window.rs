@@ -8,6 +8,10 @@
 //!   blit) with a cut [`MOVING_COARSENESS`] times coarser than asked; at rest the frames are
 //!   full size and the cut halves every frame down to the asked bound.
 //! - The title shows what is shown, the frame time and the cut's size.
+//! - e starts an edit of the scene in the `--set` syntax, typed into the title; Enter hands it
+//!   to the caller's relighter, which returns the edited scene and its cache, and the window
+//!   goes on with them (Esc drops the edit). The window does not relight itself: that is the
+//!   bake's work, which the preview does not import.
 //! - A scripted run (`frames`) orbits once around the target and ends where it started, then
 //!   refines, optionally reads the swapchain image back as a screenshot, and exits: what the
 //!   tests run under Xvfb.
@@ -46,7 +50,14 @@ pub struct WindowSettings {
     pub screenshot: Option<PathBuf>,
     /// Run under the Vulkan validation layer and collect its messages.
     pub validate: bool,
+    /// A scripted run applies this edit before its first frame, as typing it would.
+    pub edit: Option<String>,
 }
+
+/// What the window calls to apply an edit the user typed: given the scene and cache it shows
+/// and the edit (`--set` syntax), the edited scene and its cache, or why not in one sentence.
+pub type Relighter<'a> =
+    &'a mut dyn FnMut(&Scene, &BakedCache, &str) -> Result<(Scene, BakedCache), String>;
 
 /// What a windowed run did.
 #[derive(Clone, Debug, Default)]
@@ -66,12 +77,14 @@ pub struct WindowReport {
 }
 
 /// Open a window on the cache (and its scene) seen by `camera`, whose size is the window's,
-/// and run until it is closed or the script ends.
-pub fn run_window(
-    cache: &BakedCache,
-    scene: Option<&Scene>,
+/// and run until it is closed or the script ends. With a scene, `relighter` applies the edits
+/// typed into the window (key e).
+pub fn run_window<'a>(
+    cache: &'a BakedCache,
+    scene: Option<&'a Scene>,
     camera: Camera,
     settings: &WindowSettings,
+    relighter: Option<Relighter<'a>>,
 ) -> Result<WindowReport, PreviewError> {
     let event_loop = EventLoop::new().map_err(|e| PreviewError::Window(e.to_string()))?;
     let bounds = super::bounds(cache, scene);
@@ -90,6 +103,10 @@ pub fn run_window(
         cursor: (0.0, 0.0),
         report: WindowReport::default(),
         error: None,
+        relighter,
+        relit: None,
+        editing: None,
+        notice: None,
     };
     event_loop
         .run_app(&mut app)
@@ -115,6 +132,15 @@ struct Running {
 struct App<'a> {
     cache: &'a BakedCache,
     scene: Option<&'a Scene>,
+    /// Applies typed edits (see [`Relighter`]).
+    relighter: Option<Relighter<'a>>,
+    /// The edited scene and its cache, once an edit was applied: shown instead of the
+    /// originals.
+    relit: Option<(Scene, BakedCache)>,
+    /// The edit being typed.
+    editing: Option<String>,
+    /// What the last edit did, for the title.
+    notice: Option<String>,
     settings: WindowSettings,
     show: Show,
     /// The starting camera and orbit target.
@@ -131,6 +157,51 @@ struct App<'a> {
 }
 
 impl App<'_> {
+    /// The scene and cache shown: the last edit's, else the originals.
+    fn shown(&self) -> (Option<&Scene>, &BakedCache) {
+        match &self.relit {
+            Some((scene, cache)) => (Some(scene), cache),
+            None => (self.scene, self.cache),
+        }
+    }
+
+    /// Apply `edit` through the relighter and show its scene and cache; a refusal goes to the
+    /// title (and, in a scripted run, ends it with the error).
+    fn apply_edit(&mut self, edit: &str) -> Result<(), PreviewError> {
+        let Some(relight) = self.relighter.take() else {
+            return Err(PreviewError::Window(
+                "this window cannot apply edits".into(),
+            ));
+        };
+        let result = match self.shown() {
+            (Some(scene), cache) => relight(scene, cache, edit),
+            (None, _) => Err("an edit needs the scene (--scene)".to_string()),
+        };
+        self.relighter = Some(relight);
+        match result {
+            Ok(relit) => {
+                if let Some(r) = self.running.as_mut() {
+                    r.preview =
+                        Preview::new(r.gpu.clone(), &relit.1, Some(&relit.0), r.swapchain.extent)?;
+                }
+                self.relit = Some(relit);
+                self.notice = Some(format!("applied {edit}"));
+            }
+            Err(why) if self.settings.frames.is_some() => return Err(PreviewError::Window(why)),
+            Err(why) => self.notice = Some(why),
+        }
+        self.moved();
+        Ok(())
+    }
+
+    /// The title while an edit is typed.
+    fn show_editing(&self) {
+        if let (Some(r), Some(text)) = (&self.running, &self.editing) {
+            r.window
+                .set_title(&format!("edit: {text}_   (Enter: apply, Esc: cancel)"));
+        }
+    }
+
     fn open(&mut self, event_loop: &ActiveEventLoop) -> Result<(), PreviewError> {
         let size = PhysicalSize::new(self.camera.width, self.camera.height);
         let window = event_loop
@@ -163,7 +234,8 @@ impl App<'_> {
             .camera
             .clone()
             .with_size(swapchain.extent.0, swapchain.extent.1);
-        let preview = Preview::new(gpu.clone(), self.cache, self.scene, swapchain.extent)?;
+        let (scene, cache) = self.shown();
+        let preview = Preview::new(gpu.clone(), cache, scene, swapchain.extent)?;
         self.report.device = gpu.name.clone();
         self.running = Some(Running {
             swapchain,
@@ -171,6 +243,9 @@ impl App<'_> {
             gpu,
             window,
         });
+        if let Some(edit) = self.settings.edit.clone() {
+            self.apply_edit(&edit)?;
+        }
         Ok(())
     }
 
@@ -212,14 +287,19 @@ impl App<'_> {
         self.report.last_cut_size = splats.len();
         self.report.last_cut_seconds = cut_seconds;
         self.report.last_draw_seconds = draw_seconds;
-        r.window.set_title(&format!(
-            "wpbgi preview: {:?}, {:.0} ms, cut of {} nodes ({} px{})",
-            self.show,
-            1e3 * (cut_seconds + draw_seconds),
-            splats.len(),
-            self.cut_now,
-            if moving { ", half size" } else { "" }
-        ));
+        if self.editing.is_none() {
+            r.window.set_title(&format!(
+                "wpbgi preview: {:?}, {:.0} ms, cut of {} nodes ({} px{}){}",
+                self.show,
+                1e3 * (cut_seconds + draw_seconds),
+                splats.len(),
+                self.cut_now,
+                if moving { ", half size" } else { "" },
+                self.notice
+                    .as_ref()
+                    .map_or(String::new(), |n| format!("; {n}"))
+            ));
+        }
         if let (Some(bytes), Some(path)) = (pixels, &self.settings.screenshot) {
             let bgr = matches!(
                 r.swapchain.format,
@@ -256,7 +336,11 @@ impl App<'_> {
         }
         r.swapchain.recreate((size.width, size.height))?;
         let (w, h) = r.swapchain.extent;
-        r.preview.resize((w, h), self.scene)?;
+        let scene = match &self.relit {
+            Some((scene, _)) => Some(scene),
+            None => self.scene,
+        };
+        r.preview.resize((w, h), scene)?;
         self.camera = self.camera.clone().with_size(w, h);
         self.home.0 = self.home.0.clone().with_size(w, h);
         Ok(())
@@ -379,9 +463,41 @@ impl App<'_> {
                 }
             }
             WindowEvent::KeyboardInput { event, .. }
+                if event.state == ElementState::Pressed
+                    && self.settings.frames.is_none()
+                    && self.editing.is_some() =>
+            {
+                match event.logical_key.as_ref() {
+                    Key::Named(NamedKey::Escape) => self.editing = None,
+                    Key::Named(NamedKey::Enter) => {
+                        let edit = self.editing.take().unwrap_or_default();
+                        self.apply_edit(edit.trim())?;
+                    }
+                    Key::Named(NamedKey::Backspace) => {
+                        if let Some(text) = self.editing.as_mut() {
+                            text.pop();
+                        }
+                    }
+                    _ => {
+                        if let (Some(text), Some(typed)) = (self.editing.as_mut(), &event.text) {
+                            text.push_str(typed);
+                        }
+                    }
+                }
+                self.show_editing();
+                if self.editing.is_none() {
+                    self.moved();
+                }
+            }
+            WindowEvent::KeyboardInput { event, .. }
                 if event.state == ElementState::Pressed && self.settings.frames.is_none() =>
             {
                 let show = match event.logical_key.as_ref() {
+                    Key::Character("e") if self.relighter.is_some() && self.scene.is_some() => {
+                        self.editing = Some(String::new());
+                        self.show_editing();
+                        return Ok(());
+                    }
                     Key::Named(NamedKey::Escape) => {
                         event_loop.exit();
                         return Ok(());

@@ -6,11 +6,13 @@ use clap::{Args, ValueEnum};
 use serde_json::json;
 use std::path::PathBuf;
 use std::sync::Arc;
+use wpbgi::bake::relight::relight;
 use wpbgi::cache::store::BakedCache;
 use wpbgi::image::{write_exr, write_png};
 use wpbgi::preview::device::Gpu;
 use wpbgi::preview::window::{run_window, WindowSettings};
 use wpbgi::preview::{bounds, framing_camera, Frame, Preview, Show, DEFAULT_CUT_PIXELS};
+use wpbgi::scene::edit::Edit;
 use wpbgi::scene::{Camera, Scene};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, ValueEnum)]
@@ -60,6 +62,10 @@ pub struct PreviewArgs {
     /// Windowed: read the last frame back from the window's swapchain into this PNG.
     #[arg(long, conflicts_with = "headless")]
     pub screenshot: Option<PathBuf>,
+    /// Windowed, scripted (--frames): apply this edit (the --set syntax) in the window before
+    /// the first frame, as typing it after the key e does. For tests and demos.
+    #[arg(long, value_name = "EDIT", requires = "frames", requires = "scene")]
+    pub window_edit: Option<String>,
     /// What to show.
     #[arg(long, value_enum, default_value = "total")]
     pub show: ShowArg,
@@ -169,7 +175,8 @@ fn pick_camera_without_scene(cache: &BakedCache, args: &CameraArgs) -> Result<Ca
 }
 
 /// The windowed preview: an orbit camera (left drag: orbit, right or middle drag: pan, wheel:
-/// zoom; keys 1–5 or t, i, d, s, c: what to show; r: back to the start; Esc or q: quit).
+/// zoom; keys 1–5 or t, i, d, s, c: what to show; r: back to the start; e: type an edit,
+/// Enter relights; Esc or q: quit).
 fn windowed(
     a: &PreviewArgs,
     cache: &BakedCache,
@@ -182,8 +189,33 @@ fn windowed(
         frames: a.frames,
         screenshot: a.screenshot.clone(),
         validate: std::env::var("WPBGI_VALIDATE").is_ok_and(|v| v == "1"),
+        edit: a.window_edit.clone(),
     };
-    let report = run_window(cache, scene, camera, &settings)?;
+    let mut relights = 0;
+    // The window's edits (key e): relit through a cache file that lives as long as its
+    // memory map (the name is removed at once).
+    let mut relighter = |scene: &Scene, cache: &BakedCache, text: &str| {
+        let edit: Edit = text.parse().map_err(|e: wpbgi::Error| e.to_string())?;
+        relights += 1;
+        let path = std::env::temp_dir().join(format!(
+            "wpbgi-preview-relit-{}-{relights}.wpc",
+            std::process::id()
+        ));
+        let relit = relight(
+            scene,
+            cache,
+            &[edit],
+            &path,
+            &|_, _| {},
+            crate::interrupt::flag(),
+        )
+        .map_err(|e| e.to_string())?;
+        let cache = BakedCache::read(&path, None).map_err(|e| e.to_string());
+        let _ = std::fs::remove_file(&path);
+        say!("{text}: {}", relit.how);
+        Ok((relit.scene, cache?))
+    };
+    let report = run_window(cache, scene, camera, &settings, Some(&mut relighter))?;
     say!(
         "{} frames on {}; the last: cut of {} nodes in {:.1} ms, drawn in {:.1} ms",
         report.frames,

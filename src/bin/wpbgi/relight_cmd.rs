@@ -58,21 +58,12 @@ pub fn relight_command(a: RelightArgs) -> Result<()> {
             json!({"output": a.output, "how": how, "detail": detail, "seconds": relit.seconds})
         );
     } else {
-        match &relit.how {
-            Relighting::Rescaled { factor } => say!(
-                "relit {} in {:.2} s: every emitter ×({}, {}, {}), the cache rescaled",
-                a.output.display(),
-                relit.seconds,
-                factor.x,
-                factor.y,
-                factor.z
-            ),
-            Relighting::Rebaked { why } => say!(
-                "relit {} in {:.1} s by baking the edited scene again: {why}",
-                a.output.display(),
-                relit.seconds
-            ),
-        }
+        say!(
+            "relit {} in {:.2} s: {}",
+            a.output.display(),
+            relit.seconds,
+            relit.how
+        );
     }
     Ok(())
 }
