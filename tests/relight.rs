@@ -60,6 +60,11 @@ fn scaling_every_emitter_rescales_the_cache_as_a_fresh_bake_would_be() {
         let original = Scene::load(&common::mitsuba_data(&format!("{name}.gltf"))).expect("scene");
         let path = |what: &str| dir.join(format!("{name}-{edit}-{what}.wpc"));
         let cache = common::bake_to_cache(&original, &settings(), &path("original"));
+        // One emitter: the plan says a colour factor rescales too.
+        let rescales = cache.plan["plan"]["relight"]["rescales"]
+            .as_str()
+            .unwrap_or_default();
+        assert!(rescales.contains("grey or coloured"), "{rescales}");
         let edits = edits(&[edit]);
         let relit = relight(
             &original,
@@ -321,6 +326,21 @@ fn every_light_doubled_rescales_and_one_alone_bakes_again() {
     assert!(rel == 0.0, "relMSE {rel:.3e}");
     match run(&["lamp.intensity*=2"], "lamp.wpc").0 {
         Relighting::Rebaked { why } => assert!(why.contains("different factors"), "{why}"),
+        other => panic!("expected a re-bake, got {other:?}"),
+    }
+    // Two emitter colours: a grey factor only, as the plan says, and a colour factor bakes
+    // again.
+    let rescales = cache.plan["plan"]["relight"]["rescales"]
+        .as_str()
+        .unwrap_or_default();
+    assert!(rescales.contains("one grey factor"), "{rescales}");
+    match run(
+        &["light.emission*=1,1,2", "lamp.intensity*=1,1,2"],
+        "blue.wpc",
+    )
+    .0
+    {
+        Relighting::Rebaked { why } => assert!(why.contains("recolour"), "{why}"),
         other => panic!("expected a re-bake, got {other:?}"),
     }
 }

@@ -142,6 +142,7 @@ pub fn bake_cancellable(
     let light_tree = (punctual > LIGHT_TREE_FROM).then(|| LightTree::new(&scene.lights));
     let emitters = EmitterSampler::with_punctual(scene, light_tree.is_none());
     plan.json["lightcuts"] = light_tree.is_some().into();
+    plan.note_relight(scene, light_tree.is_some());
     stage("plan", t);
 
     let t = Instant::now();

@@ -3,6 +3,7 @@
 
 use crate::bsdf::Bsdf;
 use crate::scene::{LightKind, Scene};
+use crate::spectrum::Rgb;
 use crate::surfels::radiance::map_levels;
 use glam::Vec2;
 use serde_json::{json, Value};
@@ -26,7 +27,60 @@ pub struct Plan {
     pub json: Value,
 }
 
+/// How far two emitters' colours (chromaticities) may differ and count as one (float
+/// rounding).
+pub(crate) const SAME_COLOUR: f32 = 1e-6;
+
+/// Whether a bake of `scene` makes the same choices when every emitter's radiance is
+/// multiplied by one colour (not only a grey factor): every emitter untextured and of one
+/// colour, and no light tree (`lightcuts`). The bake picks emitters by luminous power and cuts
+/// light trees on bounds of it; a shared colour factor scales every emitter's power alike only
+/// then. What `wpbgi relight` may rescale (`super::relight`).
+pub(crate) fn recolourable(scene: &Scene, lightcuts: bool) -> bool {
+    let mut colours = Vec::new();
+    for m in &scene.materials {
+        if let Some(e) = &m.emission {
+            if e.texture.is_some() {
+                return false;
+            }
+            colours.push(e.radiance);
+        }
+    }
+    colours.extend(scene.lights.iter().map(|l| l.intensity));
+    if let Some(env) = &scene.environment {
+        if env.map.is_some() {
+            return false;
+        }
+        colours.push(env.scale);
+    }
+    let chroma: Vec<Rgb> = colours
+        .into_iter()
+        .filter(|c| c.element_sum() > 0.0)
+        .map(|c| c / c.element_sum())
+        .collect();
+    !lightcuts
+        && chroma
+            .windows(2)
+            .all(|w| (w[0] - w[1]).abs().max_element() <= SAME_COLOUR)
+}
+
 impl Plan {
+    /// Record what `wpbgi relight` can change in a cache of this bake without baking again
+    /// (`lightcuts`: whether the bake cuts a light tree).
+    pub(crate) fn note_relight(&mut self, scene: &Scene, lightcuts: bool) {
+        let scale = if recolourable(scene, lightcuts) {
+            "every emitter's emission or intensity by one factor, grey or coloured"
+        } else {
+            "every emitter's emission or intensity by one grey factor (its emitters differ in \
+             colour or texture, or it cuts a light tree)"
+        };
+        self.json["relight"] = json!({
+            "rescales": scale,
+            "bakes_again": "any other edit: reflectance, tints, transmittance, roughness, one \
+                            emitter alone",
+        });
+    }
+
     /// Record the bounce settings: `bounces` 0 leaves indirect light out.
     pub fn note_bounces(&mut self, bounces: &crate::bake::bounce::BounceSettings) {
         if bounces.max == 0 {

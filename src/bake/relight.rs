@@ -9,7 +9,8 @@
 //! the cache. It holds only where k leaves every choice of the bake as it was: the bake
 //! picks emitters in proportion to their luminous power, stops its bounces on luminance
 //! ratios and cuts its light tree on relative bounds, so k must be grey, or every emitter
-//! one untextured colour (then k changes no emitter's share) with no light tree.
+//! one untextured colour (then k changes no emitter's share) with no light tree
+//! (`plan::recolourable`, which the bake's plan records under "relight").
 //!
 //! Every other edit (a reflectance, a tint, a roughness, one light of several recoloured, an
 //! emitter added or removed) changes how light bounces, and the cache is baked again for the
@@ -22,6 +23,7 @@
 
 use super::baked::Baked;
 use super::pipeline::bake_cancellable;
+use super::plan::recolourable;
 use super::settings::BakeSettings;
 use super::store::{save, write_scaled};
 use crate::cache::store::{bake_hash, BakedCache};
@@ -155,8 +157,8 @@ const SAME_FACTOR: f32 = 1e-6;
 /// edits changed nothing else and k leaves the bake's choices as they were (see the module
 /// docs); otherwise why not. `lightcuts`: whether the bake cut a light tree.
 fn emission_factor(original: &Scene, edited: &Scene, lightcuts: bool) -> Result<Rgb, String> {
-    // (original, edited) radiance of every emitter, and whether it is textured.
-    let mut pairs: Vec<(Rgb, Rgb, bool)> = Vec::new();
+    // (original, edited) radiance of every emitter.
+    let mut pairs: Vec<(Rgb, Rgb)> = Vec::new();
     for (o, e) in original.materials.iter().zip(&edited.materials) {
         let rest =
             |m: &crate::scene::Material| format!("{:?}", (&m.scattering, &m.cutout, &m.normal_map));
@@ -169,19 +171,19 @@ fn emission_factor(original: &Scene, edited: &Scene, lightcuts: bool) -> Result<
         match (&o.emission, &e.emission) {
             (None, None) => {}
             (Some(a), Some(b)) if a.two_sided == b.two_sided => {
-                pairs.push((a.radiance, b.radiance, a.texture.is_some()))
+                pairs.push((a.radiance, b.radiance))
             }
             _ => return Err(format!("the edits make material \"{}\" an emitter", o.name)),
         }
     }
     for (o, e) in original.lights.iter().zip(&edited.lights) {
-        pairs.push((o.intensity, e.intensity, false));
+        pairs.push((o.intensity, e.intensity));
     }
     if let (Some(o), Some(e)) = (&original.environment, &edited.environment) {
-        pairs.push((o.scale, e.scale, o.map.is_some()));
+        pairs.push((o.scale, e.scale));
     }
     let mut factor = [None::<f32>; 3];
-    for &(o, e, _) in &pairs {
+    for &(o, e) in &pairs {
         for c in 0..3 {
             if o[c] > 0.0 {
                 let k = e[c] / o[c];
@@ -202,25 +204,12 @@ fn emission_factor(original: &Scene, edited: &Scene, lightcuts: bool) -> Result<
         return Err("the edits turn an emitter's light off".into());
     }
     let grey = k.max_element() - k.min_element() <= SAME_FACTOR * k.max_element();
-    if !grey {
-        if lightcuts {
-            return Err("the edits recolour lights that the bake cut as a light tree".into());
-        }
-        if pairs.iter().any(|p| p.2) {
-            return Err("the edits recolour a textured emitter".into());
-        }
-        let chroma = |c: Rgb| c / c.element_sum();
-        let lit: Vec<Rgb> = pairs
-            .iter()
-            .filter(|p| p.0.element_sum() > 0.0)
-            .map(|p| chroma(p.0))
-            .collect();
-        if lit
-            .windows(2)
-            .any(|w| (w[0] - w[1]).abs().max_element() > SAME_FACTOR)
-        {
-            return Err("the edits recolour emitters of different colours".into());
-        }
+    if !grey && !recolourable(original, lightcuts) {
+        return Err(
+            "the edits recolour emitters of different colours or textures, or lights \
+                    that the bake cut as a light tree"
+                .into(),
+        );
     }
     Ok(k)
 }
