@@ -97,7 +97,11 @@ fn c_and_python_examples_reproduce_the_rust_api() {
             .arg("-o")
             .arg(&exe),
     );
-    let log = run(Command::new(&exe).args(example_args(&dir, "c")));
+    // The library found above, not another copy on cargo's LD_LIBRARY_PATH (a `cargo build`
+    // leaves an older one in the profile folder, which comes first there).
+    let log = run(Command::new(&exe)
+        .args(example_args(&dir, "c"))
+        .env("LD_LIBRARY_PATH", &lib_dir));
     assert!(log.contains("progress reports"), "{log}");
     assert_same_as_rust(&dir, "c", &rust);
     // Its EXR, written by wpbgi_render_to_file, holds the same floats.
