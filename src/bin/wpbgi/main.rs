@@ -562,6 +562,12 @@ fn reference(a: ReferenceArgs) -> Result<()> {
 }
 
 fn demo(a: DemoArgs) -> Result<()> {
+    if !edits().is_empty() {
+        bail!(
+            "demo compares the bundled scene with Mitsuba's render of it as it is; --set edits \
+             a scene that bake, render or preview load"
+        );
+    }
     let start = std::time::Instant::now();
     std::fs::create_dir_all(&a.output)
         .with_context(|| format!("cannot create the folder {}", a.output.display()))?;
