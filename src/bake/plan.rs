@@ -27,9 +27,9 @@ pub struct Plan {
     pub json: Value,
 }
 
-/// How far two emitters' colours (chromaticities) may differ and count as one (float
-/// rounding).
-pub(crate) const SAME_COLOUR: f32 = 1e-6;
+/// How far two ratios of emitter radiance (two chromaticities, two factors of an edit) may
+/// differ, relatively, and count as one: float rounding of the products that made them.
+pub(crate) const SAME_RATIO: f32 = 1e-6;
 
 /// Whether a bake of `scene` makes the same choices when every emitter's radiance is
 /// multiplied by one colour (not only a grey factor): every emitter untextured and of one
@@ -61,7 +61,7 @@ pub(crate) fn recolourable(scene: &Scene, lightcuts: bool) -> bool {
     !lightcuts
         && chroma
             .windows(2)
-            .all(|w| (w[0] - w[1]).abs().max_element() <= SAME_COLOUR)
+            .all(|w| (w[0] - w[1]).abs().max_element() <= SAME_RATIO)
 }
 
 impl Plan {

@@ -23,7 +23,7 @@
 
 use super::baked::Baked;
 use super::pipeline::bake_cancellable;
-use super::plan::recolourable;
+use super::plan::{recolourable, SAME_RATIO};
 use super::settings::BakeSettings;
 use super::store::{save, write_scaled};
 use crate::cache::store::{bake_hash, BakedCache};
@@ -150,9 +150,6 @@ fn finer_maps(original: &Scene, edited: &Scene, side: Option<u32>) -> String {
     notes.concat()
 }
 
-/// How far two factors may differ and count as one (float rounding of the edits' products).
-const SAME_FACTOR: f32 = 1e-6;
-
 /// The factor k per channel by which every emission of `edited` is `original`'s, when the
 /// edits changed nothing else and k leaves the bake's choices as they were (see the module
 /// docs); otherwise why not. `lightcuts`: whether the bake cut a light tree.
@@ -189,7 +186,7 @@ fn emission_factor(original: &Scene, edited: &Scene, lightcuts: bool) -> Result<
                 let k = e[c] / o[c];
                 match factor[c] {
                     None => factor[c] = Some(k),
-                    Some(f) if (k - f).abs() <= SAME_FACTOR * f.abs().max(k.abs()) => {}
+                    Some(f) if (k - f).abs() <= SAME_RATIO * f.abs().max(k.abs()) => {}
                     Some(_) => {
                         return Err("the edits change the emitters by different factors".into())
                     }
@@ -203,7 +200,7 @@ fn emission_factor(original: &Scene, edited: &Scene, lightcuts: bool) -> Result<
     if !(k.min_element() > 0.0 && k.is_finite()) {
         return Err("the edits turn an emitter's light off".into());
     }
-    let grey = k.max_element() - k.min_element() <= SAME_FACTOR * k.max_element();
+    let grey = k.max_element() - k.min_element() <= SAME_RATIO * k.max_element();
     if !grey && !recolourable(original, lightcuts) {
         return Err(
             "the edits recolour emitters of different colours or textures, or lights \

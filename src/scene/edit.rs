@@ -344,12 +344,15 @@ fn names(scene: &Scene) -> String {
 }
 
 impl Scene {
+    /// Apply `edits` to this scene, in order (stopping at the first refused).
+    pub fn apply_edits(&mut self, edits: &[Edit]) -> Result<()> {
+        edits.iter().try_for_each(|e| e.apply(self))
+    }
+
     /// This scene with `edits` applied, in order.
     pub fn edited(&self, edits: &[Edit]) -> Result<Scene> {
         let mut scene = self.clone();
-        for e in edits {
-            e.apply(&mut scene)?;
-        }
+        scene.apply_edits(edits)?;
         Ok(scene)
     }
 }

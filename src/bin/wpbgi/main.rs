@@ -424,9 +424,7 @@ pub(crate) fn load_scene(path: &Path) -> Result<Scene> {
 /// with the run's `--set` edits.
 pub(crate) fn load_scene_at(path: &Path, time: Option<f64>) -> Result<Scene> {
     let mut scene = load_unedited_at(path, time)?;
-    for e in edits() {
-        e.apply(&mut scene)?;
-    }
+    scene.apply_edits(edits())?;
     Ok(scene)
 }
 
