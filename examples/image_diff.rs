@@ -2,6 +2,7 @@
 //! two side by side and their absolute difference (×4) for looking at.
 //!
 //! `cargo run --release --example image_diff -- ours.exr reference.exr side_by_side.png [x,y,w,h]`
+//! (an image k times the reference's size each way is averaged down to it first).
 
 use wpbgi::image::{error_against, read_exr, write_png, Image};
 
@@ -13,6 +14,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     let mut a = read_exr(args[1].as_ref())?;
     let mut b = read_exr(args[2].as_ref())?;
+    // A render at a whole multiple of the reference's size is averaged down to it by the
+    // reference's box pixel filter, as `bench_render modes` does.
+    if a.width > b.width && a.width.is_multiple_of(b.width) {
+        a = a
+            .box_downsample(a.width / b.width)
+            .ok_or("the images' sizes are not a whole multiple apart")?;
+    }
     // Optional fifth argument x,y,w,h: compare that window, enlarged 4×.
     if let Some(win) = args.get(4) {
         let v: Vec<u32> = win.split(',').filter_map(|x| x.parse().ok()).collect();

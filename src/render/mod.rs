@@ -1,9 +1,11 @@
 //! The final render from a cache (docs/design.md §7, docs/method.md §2.3, §3, §7).
 //!
-//! 1. Centre rays find the primary hits; pixels on an edge (another mesh, a normal turning by
-//!    more than 25°, or a depth step of 5 %) or on a mirror or clear glass get 64
-//!    samples of a scrambled (0, 2)-sequence, of which one per quarter of the pixel gathers; the others one sample (adaptive
-//!    anti-aliasing).
+//! 1. Centre rays find the primary hits, and follow mirrors and clear glass to the rough
+//!    surfaces they show; pixels on an edge of either (another mesh, a normal turning by
+//!    more than 25°, or a depth step of 5 %) get 16 or 64 samples of a scrambled
+//!    (0, 2)-sequence, as many as the edge needs, of which one per quarter of the pixel
+//!    gathers; other mirror and glass pixels 4, one per quarter; the others one sample
+//!    ([`pixels`], adaptive anti-aliasing).
 //! 2. Each camera sample is traced to its rough hits ([`primary`]): emission, direct light by
 //!    ray tracing, specular chains; every rough hit becomes a receiver.
 //! 3. The gather, per 32 × 32 tile: receivers get their indirect light from the cache through
@@ -17,6 +19,7 @@
 //! order, so the image is the same for any thread count.
 
 pub mod paths;
+mod pixels;
 pub mod primary;
 pub mod sparse;
 
@@ -28,13 +31,13 @@ use crate::gather::{CutStats, Microbuffer, Senders};
 use crate::geometry::frame::Frame;
 use crate::image::Image;
 use crate::progress::Progress;
-use crate::sampler::{sobol02, Sampler};
 use crate::scene::{Camera, Scene};
 use crate::spectrum::Rgb;
-use crate::trace::{intersect, Tracer};
+use crate::trace::Tracer;
 use crate::validate::{in_range, require, require_max_depth, require_positive};
-use glam::{Vec2, Vec3};
-use primary::{trace_primary, CameraSample, LightShare, PrimarySample, PrimarySettings, Receiver};
+use glam::Vec3;
+use pixels::PixelSampling;
+use primary::{PrimarySample, PrimarySettings, Receiver};
 use rayon::prelude::*;
 use sparse::SparsePlan;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
@@ -83,8 +86,8 @@ pub struct FinalSettings {
     pub far_eps: f32,
     /// The path-traced gather's rays per receiver.
     pub spp: u32,
-    /// Diffuse receivers gather on a sparse grid and interpolate between ([`sparse`]);
-    /// off, every receiver gathers.
+    /// Receivers gather on a sparse grid and interpolate between where the light is smooth
+    /// ([`sparse`]); off, every receiver gathers.
     pub sparse: bool,
     /// Seed of every random stream.
     pub seed: u64,
@@ -224,10 +227,6 @@ pub fn grid_crop(
     ])
 }
 
-/// Edge pixels take EDGE_SIDE² samples of a (0, 2)-sequence for primary hits and direct
-/// light (an emitter's edge needs them); one in each quarter of the pixel gathers.
-pub(crate) const EDGE_SIDE: u32 = 8;
-
 /// What the gather did, summed over the image.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct GatherStats {
@@ -243,9 +242,12 @@ pub struct GatherStats {
     pub cluster_cut: CutStats,
     /// Microbuffer pixels (after refinement) over all receivers.
     pub pixels: u64,
-    /// Receivers that took their irradiance from their cell's anchors instead of gathering
+    /// Receivers that took their light from their cell's anchors instead of gathering
     /// ([`sparse`]).
     pub interpolated: u64,
+    /// Of those, the glossy and rough-dielectric ones, which took their outgoing radiance
+    /// from anchors with the same BSDF ([`sparse`]).
+    pub interpolated_glossy: u64,
 }
 
 impl GatherStats {
@@ -257,6 +259,7 @@ impl GatherStats {
         self.cluster_cut += o.cluster_cut;
         self.pixels += o.pixels;
         self.interpolated += o.interpolated;
+        self.interpolated_glossy += o.interpolated_glossy;
     }
 }
 
@@ -341,11 +344,6 @@ pub fn render_final_cancellable(
     timings.push(("load", t.elapsed().as_secs_f64()));
 
     let t = Instant::now();
-    let centre = centre_hits(&ctx, camera, settings.specular_below);
-    // The tiles of the whole image that the crop touches.
-    let tiles: Vec<(u32, u32)> = (y0 / TILE..y1.div_ceil(TILE))
-        .flat_map(|ty| (x0 / TILE..x1.div_ceil(TILE)).map(move |tx| (tx, ty)))
-        .collect();
     let primary_settings = PrimarySettings {
         max_depth: settings.max_depth,
         light_samples: settings.light_samples,
@@ -353,12 +351,17 @@ pub fn render_final_cancellable(
         chain_depth: settings.chain_depth,
         seed: settings.seed,
     };
+    let sampling = PixelSampling::new(&ctx, camera, &primary_settings);
+    // The tiles of the whole image that the crop touches.
+    let tiles: Vec<(u32, u32)> = (y0 / TILE..y1.div_ceil(TILE))
+        .flat_map(|ty| (x0 / TILE..x1.div_ceil(TILE)).map(move |tx| (tx, ty)))
+        .collect();
     let done = AtomicUsize::new(0);
     let primary: Vec<TilePrimary> = tiles
         .par_iter()
         .map(|&(tx, ty)| {
             stop()?;
-            let r = primary_tile(&ctx, camera, &centre, &primary_settings, tx, ty);
+            let r = primary_tile(&ctx, camera, &sampling, &primary_settings, tx, ty);
             let n = done.fetch_add(1, Ordering::Relaxed) + 1;
             progress("primary", n as f32 / tiles.len() as f32);
             Ok(r)
@@ -477,64 +480,6 @@ impl FinalOutput {
     }
 }
 
-/// The primary hit through a pixel's centre.
-#[derive(Clone, Copy)]
-struct CentreHit {
-    mesh: u32,
-    normal: Vec3,
-    depth: f32,
-    /// Smooth enough to start a specular chain.
-    smooth: bool,
-}
-
-fn centre_hits(ctx: &Tracer, camera: &Camera, specular_below: f32) -> Vec<Option<CentreHit>> {
-    let (w, h) = (camera.width, camera.height);
-    (0..w * h)
-        .into_par_iter()
-        .map(|i| {
-            let film = Vec2::new((i % w) as f32 + 0.5, (i / w) as f32 + 0.5);
-            let (o, d) = camera.generate_ray(film);
-            intersect(ctx, o, d).map(|hit| {
-                let m = &ctx.scene.materials[ctx.scene.meshes[hit.mesh as usize].material];
-                let bsdf = m.bsdf_at(&ctx.scene.textures, hit.uv);
-                CentreHit {
-                    mesh: hit.mesh,
-                    normal: hit.frame.n,
-                    depth: hit.t,
-                    smooth: bsdf.alpha().is_some_and(|a| a < specular_below),
-                }
-            })
-        })
-        .collect()
-}
-
-/// Whether pixel `(x, y)` needs many samples: it lies on an edge of what its centre rays see,
-/// or it sees a mirror or clear glass (whose reflected and refracted edges the centre ray
-/// cannot tell).
-fn is_edge(centre: &[Option<CentreHit>], w: u32, h: u32, x: u32, y: u32) -> bool {
-    let here = centre[(y * w + x) as usize];
-    if here.is_some_and(|c| c.smooth) {
-        return true;
-    }
-    let neighbours = [(-1i64, 0i64), (1, 0), (0, -1), (0, 1)];
-    neighbours.iter().any(|(dx, dy)| {
-        let (nx, ny) = (x as i64 + dx, y as i64 + dy);
-        if nx < 0 || ny < 0 || nx >= w as i64 || ny >= h as i64 {
-            return false;
-        }
-        let there = centre[(ny as u32 * w + nx as u32) as usize];
-        match (here, there) {
-            (None, None) => false,
-            (Some(a), Some(b)) => {
-                a.mesh != b.mesh
-                    || a.normal.dot(b.normal) < 0.9
-                    || (a.depth - b.depth).abs() > 0.05 * a.depth.min(b.depth)
-            }
-            _ => true,
-        }
-    })
-}
-
 /// A tile after the primary pass.
 struct TilePrimary {
     /// The tile's first pixel (x, y).
@@ -547,7 +492,7 @@ struct TilePrimary {
 fn primary_tile(
     ctx: &Tracer,
     camera: &Camera,
-    centre: &[Option<CentreHit>],
+    sampling: &PixelSampling,
     settings: &PrimarySettings,
     tx: u32,
     ty: u32,
@@ -561,58 +506,10 @@ fn primary_tile(
     };
     for y in ty * TILE..((ty + 1) * TILE).min(h) {
         for x in tx * TILE..((tx + 1) * TILE).min(w) {
-            let pixel = y * w + x;
-            let side = if is_edge(centre, w, h, x, y) {
-                EDGE_SIDE
-            } else {
-                1
-            };
-            let count = side * side;
-            let weight = Rgb::splat(1.0 / count as f32);
-            let mut sum = PrimarySample::default();
-            let mut depth = f32::INFINITY;
-            // Edge pixels take the points of a scrambled (0, 2)-sequence: every row and
-            // column strip of height 1/64 holds one, so an edge along the pixel grid (an
-            // emitter's) is resolved to 1/64 of the pixel; a jittered 8 × 8 grid leaves each
-            // row's eight samples to chance (the light's edges then held 65 % of the diffuse
-            // box's relMSE). Each quarter of the pixel holds 16 of them.
-            let scramble = Sampler::new(settings.seed, pixel as u64, u64::MAX).next_scramble();
-            let mut quarters_gathered = [false; 4];
-            for s in 0..count {
-                let mut sampler = Sampler::new(settings.seed, pixel as u64, s as u64);
-                let jitter = if side == 1 {
-                    Vec2::splat(0.5)
-                } else {
-                    sobol02(s, scramble)
-                };
-                let (o, d) = camera.generate_ray(Vec2::new(x as f32, y as f32) + jitter);
-                // The first sample in each quarter of the pixel gathers, for the quarter.
-                let quarter = usize::from(jitter.x >= 0.5) + 2 * usize::from(jitter.y >= 0.5);
-                let gathers =
-                    side == 1 || !std::mem::replace(&mut quarters_gathered[quarter], true);
-                let block = if side == 1 { 1 } else { count / 4 };
-                let cs = CameraSample {
-                    o,
-                    d,
-                    pixel,
-                    weight,
-                    gather_weight: gathers.then(|| weight * block as f32),
-                    quarter: (side > 1).then_some(quarter as u8),
-                    light: LightShare::of_sample(settings.light_samples, s, count),
-                };
-                let r = trace_primary(ctx, settings, cs, &mut sampler, &mut out.receivers);
-                sum.direct += r.direct;
-                sum.albedo += r.albedo * weight;
-                sum.normal += r.normal * weight;
-                depth = depth.min(r.depth);
-                if r.depth.is_finite() {
-                    sum.alpha += 1.0 / count as f32;
-                }
-            }
-            sum.normal = sum.normal.normalize_or_zero();
-            sum.depth = depth;
-            out.samples += count as u64;
-            out.pixels.push((pixel, sum));
+            let (sample, samples) =
+                sampling.trace_pixel(ctx, camera, settings, (x, y), &mut out.receivers);
+            out.samples += u64::from(samples);
+            out.pixels.push((y * w + x, sample));
         }
     }
     out
@@ -668,18 +565,19 @@ fn gather_tile(
     // others interpolate where their cell allows, finer grids gathering where it does not.
     let plan = SparsePlan::new(receivers, origin, size, width, settings.sparse);
     let mut value = vec![Rgb::ZERO; receivers.len()];
-    let interpolated = plan.run(receivers, &mut value, |which, value| {
+    let (interpolated, glossy) = plan.run(receivers, &mut value, |which, value| {
         gather_set(
             senders, receivers, which, &plan, settings, value, &mut stats,
         )
     });
     stats.interpolated = interpolated as u64;
+    stats.interpolated_glossy = glossy as u64;
     let out = receivers
         .iter()
         .enumerate()
         .map(|(k, r)| {
             let l = match &r.bsdf {
-                Bsdf::Diffuse(d) if plan.eligible(k) => d.reflectance * value[k],
+                Bsdf::Diffuse(d) if plan.by_irradiance(receivers, k) => d.reflectance * value[k],
                 _ => value[k],
             };
             (r.pixel, r.weight * l, by_glossy_hit(r))
@@ -698,7 +596,7 @@ fn by_glossy_hit(r: &Receiver) -> bool {
     r.chain != 0 || !matches!(r.bsdf, Bsdf::Diffuse(_))
 }
 
-/// Gather receivers `which` into `value`: the irradiance of the eligible ones (see
+/// Gather receivers `which` into `value`: the irradiance of the eligible diffuse ones (see
 /// [`SparsePlan`]), the outgoing radiance of the others.
 fn gather_set(
     senders: &Senders,
@@ -723,7 +621,11 @@ fn gather_set(
         prepare_buffer(&mut mb, r, settings);
         stats.receiver_cut += gather.fill(r.p, r.mesh, &mut mb, &mut stack);
         stats.pixels += mb.pixels.len() as u64;
-        let bsdf = if plan.eligible(k) { &white } else { &r.bsdf };
+        let bsdf = if plan.by_irradiance(receivers, k) {
+            &white
+        } else {
+            &r.bsdf
+        };
         value[k] = mb.convolve(bsdf, r.view);
     };
     let mut gather = ClusterGather::alone(senders);

@@ -145,6 +145,13 @@ impl LightShare {
     /// camera sample), relMSE against Mitsuba within 0.02 % of the 32-each render's.
     pub(crate) const LEAST: u32 = 8;
 
+    /// No direct-light samples: for tracing a camera sample's chain alone.
+    pub(crate) const NONE: LightShare = LightShare {
+        first: 0,
+        count: 0,
+        total: 0,
+    };
+
     /// The share of camera sample `sample` of a pixel of `samples`, for `light_samples` per
     /// pixel (at least 1; `render_final` refuses 0): at least [`LightShare::LEAST`] each.
     pub(crate) fn of_sample(light_samples: u32, sample: u32, samples: u32) -> Self {

@@ -1,9 +1,9 @@
-//! Fewer gathers for the same image (issue 20): diffuse receivers gather on a sparse grid of
-//! pixels, and the receivers between take their irradiance from the grid where it is smooth.
+//! Fewer gathers for the same image (issue 20): receivers gather on a sparse grid of pixels,
+//! and the receivers between take their light from the grid where it is smooth.
 //!
-//! Indirect light on a diffuse surface varies slowly, except across edges, contacts and the
-//! shadows of indirect light; the albedo that multiplies it (a texture) may vary fast. So a
-//! tile's diffuse receivers are split:
+//! Indirect light on a surface varies slowly, except across edges, contacts and the shadows
+//! of indirect light; the albedo that multiplies it (a texture) may vary fast. So a tile's
+//! receivers are split:
 //!
 //! - **Layers.** A pixel's receivers are its primary hit and the ends of its specular chains
 //!   (through a mirror, into and out of a glass), each with the signature of its chain
@@ -17,17 +17,25 @@
 //!   sample, else from the first quarter there on its surface. On a geometric edge (the
 //!   quarters of primary hits) they keep their own gathers: interpolating them from whole
 //!   pixels across the edge cost 4–9 % relMSE at 128² (cbox-rough, cbox-glossy).
-//! - **Eligible** receivers: a diffuse BSDF, alone in their pixel's layer and quarter, not a
-//!   quarter of a geometric edge.
+//! - **Eligible** receivers: alone in their pixel's layer and quarter, not a quarter of a
+//!   geometric edge.
+//! - **What is interpolated.** A diffuse receiver's gather keeps its irradiance E (the
+//!   cosine-weighted incident light over π: the outgoing radiance of a white diffuse
+//!   surface), which each receiver multiplies by its own albedo, so a texture stays sharp. A
+//!   glossy or rough-dielectric receiver's keeps its outgoing radiance towards its viewer,
+//!   and takes it only from corners with the very same BSDF (one material, the same texel
+//!   values): its lobe, unlike a diffuse albedo, does not factor out. Across a cell of a few
+//!   pixels its viewer turns by a fraction of a degree, far less than the narrowest lobe that
+//!   gathers (α ≥ 0.03, about 2°), so the reflected light there is as smooth as the
+//!   irradiance of a diffuse surface, and the same contrast rule guards its edges.
 //! - **Anchors**: the eligible receivers on the grid of every `CELLS[0]`-th row and column of
-//!   the tile (and its last row and column). They gather, and keep their irradiance E (the
-//!   cosine-weighted incident light over π: the outgoing radiance of a white diffuse surface).
-//! - The others take E from their layer's receivers at the corners of their cell,
+//!   the tile (and its last row and column). They gather.
+//! - The others take their value from the receivers at the corners of their cell,
 //!   bilinearly, when all four exist, lie on the receiver's mesh and plane (normals within
-//!   18°, offsets from its tangent plane within a tenth of the distance) and agree with each
-//!   other to [`CONTRAST`] in luminance. A corner is the receiver of the same quarter, else
-//!   that of a whole pixel, else the first quarter on the receiver's surface. Each receiver
-//!   multiplies E by its own albedo.
+//!   18°, offsets from its tangent plane within a tenth of the distance), carry a BSDF that
+//!   interpolates with the receiver's (above) and agree with each other to [`CONTRAST`] in
+//!   luminance. A corner is the receiver of the same quarter, else that of a whole pixel,
+//!   else the first quarter on the receiver's surface.
 //! - **Finer cells.** Where a cell fails (an edge or a contact crosses it, a corner is
 //!   missing), the receivers on the grid of the next of [`CELLS`] inside it gather, and the rest interpolate from the finer cells around them by the same rules;
 //!   what fails there gathers. An edge through a cell then costs the gathers along it, not
@@ -56,8 +64,8 @@ const SAME_PLANE: f32 = 0.1;
 
 /// Which of a tile's receivers gather, and how the others are interpolated.
 pub(crate) struct SparsePlan {
-    /// Per receiver: diffuse, alone in its pixel's layer and quarter, and not a quarter of a
-    /// geometric edge (see the module docs).
+    /// Per receiver: alone in its pixel's layer and quarter, and not a quarter of a geometric
+    /// edge (see the module docs).
     eligible: Vec<bool>,
     /// Per receiver: it gathers in the first pass (anchors and the ineligible).
     first: Vec<bool>,
@@ -72,6 +80,16 @@ pub(crate) struct SparsePlan {
 /// A receiver's place in a tile's layers: its pixel's index in the tile (row-major), its
 /// chain and its quarter ([`Receiver::chain`], [`Receiver::quarter`]).
 type Key = (u32, u64, Option<u8>);
+
+/// Whether a corner with BSDF `corner` can lend its value to a receiver with BSDF `bsdf`: any
+/// two diffuse ones (their values are irradiance), otherwise only the very same BSDF (their
+/// values are outgoing radiance, which carries the lobe).
+fn interpolates_with(corner: &Bsdf, bsdf: &Bsdf) -> bool {
+    match bsdf {
+        Bsdf::Diffuse(_) => matches!(corner, Bsdf::Diffuse(_)),
+        _ => corner == bsdf,
+    }
+}
 
 /// Image pixel `pixel`'s coordinates within the tile at `origin`, in an image `width` wide.
 fn local(pixel: u32, origin: (u32, u32), width: u32) -> (u32, u32) {
@@ -124,10 +142,7 @@ impl SparsePlan {
             .iter()
             .zip(&cells)
             .map(|(r, c)| {
-                sparse
-                    && matches!(r.bsdf, Bsdf::Diffuse(_))
-                    && count.get(&c.2) == Some(&1)
-                    && !(r.chain == 0 && r.quarter.is_some())
+                sparse && count.get(&c.2) == Some(&1) && !(r.chain == 0 && r.quarter.is_some())
             })
             .collect();
         let mut at = HashMap::new();
@@ -154,17 +169,18 @@ impl SparsePlan {
 
     /// Every receiver's value in `value`: the first pass's and each finer grid's receivers
     /// gathered by `gather` (given which receivers, and the values so far, it fills theirs),
-    /// the others interpolated between (see the module docs). Returns how many interpolated.
+    /// the others interpolated between (see the module docs). Returns how many interpolated,
+    /// and how many of those by their outgoing radiance (not diffuse).
     pub fn run(
         &self,
         receivers: &[Receiver],
         value: &mut [Rgb],
         mut gather: impl FnMut(&[usize], &mut [Rgb]),
-    ) -> usize {
+    ) -> (usize, usize) {
         let first: Vec<usize> = (0..receivers.len()).filter(|&k| self.first[k]).collect();
         gather(&first, value);
         let mut pending: Vec<usize> = (0..receivers.len()).filter(|&k| !self.first[k]).collect();
-        let mut interpolated = 0;
+        let (mut interpolated, mut by_radiance) = (0, 0);
         for (level, &cell) in CELLS.iter().enumerate() {
             let finer = CELLS.get(level + 1).copied();
             let (mut now, mut later) = (Vec::new(), Vec::new());
@@ -173,6 +189,7 @@ impl SparsePlan {
                     Some(e) => {
                         value[k] = e;
                         interpolated += 1;
+                        by_radiance += usize::from(!self.by_irradiance(receivers, k));
                     }
                     None => match finer {
                         Some(f) if !self.on_grid_of(receivers, k, f) => later.push(k),
@@ -183,12 +200,14 @@ impl SparsePlan {
             gather(&now, value);
             pending = later;
         }
-        interpolated
+        (interpolated, by_radiance)
     }
 
-    /// Whether receiver `k` is eligible: its gather's value is its irradiance E.
-    pub fn eligible(&self, k: usize) -> bool {
-        self.eligible[k]
+    /// Whether receiver `k`'s value is its irradiance E, which its albedo multiplies
+    /// afterwards: an eligible diffuse receiver (see the module docs). Every other value is
+    /// the receiver's outgoing radiance.
+    pub fn by_irradiance(&self, receivers: &[Receiver], k: usize) -> bool {
+        self.eligible[k] && matches!(receivers[k].bsdf, Bsdf::Diffuse(_))
     }
 
     /// Whether receiver `k` lies on the grid of every `cell`-th row and column.
@@ -210,11 +229,11 @@ impl SparsePlan {
             let same_surface = c.mesh == r.mesh
                 && c.frame.n.dot(r.frame.n) >= SAME_NORMAL
                 && r.frame.n.dot(offset).abs() <= SAME_PLANE * offset.length();
-            same_surface.then_some(j)
+            (same_surface && interpolates_with(&c.bsdf, &r.bsdf)).then_some(j)
         })
     }
 
-    /// The irradiance of receiver `k` from the corners of its cell on the grid of every
+    /// The value of receiver `k` from the corners of its cell on the grid of every
     /// `cell`-th line, given theirs (`value(j)` for receiver j), or `None` where it cannot
     /// interpolate.
     fn interpolate(
@@ -322,15 +341,42 @@ mod tests {
             plan.interpolate(&receivers, k, CELLS[0], bright).is_none(),
             "disagreeing corners"
         );
-        // A conductor is not eligible: it gathers.
+        // A conductor among diffuse corners cannot take their irradiance: it interpolates
+        // only from corners with its very BSDF, whose values are its outgoing radiance.
+        let gold = |alpha: f32| {
+            Bsdf::Conductor(RoughConductor {
+                distr: Microfacet::new(Distribution::Ggx, alpha, alpha),
+                eta: Rgb::ZERO,
+                k: Rgb::ONE,
+                specular_reflectance: Rgb::ONE,
+            })
+        };
         let mut shiny = receivers.clone();
-        shiny[k].bsdf = Bsdf::Conductor(RoughConductor {
-            distr: Microfacet::new(Distribution::Ggx, 0.3, 0.3),
-            eta: Rgb::ZERO,
-            k: Rgb::ONE,
-            specular_reflectance: Rgb::ONE,
-        });
-        assert!(SparsePlan::new(&shiny, (0, 0), (8, 8), 8, true).first[k]);
+        shiny[k].bsdf = gold(0.3);
+        let plan = SparsePlan::new(&shiny, (0, 0), (8, 8), 8, true);
+        assert!(plan.interpolate(&shiny, k, CELLS[0], e).is_none());
+        for r in shiny.iter_mut() {
+            r.bsdf = gold(0.3);
+        }
+        let plan = SparsePlan::new(&shiny, (0, 0), (8, 8), 8, true);
+        let got = plan
+            .interpolate(&shiny, k, CELLS[0], e)
+            .expect("interpolates");
+        assert!((got - e(k)).abs().max_element() < 1e-6);
+        assert!(
+            !plan.by_irradiance(&shiny, k),
+            "a conductor's value is its radiance"
+        );
+        assert!(
+            plan.by_irradiance(&receivers, k),
+            "a diffuse one's is its irradiance"
+        );
+        shiny[corner].bsdf = gold(0.31);
+        let plan = SparsePlan::new(&shiny, (0, 0), (8, 8), 8, true);
+        assert!(
+            plan.interpolate(&shiny, k, CELLS[0], e).is_none(),
+            "a corner of another roughness"
+        );
         // Off, everyone gathers.
         let dense = SparsePlan::new(&receivers, (0, 0), (8, 8), 8, false);
         assert!((0..64).all(|k| dense.first[k]));
@@ -349,7 +395,7 @@ mod tests {
         let plan = SparsePlan::new(receivers, (0, 0), size, size.0, true);
         let mut value = vec![Rgb::splat(f32::NAN); receivers.len()];
         let mut gathered = vec![false; receivers.len()];
-        let interpolated = plan.run(receivers, &mut value, |which, value| {
+        let (interpolated, _) = plan.run(receivers, &mut value, |which, value| {
             for &k in which {
                 assert!(!gathered[k], "{k} gathers twice");
                 gathered[k] = true;

@@ -110,13 +110,13 @@ pub struct RenderArgs {
     /// Uniform microbuffers for glossy receivers too (no BSDF-importance refinement).
     #[arg(long)]
     pub uniform: bool,
-    /// Every receiver gathers (by default diffuse receivers gather on a grid of every 4th
-    /// pixel, every 2nd where a cell fails, and interpolate between where the light is smooth
-    /// on one surface, seen directly or through the same mirrors and glass: docs/render.md).
+    /// Every receiver gathers (by default receivers gather on a grid of every 4th pixel, every
+    /// 2nd where a cell fails, and interpolate between where the light is smooth on one
+    /// surface, seen directly or through the same mirrors and glass: docs/render.md).
     #[arg(long)]
     pub dense: bool,
     /// Emitter samples per pixel for direct light (at each rough hit; a pixel of many camera
-    /// samples, on an edge or a mirror, shares them out, at least two per sample).
+    /// samples, on an edge or a mirror, shares them out, at least eight per sample).
     #[arg(long, default_value_t = FinalSettings::default().light_samples)]
     pub light_samples: u32,
     /// Longest path in segments, as Mitsuba's max_depth (-1: everything the cache holds).
@@ -278,10 +278,11 @@ pub fn exr_options(
 pub fn print_summary(out: &FinalOutput) {
     let s = &out.stats;
     detail!(
-        "  {} camera samples, {} receivers ({} interpolated, {} in {} clusters)",
+        "  {} camera samples, {} receivers ({} interpolated, {} of them glossy; {} in {} clusters)",
         out.samples,
         s.receivers,
         s.interpolated,
+        s.interpolated_glossy,
         s.clustered,
         s.clusters
     );
@@ -473,6 +474,7 @@ fn render_frame(
         "camera_samples": out.samples,
         "receivers": s.receivers,
         "interpolated": s.interpolated,
+        "interpolated_glossy": s.interpolated_glossy,
         "peak_memory_bytes": wpbgi::compare::memory::peak(),
     });
     if let (Some(r), Some(path)) = (&reference, &a.reference) {

@@ -1,0 +1,468 @@
+//! How many camera samples each pixel takes (adaptive anti-aliasing), decided from one ray
+//! through every pixel's centre before the primary pass.
+//!
+//! - A pixel on an **edge** of what the centre rays see (a 4-neighbour sees another mesh, a
+//!   normal turned by more than 25° or a depth step of 5 %) takes samples of a scrambled
+//!   (0, 2)-sequence: [`EDGE_SIDE`]² of them on an **outline**, where the light the centre
+//!   rays see emitted changes across the edge (an emitter's outline needs them); elsewhere a
+//!   round of [`EDGE_ROUND`], and all [`EDGE_SIDE`]² only where the round's samples disagree
+//!   ([`needs_more`]): an edge between two walls of one brightness has nothing for the rest
+//!   to resolve.
+//! - A pixel on a **mirror or clear glass** (roughness below the specular cut-off) also
+//!   follows its centre ray's specular chain, every branch of it, to the rough hits at its
+//!   ends. Where its neighbours' chains take the same branches to the same surfaces (one
+//!   mesh, normals within 25°, ends within 5 % of their distance from the camera) the
+//!   reflected or refracted image is a smooth piece of one surface, and the pixel takes
+//!   [`SMOOTH_SIDE`]² samples, one per quarter, each gathering for its quarter as the
+//!   quarters of an edge pixel do. Where they differ (the outline of what the mirror shows,
+//!   a reflected emitter, a branch that appears or leaves) it is an edge.
+//! - Every other pixel takes its centre sample.
+//!
+//! Before, every edge and every mirror and glass pixel took 64 samples, since the centre ray
+//! alone cannot tell the reflected edges: on cbox-mirror at 512² that was 3.3 M camera
+//! samples for 262 144 pixels, and the primary pass was 5.5 s of 18.1; now 1.0 M and 2.0 s,
+//! at relMSE within 0.1 % (docs/render.md).
+
+use super::primary::{
+    trace_primary, CameraSample, LightShare, PrimarySample, PrimarySettings, Receiver,
+};
+use crate::sampler::{sobol02, Sampler};
+use crate::scene::Camera;
+use crate::spectrum::{luminance, Rgb};
+use crate::trace::{intersect, Tracer};
+use glam::{Vec2, Vec3};
+use rayon::prelude::*;
+
+/// Edge pixels take up to EDGE_SIDE² samples of a (0, 2)-sequence for primary hits and
+/// direct light (an emitter's edge needs them); one in each quarter of the pixel gathers.
+pub(crate) const EDGE_SIDE: u32 = 8;
+
+/// An edge pixel's samples come in rounds of this many, the (0, 2)-sequence's points in
+/// order (each round a (0, 4, 2)-net: one point in every 1/16 of the pixel's rows, columns
+/// and quarters); after the first, it takes the other three rounds only where the first
+/// round's samples disagree ([`needs_more`]).
+pub(crate) const EDGE_ROUND: u32 = 16;
+
+/// The first round of an edge pixel goes on to [`EDGE_SIDE`]² samples when the spread of its
+/// samples' luminance, squared, exceeds this fraction of their mean's square: relative, so
+/// that a scene lit twice as brightly is sampled alike (tests/stability.rs scales the
+/// emission by 2^±20 and asks for the same image scaled, bit for bit; a floor like the
+/// relative MSE's 0.01 broke that). The same test on the centre rays' emitted light makes an
+/// edge an outline. See docs/render.md for the figures.
+pub(crate) const EDGE_SPREAD: f32 = 0.5;
+
+/// Mirror and clear-glass pixels whose chains see no edge take SMOOTH_SIDE² samples: the
+/// first four points of the (0, 2)-sequence, one in each quarter, each gathering for its
+/// quarter (the sparse grid's quarter layers, [`super::sparse`]).
+pub(crate) const SMOOTH_SIDE: u32 = 2;
+
+/// The edge test's thresholds: neighbours' normals within this cosine (25°) and depths within
+/// this fraction of the nearer are one surface.
+const SAME_NORMAL: f32 = 0.9;
+const SAME_DEPTH: f32 = 0.05;
+
+/// Where one branch of a centre ray's specular chain ends on a rough surface.
+#[derive(Clone, Copy, Debug)]
+struct ChainEnd {
+    /// The chain's signature ([`Receiver::chain`]).
+    chain: u64,
+    mesh: u32,
+    normal: Vec3,
+    /// Distance from the camera's ray origin, a lower bound of the chain's length.
+    depth: f32,
+}
+
+/// The hit through a pixel's centre.
+#[derive(Clone, Debug)]
+struct CentreHit {
+    mesh: u32,
+    normal: Vec3,
+    depth: f32,
+    /// For a mirror or clear glass: the ends of its specular chain, by chain signature.
+    /// `None` for a rough surface.
+    ends: Option<Vec<ChainEnd>>,
+}
+
+/// Every pixel's centre hit, from which each pixel's sample count follows.
+pub(crate) struct PixelSampling {
+    width: u32,
+    height: u32,
+    centre: Vec<Option<CentreHit>>,
+    /// Per pixel, the luminance of the light its centre ray sees emitted: an emitter's, the
+    /// environment's where it leaves the scene, along a mirror's or glass's chain too.
+    emitted: Vec<f32>,
+}
+
+/// How a pixel is sampled ([`PixelSampling::kind`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum PixelKind {
+    /// Its centre.
+    Plain,
+    /// A mirror or clear glass with no edge in what it shows: [`SMOOTH_SIDE`]² samples.
+    Smooth,
+    /// An edge between surfaces that emit alike: a round of [`EDGE_ROUND`] samples, and the
+    /// rest of [`EDGE_SIDE`]² where they disagree.
+    Edge,
+    /// An edge where what is seen emitted changes (an emitter's outline, the sky beside an
+    /// object): all [`EDGE_SIDE`]² samples at once, since a sliver of the bright side can slip
+    /// between a round's samples.
+    Outline,
+}
+
+impl PixelSampling {
+    /// Trace the centre of every pixel of `camera`'s image, and the chains of those on a
+    /// mirror or clear glass.
+    pub fn new(ctx: &Tracer, camera: &Camera, settings: &PrimarySettings) -> Self {
+        let (w, h) = (camera.width, camera.height);
+        let (centre, emitted) = (0..w * h)
+            .into_par_iter()
+            .map(|pixel| {
+                let film = Vec2::new((pixel % w) as f32 + 0.5, (pixel / w) as f32 + 0.5);
+                let (o, d) = camera.generate_ray(film);
+                let Some(hit) = intersect(ctx, o, d) else {
+                    let sky = ctx.scene.environment.as_ref().map(|e| e.radiance(d));
+                    return (None, sky.map_or(0.0, luminance));
+                };
+                let m = &ctx.scene.materials[ctx.scene.meshes[hit.mesh as usize].material];
+                let bsdf = m.bsdf_at(&ctx.scene.textures, hit.uv);
+                let smooth = bsdf.alpha().is_some_and(|a| a < settings.specular_below);
+                let (ends, emitted) = if smooth {
+                    let (ends, emitted) = chain_ends(ctx, settings, o, d, pixel);
+                    (Some(ends), emitted)
+                } else {
+                    let front = hit.frame.n.dot(d) < 0.0;
+                    (None, m.emission_at(&ctx.scene.textures, hit.uv, front))
+                };
+                let centre = CentreHit {
+                    mesh: hit.mesh,
+                    normal: hit.frame.n,
+                    depth: hit.t,
+                    ends,
+                };
+                (Some(centre), luminance(emitted))
+            })
+            .unzip();
+        PixelSampling {
+            width: w,
+            height: h,
+            centre,
+            emitted,
+        }
+    }
+
+    /// How pixel `(x, y)` is sampled (see the module docs).
+    pub fn kind(&self, x: u32, y: u32) -> PixelKind {
+        let at = (y * self.width + x) as usize;
+        let here = &self.centre[at];
+        let neighbours = [(-1i64, 0i64), (1, 0), (0, -1), (0, 1)];
+        let neighbours = neighbours.iter().filter_map(|(dx, dy)| {
+            let (nx, ny) = (x as i64 + dx, y as i64 + dy);
+            let inside = nx >= 0 && ny >= 0 && nx < self.width as i64 && ny < self.height as i64;
+            inside.then(|| (ny as u32 * self.width + nx as u32) as usize)
+        });
+        let mut edge = false;
+        let mut outline = false;
+        for there in neighbours {
+            let apart = match (here, &self.centre[there]) {
+                (None, None) => false,
+                (Some(a), Some(b)) => {
+                    !same_surface(a.mesh, a.normal, a.depth, b.mesh, b.normal, b.depth)
+                        || !same_ends(a.ends.as_deref(), b.ends.as_deref())
+                }
+                _ => true,
+            };
+            edge |= apart;
+            outline |= apart && differ(self.emitted[at], self.emitted[there]);
+        }
+        match here {
+            _ if outline => PixelKind::Outline,
+            _ if edge => PixelKind::Edge,
+            Some(CentreHit { ends: Some(_), .. }) => PixelKind::Smooth,
+            _ => PixelKind::Plain,
+        }
+    }
+}
+
+impl PixelSampling {
+    /// Trace the camera samples of pixel `(x, y)`, pushing its receivers: its emission and
+    /// direct light (the mean of its samples) and the first hit's AOVs, and how many camera
+    /// samples it took. A pixel of one sample takes its centre; a pixel of several the
+    /// points of a (0, 2)-sequence scrambled per pixel, of which the first in each quarter
+    /// gathers for the quarter, so its receivers weigh a quarter each whatever the count. An
+    /// edge pixel takes [`EDGE_ROUND`] samples, and the rest of [`EDGE_SIDE`]² where those
+    /// disagree ([`needs_more`]).
+    ///
+    /// Edge pixels take the points of a scrambled (0, 2)-sequence: every row and column strip
+    /// of height 1/64 holds one, so an edge along the pixel grid (an emitter's) is resolved to
+    /// 1/64 of the pixel; a jittered 8 × 8 grid leaves each row's eight samples to chance (the
+    /// light's edges then held 65 % of the diffuse box's relMSE).
+    pub fn trace_pixel(
+        &self,
+        ctx: &Tracer,
+        camera: &Camera,
+        settings: &PrimarySettings,
+        (x, y): (u32, u32),
+        receivers: &mut Vec<Receiver>,
+    ) -> (PrimarySample, u32) {
+        let (side, count) = match self.kind(x, y) {
+            PixelKind::Plain => (1, 1),
+            PixelKind::Smooth => (SMOOTH_SIDE, SMOOTH_SIDE * SMOOTH_SIDE),
+            PixelKind::Edge => (EDGE_SIDE, EDGE_ROUND),
+            PixelKind::Outline => (EDGE_SIDE, EDGE_SIDE * EDGE_SIDE),
+        };
+        let first = self.trace_samples(ctx, camera, settings, (x, y), side, count, Some(receivers));
+        if side != EDGE_SIDE
+            || count == EDGE_SIDE * EDGE_SIDE
+            || !needs_more(&first.luminances, first.hits, count)
+        {
+            return (first.mean, count);
+        }
+        // The whole sequence, its direct light shared out over all of it; the first round's
+        // receivers already gather for the quarters.
+        let most = EDGE_SIDE * EDGE_SIDE;
+        let all = self.trace_samples(ctx, camera, settings, (x, y), side, most, None);
+        (all.mean, count + most)
+    }
+
+    /// The first `count` camera samples of pixel `(x, y)` (of a grid of `side`²): their mean
+    /// and each sample's luminance. Their receivers go to `receivers`; with `None` (the second
+    /// pass of an edge) none gathers.
+    #[allow(clippy::too_many_arguments)]
+    fn trace_samples(
+        &self,
+        ctx: &Tracer,
+        camera: &Camera,
+        settings: &PrimarySettings,
+        (x, y): (u32, u32),
+        side: u32,
+        count: u32,
+        receivers: Option<&mut Vec<Receiver>>,
+    ) -> Samples {
+        let pixel = y * self.width + x;
+        let weight = Rgb::splat(1.0 / count as f32);
+        let scramble = Sampler::new(settings.seed, u64::from(pixel), u64::MAX).next_scramble();
+        let mut out = Samples {
+            mean: PrimarySample::default(),
+            luminances: Vec::with_capacity(count as usize),
+            hits: 0,
+        };
+        let mut depth = f32::INFINITY;
+        let mut quarters_gathered = [false; 4];
+        let gathers = receivers.is_some();
+        let mut none = Vec::new();
+        let receivers = receivers.unwrap_or(&mut none);
+        for s in 0..count {
+            let mut sampler = Sampler::new(settings.seed, u64::from(pixel), u64::from(s));
+            let jitter = if side == 1 {
+                Vec2::splat(0.5)
+            } else {
+                sobol02(s, scramble)
+            };
+            let (o, d) = camera.generate_ray(Vec2::new(x as f32, y as f32) + jitter);
+            // The first sample in each quarter of the pixel gathers, for the quarter.
+            let quarter = usize::from(jitter.x >= 0.5) + 2 * usize::from(jitter.y >= 0.5);
+            let gather_weight = match side {
+                1 => Some(Rgb::ONE),
+                _ => (!std::mem::replace(&mut quarters_gathered[quarter], true))
+                    .then_some(Rgb::splat(0.25)),
+            };
+            let cs = CameraSample {
+                o,
+                d,
+                pixel,
+                weight,
+                gather_weight: gather_weight.filter(|_| gathers),
+                quarter: (side > 1).then_some(quarter as u8),
+                light: LightShare::of_sample(settings.light_samples, s, count),
+            };
+            let r = trace_primary(ctx, settings, cs, &mut sampler, receivers);
+            out.luminances.push(luminance(r.direct) * count as f32);
+            out.mean.direct += r.direct;
+            out.mean.albedo += r.albedo * weight;
+            out.mean.normal += r.normal * weight;
+            depth = depth.min(r.depth);
+            out.hits += u32::from(r.depth.is_finite());
+        }
+        out.mean.normal = out.mean.normal.normalize_or_zero();
+        out.mean.depth = depth;
+        out.mean.alpha = out.hits as f32 / count as f32;
+        out
+    }
+}
+
+/// What [`PixelSampling::trace_samples`] found.
+struct Samples {
+    /// Emission and direct light, AOVs and coverage: the samples' mean.
+    mean: PrimarySample,
+    /// Each sample's luminance (its emission and direct light).
+    luminances: Vec<f32>,
+    /// How many samples hit the scene.
+    hits: u32,
+}
+
+/// Whether two luminances differ: their difference, squared, exceeds [`EDGE_SPREAD`] of
+/// their mean's square.
+fn differ(a: f32, b: f32) -> bool {
+    let mean = 0.5 * (a + b);
+    (a - b) * (a - b) > EDGE_SPREAD * mean * mean
+}
+
+/// Whether an edge pixel's first round of samples, with luminances `first` and `hits` of
+/// `round` hitting the scene, leaves its mean uncertain: some samples miss the scene while
+/// others hit (the coverage is an edge too), or the spread of their luminance is large
+/// against their mean ([`EDGE_SPREAD`]). An emitter's outline
+/// (radiance 18 beside 0.5) always takes the other rounds; an edge between two lit walls of
+/// similar brightness does not.
+fn needs_more(first: &[f32], hits: u32, round: u32) -> bool {
+    if hits != 0 && hits != round {
+        return true;
+    }
+    let (lo, hi) = first.iter().fold((f32::INFINITY, 0.0f32), |(lo, hi), &v| {
+        (lo.min(v), hi.max(v))
+    });
+    let mean = first.iter().sum::<f32>() / first.len().max(1) as f32;
+    let spread = hi - lo;
+    spread * spread > EDGE_SPREAD * mean * mean
+}
+
+/// Whether two neighbouring hits lie on one surface: the same mesh, normals within 25°, depths
+/// within 5 % of the nearer.
+fn same_surface(m0: u32, n0: Vec3, d0: f32, m1: u32, n1: Vec3, d1: f32) -> bool {
+    m0 == m1 && n0.dot(n1) >= SAME_NORMAL && (d0 - d1).abs() <= SAME_DEPTH * d0.min(d1)
+}
+
+/// Whether two neighbours' chains end alike: both rough, or both smooth with the same
+/// branches ending on one surface each.
+fn same_ends(a: Option<&[ChainEnd]>, b: Option<&[ChainEnd]>) -> bool {
+    match (a, b) {
+        (None, None) => true,
+        (Some(a), Some(b)) => {
+            a.len() == b.len()
+                && a.iter().zip(b).all(|(e, f)| {
+                    e.chain == f.chain
+                        && same_surface(e.mesh, e.normal, e.depth, f.mesh, f.normal, f.depth)
+                })
+        }
+        _ => false,
+    }
+}
+
+/// The rough hits at the ends of the specular chain of the centre ray `(o, d)` of `pixel`,
+/// traced as the primary pass traces a camera sample (every branch, to the same depth and
+/// weight cut-offs), without its direct light; sorted by chain signature. And the light it
+/// sees emitted along the way.
+fn chain_ends(
+    ctx: &Tracer,
+    settings: &PrimarySettings,
+    o: Vec3,
+    d: Vec3,
+    pixel: u32,
+) -> (Vec<ChainEnd>, Rgb) {
+    let sample = CameraSample {
+        o,
+        d,
+        pixel,
+        weight: Rgb::ONE,
+        gather_weight: Some(Rgb::ONE),
+        quarter: None,
+        light: LightShare::NONE,
+    };
+    // A stream of its own: the camera samples' are keyed by their index.
+    let mut sampler = Sampler::new(settings.seed, u64::from(pixel), u64::MAX - 1);
+    let mut receivers: Vec<Receiver> = Vec::new();
+    // The ends' own receivers, with every depth allowed: an end past max_depth is still
+    // what the pixel shows.
+    let unlimited = PrimarySettings {
+        max_depth: -1,
+        ..*settings
+    };
+    let emitted = trace_primary(ctx, &unlimited, sample, &mut sampler, &mut receivers).direct;
+    let mut ends: Vec<ChainEnd> = receivers
+        .iter()
+        .map(|r| ChainEnd {
+            chain: r.chain,
+            mesh: r.mesh,
+            normal: r.frame.n,
+            depth: (r.p - o).length(),
+        })
+        .collect();
+    ends.sort_by_key(|e| e.chain);
+    (ends, emitted)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn end(chain: u64, mesh: u32, depth: f32) -> ChainEnd {
+        ChainEnd {
+            chain,
+            mesh,
+            normal: Vec3::Z,
+            depth,
+        }
+    }
+
+    /// Chains end alike when every branch ends on one surface; a branch more or less, another
+    /// mesh, or a depth step of more than 5 % is an edge.
+    #[test]
+    fn chains_end_alike_on_one_surface_only() {
+        let a = [end(1, 3, 2.0), end(7, 4, 3.0)];
+        assert!(same_ends(
+            Some(&a),
+            Some(&[end(1, 3, 2.05), end(7, 4, 3.1)])
+        ));
+        assert!(!same_ends(Some(&a), Some(&a[..1])), "a branch less");
+        assert!(!same_ends(
+            Some(&a),
+            Some(&[end(1, 3, 2.0), end(7, 5, 3.0)])
+        ));
+        assert!(!same_ends(
+            Some(&a),
+            Some(&[end(1, 3, 2.2), end(7, 4, 3.0)])
+        ));
+        assert!(!same_ends(
+            Some(&a),
+            Some(&[end(1, 3, 2.0), end(8, 4, 3.0)])
+        ));
+        assert!(
+            !same_ends(Some(&a), None),
+            "a mirror beside a rough surface"
+        );
+        assert!(same_ends(None, None));
+        assert!(same_ends(Some(&[]), Some(&[])), "two chains lost alike");
+    }
+
+    /// An edge's first round goes on where its samples spread wide against their mean: an
+    /// emitter's outline (18 beside 0.5), a wall beside a dark one (0.5 beside 0.05), a
+    /// coverage edge; not two walls of about one brightness, nor a round of equal samples.
+    #[test]
+    fn a_round_goes_on_where_its_samples_disagree() {
+        let round =
+            |a: f32, b: f32| -> Vec<f32> { (0..16).map(|i| if i < 8 { a } else { b }).collect() };
+        assert!(
+            needs_more(&round(18.0, 0.5), 16, 16),
+            "an emitter's outline"
+        );
+        assert!(
+            needs_more(&round(0.5, 0.05), 16, 16),
+            "a lit wall beside a dark one"
+        );
+        assert!(
+            !needs_more(&round(0.5, 0.4), 16, 16),
+            "two walls of one brightness"
+        );
+        assert!(!needs_more(&round(0.3, 0.3), 16, 16), "equal samples");
+        assert!(
+            needs_more(&round(0.3, 0.3), 12, 16),
+            "some samples miss the scene"
+        );
+        assert!(
+            !needs_more(&round(0.0, 0.0), 0, 16),
+            "all miss, a black sky"
+        );
+        // The outline test on the centre rays' emitted light, by the same rule.
+        assert!(differ(18.0, 0.0) && differ(0.0, 1.0));
+        assert!(!differ(0.0, 0.0) && !differ(1.0, 1.1));
+    }
+}
