@@ -13,8 +13,8 @@
 //!   ends. Where its neighbours' chains take the same branches to the same surfaces (one
 //!   mesh, normals within 25°, ends within 5 % of their distance from the camera) the
 //!   reflected or refracted image is a smooth piece of one surface, and the pixel takes
-//!   [`SMOOTH_SIDE`]² samples, one per quarter, each gathering for its quarter as the
-//!   quarters of an edge pixel do. Where they differ (the outline of what the mirror shows,
+//!   [`SMOOTH_SIDE`]² samples, one per quarter, of which the first gathers for the whole
+//!   pixel. Where they differ (the outline of what the mirror shows,
 //!   a reflected emitter, a branch that appears or leaves) it is an edge.
 //! - Every other pixel takes its centre sample.
 //!
@@ -52,8 +52,10 @@ pub(crate) const EDGE_ROUND: u32 = 16;
 pub(crate) const EDGE_SPREAD: f32 = 0.5;
 
 /// Mirror and clear-glass pixels whose chains see no edge take SMOOTH_SIDE² samples: the
-/// first four points of the (0, 2)-sequence, one in each quarter, each gathering for its
-/// quarter (the sparse grid's quarter layers, [`super::sparse`]).
+/// first four points of the (0, 2)-sequence, one in each quarter, for their direct light and
+/// what they show; the first gathers for the whole pixel, as a plain pixel's does. (Gathering
+/// per quarter, as an edge does, made each quarter a layer of the sparse grid with anchors of
+/// its own: at 512² 6–16 % slower on the glass and mirror scenes, relMSE within 0.2 %.)
 pub(crate) const SMOOTH_SIDE: u32 = 2;
 
 /// The edge test's thresholds: neighbours' normals within this cosine (25°) and depths within
@@ -187,9 +189,9 @@ impl PixelSampling {
     /// Trace the camera samples of pixel `(x, y)`, pushing its receivers: its emission and
     /// direct light (the mean of its samples) and the first hit's AOVs, and how many camera
     /// samples it took. A pixel of one sample takes its centre; a pixel of several the
-    /// points of a (0, 2)-sequence scrambled per pixel, of which the first in each quarter
-    /// gathers for the quarter, so its receivers weigh a quarter each whatever the count. An
-    /// edge pixel takes [`EDGE_ROUND`] samples, and the rest of [`EDGE_SIDE`]² where those
+    /// points of a (0, 2)-sequence scrambled per pixel, of which on an edge the first in each
+    /// quarter gathers for the quarter (its receivers weigh a quarter each whatever the
+    /// count), elsewhere the first for the whole pixel. An edge pixel takes [`EDGE_ROUND`] samples, and the rest of [`EDGE_SIDE`]² where those
     /// disagree ([`needs_more`]).
     ///
     /// Edge pixels take the points of a scrambled (0, 2)-sequence: every row and column strip
@@ -259,12 +261,13 @@ impl PixelSampling {
                 sobol02(s, scramble)
             };
             let (o, d) = camera.generate_ray(Vec2::new(x as f32, y as f32) + jitter);
-            // The first sample in each quarter of the pixel gathers, for the quarter.
+            // On an edge the first sample in each quarter of the pixel gathers, for the
+            // quarter; elsewhere the first gathers for the whole pixel.
             let quarter = usize::from(jitter.x >= 0.5) + 2 * usize::from(jitter.y >= 0.5);
             let gather_weight = match side {
-                1 => Some(Rgb::ONE),
-                _ => (!std::mem::replace(&mut quarters_gathered[quarter], true))
+                EDGE_SIDE => (!std::mem::replace(&mut quarters_gathered[quarter], true))
                     .then_some(Rgb::splat(0.25)),
+                _ => (s == 0).then_some(Rgb::ONE),
             };
             let cs = CameraSample {
                 o,
@@ -272,7 +275,7 @@ impl PixelSampling {
                 pixel,
                 weight,
                 gather_weight: gather_weight.filter(|_| gathers),
-                quarter: (side > 1).then_some(quarter as u8),
+                quarter: (side == EDGE_SIDE).then_some(quarter as u8),
                 light: LightShare::of_sample(settings.light_samples, s, count),
             };
             let r = trace_primary(ctx, settings, cs, &mut sampler, receivers);

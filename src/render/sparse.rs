@@ -11,10 +11,11 @@
 //!   over neighbouring pixels see one surface through the same mirrors and glass, as the
 //!   primary hits see it directly: each chain is a layer of the image, interpolated as the
 //!   primary layer is.
-//! - **Quarters.** A pixel of many samples gathers once per quarter of it. On a mirror or a
-//!   clear glass, the receivers of one quarter over the pixels are a layer too, which takes
-//!   its corners from the same quarter of its anchors' pixels, else from pixels of one
-//!   sample, else from the first quarter there on its surface. On a geometric edge (the
+//! - **Quarters.** An edge pixel (of what is seen directly, or through a mirror or glass)
+//!   gathers once per quarter of it; every other pixel once ([`super::pixels`]). Seen
+//!   through a mirror or a clear glass, the receivers of one quarter over the pixels are a
+//!   layer too, which takes its corners from the same quarter of its anchors' pixels, else
+//!   from whole pixels, else from the first quarter there on its surface. On a geometric edge (the
 //!   quarters of primary hits) they keep their own gathers: interpolating them from whole
 //!   pixels across the edge cost 4–9 % relMSE at 128² (cbox-rough, cbox-glossy).
 //! - **Eligible** receivers: alone in their pixel's layer and quarter, not a quarter of a
