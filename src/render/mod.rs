@@ -5,7 +5,7 @@
 //!    more than 25°, or a depth step of 5 %) get 16 or 64 samples of a scrambled
 //!    (0, 2)-sequence, as many as the edge needs, of which one per quarter of the pixel
 //!    gathers; other mirror and glass pixels 4, one per quarter, the first gathering; the
-//!    others one sample ([`pixels`], adaptive anti-aliasing).
+//!    others one sample (`pixels.rs`, adaptive anti-aliasing).
 //! 2. Each camera sample is traced to its rough hits ([`primary`]): emission, direct light by
 //!    ray tracing, specular chains; every rough hit becomes a receiver.
 //! 3. The gather, per 32 × 32 tile: receivers get their indirect light from the cache through
@@ -349,6 +349,7 @@ pub fn render_final_cancellable(
         light_samples: settings.light_samples,
         specular_below: settings.specular_below,
         chain_depth: settings.chain_depth,
+        smooth_quarters: settings.gather == GatherMode::Paths,
         seed: settings.seed,
     };
     let sampling = PixelSampling::new(&ctx, camera, &primary_settings);

@@ -12,7 +12,7 @@
 //!   primary hits see it directly: each chain is a layer of the image, interpolated as the
 //!   primary layer is.
 //! - **Quarters.** An edge pixel (of what is seen directly, or through a mirror or glass)
-//!   gathers once per quarter of it; every other pixel once ([`super::pixels`]). Seen
+//!   gathers once per quarter of it; every other pixel once (`render/pixels.rs`). Seen
 //!   through a mirror or a clear glass, the receivers of one quarter over the pixels are a
 //!   layer too, which takes its corners from the same quarter of its anchors' pixels, else
 //!   from whole pixels, else from the first quarter there on its surface. On a geometric edge (the
