@@ -175,7 +175,7 @@ impl PixelSampling {
                 _ => true,
             };
             edge |= apart;
-            outline |= apart && differ(self.emitted[at], self.emitted[there]);
+            outline |= apart && Spread::of(&[self.emitted[at], self.emitted[there]]).wide();
         }
         match here {
             _ if outline => PixelKind::Outline,
@@ -207,17 +207,15 @@ impl PixelSampling {
         (x, y): (u32, u32),
         receivers: &mut Vec<Receiver>,
     ) -> (PrimarySample, u32) {
-        let (side, count) = match self.kind(x, y) {
+        let kind = self.kind(x, y);
+        let (side, count) = match kind {
             PixelKind::Plain => (1, 1),
             PixelKind::Smooth => (SMOOTH_SIDE, SMOOTH_SIDE * SMOOTH_SIDE),
             PixelKind::Edge => (EDGE_SIDE, EDGE_ROUND),
             PixelKind::Outline => (EDGE_SIDE, EDGE_SIDE * EDGE_SIDE),
         };
         let first = self.trace_samples(ctx, camera, settings, (x, y), side, count, Some(receivers));
-        if side != EDGE_SIDE
-            || count == EDGE_SIDE * EDGE_SIDE
-            || !needs_more(&first.luminances, first.hits, count)
-        {
+        if kind != PixelKind::Edge || !needs_more(&first.spread, first.hits, count) {
             return (first.mean, count);
         }
         // The whole sequence, its direct light shared out over all of it; the first round's
@@ -228,7 +226,7 @@ impl PixelSampling {
     }
 
     /// The first `count` camera samples of pixel `(x, y)` (of a grid of `side`²): their mean
-    /// and each sample's luminance. Their receivers go to `receivers`; with `None` (the second
+    /// and how their luminance spreads. Their receivers go to `receivers`; with `None` (the second
     /// pass of an edge) none gathers.
     #[allow(clippy::too_many_arguments)]
     fn trace_samples(
@@ -246,7 +244,7 @@ impl PixelSampling {
         let scramble = Sampler::new(settings.seed, u64::from(pixel), u64::MAX).next_scramble();
         let mut out = Samples {
             mean: PrimarySample::default(),
-            luminances: Vec::with_capacity(count as usize),
+            spread: Spread::EMPTY,
             hits: 0,
         };
         let mut depth = f32::INFINITY;
@@ -282,7 +280,7 @@ impl PixelSampling {
                 light: LightShare::of_sample(settings.light_samples, s, count),
             };
             let r = trace_primary(ctx, settings, cs, &mut sampler, receivers);
-            out.luminances.push(luminance(r.direct) * count as f32);
+            out.spread = out.spread.add(luminance(r.direct) * count as f32);
             out.mean.direct += r.direct;
             out.mean.albedo += r.albedo * weight;
             out.mean.normal += r.normal * weight;
@@ -300,35 +298,59 @@ impl PixelSampling {
 struct Samples {
     /// Emission and direct light, AOVs and coverage: the samples' mean.
     mean: PrimarySample,
-    /// Each sample's luminance (its emission and direct light).
-    luminances: Vec<f32>,
+    /// How the samples' luminance (emission and direct light) spreads.
+    spread: Spread,
     /// How many samples hit the scene.
     hits: u32,
 }
 
-/// Whether two luminances differ: their difference, squared, exceeds [`EDGE_SPREAD`] of
-/// their mean's square.
-fn differ(a: f32, b: f32) -> bool {
-    let mean = 0.5 * (a + b);
-    (a - b) * (a - b) > EDGE_SPREAD * mean * mean
+/// The least, greatest and summed luminance of some samples, kept as they come (no list).
+#[derive(Clone, Copy, Debug)]
+struct Spread {
+    lo: f32,
+    hi: f32,
+    sum: f32,
+    count: u32,
 }
 
-/// Whether an edge pixel's first round of samples, with luminances `first` and `hits` of
-/// `round` hitting the scene, leaves its mean uncertain: some samples miss the scene while
-/// others hit (the coverage is an edge too), or the spread of their luminance is large
-/// against their mean ([`EDGE_SPREAD`]). An emitter's outline
-/// (radiance 18 beside 0.5) always takes the other rounds; an edge between two lit walls of
-/// similar brightness does not.
-fn needs_more(first: &[f32], hits: u32, round: u32) -> bool {
-    if hits != 0 && hits != round {
-        return true;
+impl Spread {
+    const EMPTY: Spread = Spread {
+        lo: f32::INFINITY,
+        hi: 0.0,
+        sum: 0.0,
+        count: 0,
+    };
+
+    fn of(values: &[f32]) -> Spread {
+        values.iter().fold(Spread::EMPTY, |s, &v| s.add(v))
     }
-    let (lo, hi) = first.iter().fold((f32::INFINITY, 0.0f32), |(lo, hi), &v| {
-        (lo.min(v), hi.max(v))
-    });
-    let mean = first.iter().sum::<f32>() / first.len().max(1) as f32;
-    let spread = hi - lo;
-    spread * spread > EDGE_SPREAD * mean * mean
+
+    fn add(self, v: f32) -> Spread {
+        Spread {
+            lo: self.lo.min(v),
+            hi: self.hi.max(v),
+            sum: self.sum + v,
+            count: self.count + 1,
+        }
+    }
+
+    /// Whether the values spread wide against their mean: the spread, squared, exceeds
+    /// [`EDGE_SPREAD`] of the mean's square. Relative, so a scene lit 2^k times as brightly
+    /// is sampled alike.
+    fn wide(&self) -> bool {
+        let mean = self.sum / self.count.max(1) as f32;
+        let spread = self.hi - self.lo;
+        spread * spread > EDGE_SPREAD * mean * mean
+    }
+}
+
+/// Whether an edge pixel's first round of samples, whose luminances spread as `first` and of
+/// which `hits` of `round` hit the scene, leaves its mean uncertain: some samples miss the
+/// scene while others hit (the coverage is an edge too), or their luminance spreads wide
+/// ([`Spread::wide`]). An emitter's outline (radiance 18 beside 0.5) always takes the other
+/// rounds; an edge between two lit walls of similar brightness does not.
+fn needs_more(first: &Spread, hits: u32, round: u32) -> bool {
+    (hits != 0 && hits != round) || first.wide()
 }
 
 /// Whether two neighbouring hits lie on one surface: the same mesh, normals within 25°, depths
@@ -444,8 +466,10 @@ mod tests {
     /// coverage edge; not two walls of about one brightness, nor a round of equal samples.
     #[test]
     fn a_round_goes_on_where_its_samples_disagree() {
-        let round =
-            |a: f32, b: f32| -> Vec<f32> { (0..16).map(|i| if i < 8 { a } else { b }).collect() };
+        let round = |a: f32, b: f32| -> Spread {
+            let values: Vec<f32> = (0..16).map(|i| if i < 8 { a } else { b }).collect();
+            Spread::of(&values)
+        };
         assert!(
             needs_more(&round(18.0, 0.5), 16, 16),
             "an emitter's outline"
@@ -468,7 +492,8 @@ mod tests {
             "all miss, a black sky"
         );
         // The outline test on the centre rays' emitted light, by the same rule.
-        assert!(differ(18.0, 0.0) && differ(0.0, 1.0));
-        assert!(!differ(0.0, 0.0) && !differ(1.0, 1.1));
+        let wide = |v: &[f32]| Spread::of(v).wide();
+        assert!(wide(&[18.0, 0.0]) && wide(&[0.0, 1.0]));
+        assert!(!wide(&[0.0, 0.0]) && !wide(&[1.0, 1.1]));
     }
 }
