@@ -8,9 +8,10 @@
 //! culled.
 //!
 //! Near leaves (docs/method.md §2.3 step 3): a leaf wider than its pixel, or within [`NEAR_RADII`] disc
-//! radii (where P/d² no longer holds), is split into m × m equal-area pieces of its disc, each
-//! no wider than a pixel, splatted with its own direction, distance and cosine; pieces below
-//! a hemispherical receiver's horizon are dropped, which clips the disc exactly there. The
+//! radii (where P/d² no longer holds), is split into equal-area pieces of its disc, each no
+//! wider than a pixel from where it lies (a quadtree, fine near the receiver and coarse on the
+//! disc's far side), splatted with its own direction, distance and cosine; pieces below a
+//! hemispherical receiver's horizon are dropped, which clips the disc there. The
 //! spec resolves near leaves by ray casting the pixel centres instead; measured on a lit
 //! square (tests/gather.rs), that lost 17 % of a ring of pixels where ray-cast and splatted
 //! leaves of one surface share pixels (a centre ray that misses the near discs drops their
@@ -26,7 +27,9 @@ use glam::{Vec2, Vec3};
 /// Leaves nearer than this many disc radii are split into pieces.
 pub const NEAR_RADII: f32 = 4.0;
 
-/// The most pieces per side of a split leaf.
+/// The most pieces per side of a split leaf (a power of two: the pieces are a quadtree's
+/// cells). It matters only within a fraction of a radius of the disc: a cap of 16 left 30 %
+/// holes under a sphere resting on a floor, through which the light behind leaked.
 pub(crate) const MAX_PIECES: u32 = 64;
 
 /// Pieces per pixel width of a split leaf.
@@ -106,7 +109,7 @@ pub fn splat_cut(
                 }
             } else {
                 stats.split_leaves += 1;
-                stats.splats += split_leaf(senders, sender.surfel, (p, mesh), d, pixel, mb);
+                stats.splats += split_leaf(senders, sender.surfel, (p, mesh), pixel, mb);
             }
             continue;
         }
@@ -155,14 +158,22 @@ pub(crate) fn fits_pixel(senders: &Senders, j: u32, d2: f32, dir: Vec3, pixel: f
         && senders.projected_area(j, -dir) / d2 <= pixel
 }
 
-/// Splat surfel `i`, at distance `d` from the receiver (position, mesh), as m × m equal-area
-/// pieces of its disc, each no wider than `pixel` (the bound uses the whole disc's
-/// solid angle seen face-on from its nearest point). Returns the pieces splatted.
+/// The most a piece of the unit square reaches on a unit disc under the concentric map,
+/// per unit of its side (see [`split_leaf`]): 3 × √2 / 2.
+const REACH: f32 = 2.13;
+
+/// Quadrant `q` (x-major) of the square at `corner` whose quadrants are `half` wide.
+fn quadrant(corner: Vec2, half: f32, q: u32) -> Vec2 {
+    corner + Vec2::new((q % 2) as f32, (q / 2) as f32) * half
+}
+
+/// Splat surfel `i`, seen from the receiver (position, mesh), as equal-area pieces
+/// of its disc, each no wider than `pixel` as seen face-on from its own nearest point.
+/// Returns the pieces splatted.
 fn split_leaf(
     senders: &Senders,
     i: u32,
     (p, mesh): (Vec3, u32),
-    d: f32,
     pixel: f32,
     mb: &mut Microbuffer,
 ) -> u64 {
@@ -190,43 +201,69 @@ fn split_leaf(
     if front < 0.0 && -front < radius && s.mesh == mesh {
         return 0;
     }
-    let nearest = (d - radius).max(0.25 * radius);
-    let bound = s.area / (nearest * nearest);
-    // At least one piece per pixel width; the cap matters only within a fraction of a
-    // radius of the disc (a cap of 16 left 30 % holes under a sphere resting on a floor, through
-    // which the light behind leaked).
-    let m = ((PIECES_PER_PIXEL * (bound / pixel).sqrt()).ceil() as u32).clamp(2, MAX_PIECES);
+    // The pieces are the cells of a quadtree over the disc's equal-area (concentric) square,
+    // split until each is no wider than a pixel as seen from its own nearest point (floored
+    // at a quarter of the disc's radius, where the disc's own bound stops growing). Pieces
+    // near the receiver come out as fine as a uniform split would make every piece; the far
+    // side of the disc stays coarse (with a uniform m × m split, pieces were two thirds of a
+    // render's splats). A piece that straddles a hemispherical receiver's horizon is split to
+    // half a pixel, so the horizon clips the disc that finely.
+    let floor = 0.25 * radius;
+    let limit = pixel / (PIECES_PER_PIXEL * PIECES_PER_PIXEL);
+    let max_level = MAX_PIECES.trailing_zeros();
     let frame = Frame::from_normal(ns);
-    let piece_area = s.area / (m * m) as f32;
-    let piece_radius = radius / m as f32;
+    let to_disc = |u: Vec2| {
+        let q = square_to_uniform_disk_concentric(u) * radius;
+        frame.to_world(Vec3::new(q.x, q.y, 0.0))
+    };
     let mut splats = 0;
-    for b in 0..m {
-        for a in 0..m {
-            let u = Vec2::new((a as f32 + 0.5) / m as f32, (b as f32 + 0.5) / m as f32);
-            let q = square_to_uniform_disk_concentric(u) * radius;
-            let offset = c + frame.to_world(Vec3::new(q.x, q.y, 0.0)) - p;
-            let d2 = offset.length_squared();
-            if !(d2 > 0.0) || (!mb.spherical && offset.dot(mb.frame.n) <= 0.0) {
+    // Depth first, quadrants in x-major order: a deterministic order of pieces.
+    let mut stack: Vec<(Vec2, u32)> = Vec::with_capacity(4 * max_level as usize + 4);
+    stack.extend((0..4u32).rev().map(|q| (quadrant(Vec2::ZERO, 0.5, q), 1)));
+    while let Some((corner, level)) = stack.pop() {
+        let side = 1.0 / (1u32 << level) as f32;
+        let centre = to_disc(corner + Vec2::splat(0.5 * side));
+        // The piece's reach from its centre: the concentric map stretches no length by more
+        // than 3 disc radii per unit of the square (its Jacobian's Frobenius norm is at most
+        // √(1 + π²/8) ≈ 1.49 on [−1, 1]², which is twice the unit square), over half the
+        // cell's diagonal.
+        let reach = REACH * side * radius;
+        let offset = c + centre - p;
+        let d2 = offset.length_squared();
+        let piece_area = s.area * side * side;
+        if level < max_level {
+            let nearest = (d2.sqrt() - reach).max(floor);
+            let straddles = !mb.spherical && offset.dot(mb.frame.n).abs() < reach;
+            let bound = piece_area / (nearest * nearest);
+            if bound > limit || (straddles && bound > 0.25 * limit) {
+                stack.extend(
+                    (0..4u32)
+                        .rev()
+                        .map(|q| (quadrant(corner, 0.5 * side, q), level + 1)),
+                );
                 continue;
             }
-            let w = offset / d2.sqrt();
-            // Every piece is seen from the side the disc's centre is seen from.
-            let cos = ns.dot(-w);
-            if (cos > 0.0) != (front > 0.0) {
-                continue;
-            }
-            let omega = piece_area * cos.abs() / d2;
-            if omega > 0.0 {
-                let lookup = senders.surfel_lookup(i, -w, cos, mesh);
-                let sender = Sender {
-                    offset,
-                    radius: piece_radius,
-                    normal: ns,
-                    radiance: senders.evaluated(lookup),
-                    lookup,
-                };
-                splats += u64::from(mb.splat(&sender, omega));
-            }
+        }
+        if !(d2 > 0.0) || (!mb.spherical && offset.dot(mb.frame.n) <= 0.0) {
+            continue;
+        }
+        let w = offset / d2.sqrt();
+        // Every piece is seen from the side the disc's centre is seen from.
+        let cos = ns.dot(-w);
+        if (cos > 0.0) != (front > 0.0) {
+            continue;
+        }
+        let omega = piece_area * cos.abs() / d2;
+        if omega > 0.0 {
+            let lookup = senders.surfel_lookup(i, -w, cos, mesh);
+            let sender = Sender {
+                offset,
+                radius: radius * side,
+                normal: ns,
+                radiance: senders.evaluated(lookup),
+                lookup,
+            };
+            splats += u64::from(mb.splat(&sender, omega));
         }
     }
     splats
