@@ -15,6 +15,9 @@
 //!    blur their lobe. Or (`paths`) each receiver traces rays drawn from its BSDF and takes
 //!    the cache's light where they hit ([`paths`]): noisy, no buffers.
 //!
+//! Steps 2 and 3 run a band of tiles at a time, so the receivers held are one band's; what a
+//! render needs at least is checked against the memory available before any work.
+//!
 //! Every random number is keyed by (pixel, sample), and every tile is processed in a fixed
 //! order, so the image is the same for any thread count.
 
@@ -180,6 +183,10 @@ impl Default for FinalSettings {
 
 /// The image side of a tile.
 pub const TILE: u32 = 32;
+
+/// Tiles rendered together (at least four per thread): the render holds the receivers of one
+/// band of tiles at a time.
+const BAND_TILES: usize = 64;
 
 /// The crop (`[x0, y0, x1, y1]`, as [`FinalSettings::crop`]) of tile `[column, row]`
 /// (counted from 1, row 1 at the top) of a grid of `[columns, rows]` tiles over a
@@ -352,41 +359,27 @@ pub fn render_final_cancellable(
         smooth_quarters: settings.gather == GatherMode::Paths,
         seed: settings.seed,
     };
-    let sampling = PixelSampling::new(&ctx, camera, &primary_settings);
+    // The centre hits of the tiles the crop touches and of the pixels around them (the edge
+    // test reads a pixel's four neighbours).
+    let (tx0, ty0) = (x0 / TILE * TILE, y0 / TILE * TILE);
+    let (tx1, ty1) = (
+        (x1.div_ceil(TILE) * TILE).min(w),
+        (y1.div_ceil(TILE) * TILE).min(h),
+    );
+    let rect = [
+        tx0.saturating_sub(1),
+        ty0.saturating_sub(1),
+        (tx1 + 1).min(w),
+        (ty1 + 1).min(h),
+    ];
+    check_fits((x1 - x0, y1 - y0), rect)?;
+    let sampling = PixelSampling::new(&ctx, camera, &primary_settings, rect);
+    let mut primary_seconds = t.elapsed().as_secs_f64();
+    let mut gather_seconds = 0.0;
     // The tiles of the whole image that the crop touches.
     let tiles: Vec<(u32, u32)> = (y0 / TILE..y1.div_ceil(TILE))
         .flat_map(|ty| (x0 / TILE..x1.div_ceil(TILE)).map(move |tx| (tx, ty)))
         .collect();
-    let done = AtomicUsize::new(0);
-    let primary: Vec<TilePrimary> = tiles
-        .par_iter()
-        .map(|&(tx, ty)| {
-            stop()?;
-            let r = primary_tile(&ctx, camera, &sampling, &primary_settings, tx, ty);
-            let n = done.fetch_add(1, Ordering::Relaxed) + 1;
-            progress("primary", n as f32 / tiles.len() as f32);
-            Ok(r)
-        })
-        .collect::<Result<_>>()?;
-    timings.push(("primary and direct", t.elapsed().as_secs_f64()));
-
-    let t = Instant::now();
-    done.store(0, Ordering::Relaxed);
-    let gathered: Vec<(Vec<Gathered>, GatherStats)> = primary
-        .par_iter()
-        .map(|tile| {
-            stop()?;
-            let (tx, ty) = (tile.origin.0 / TILE, tile.origin.1 / TILE);
-            let size = (TILE.min(w - tx * TILE), TILE.min(h - ty * TILE));
-            let rect = (tile.origin, size, w);
-            let r = gather_tile(&ctx, &senders, &tile.receivers, rect, settings);
-            let n = done.fetch_add(1, Ordering::Relaxed) + 1;
-            progress("gather", n as f32 / tiles.len() as f32);
-            Ok(r)
-        })
-        .collect::<Result<_>>()?;
-    timings.push(("gather", t.elapsed().as_secs_f64()));
-
     let (cw, ch) = (x1 - x0, y1 - y0);
     let mut out = FinalOutput {
         beauty: Image::new(cw, ch),
@@ -409,33 +402,73 @@ pub fn render_final_cancellable(
         ((x0..x1).contains(&x) && (y0..y1).contains(&y))
             .then(|| ((y - y0) * cw + (x - x0)) as usize)
     };
-    for tile in &primary {
-        out.samples += tile.samples;
-        for (pixel, s) in &tile.pixels {
-            let Some(i) = in_crop(*pixel) else {
-                continue;
-            };
-            out.direct.pixels[i] = s.direct;
-            out.albedo.pixels[i] = s.albedo;
-            out.normal.pixels[i] = s.normal;
-            out.depth.pixels[i] = Vec3::splat(if s.depth.is_finite() { s.depth } else { 0.0 });
-            out.alpha[i] = s.alpha.min(1.0);
-        }
-    }
-    for (values, stats) in &gathered {
-        out.stats.add(stats);
-        for (pixel, l, glossy) in values {
-            if let Some(i) = in_crop(*pixel) {
-                out.indirect.pixels[i] += *l;
-                let part = if *glossy {
-                    &mut out.indirect_glossy
-                } else {
-                    &mut out.indirect_diffuse
+    // A band of tiles at a time, each traced, then gathered, then added to the images: the
+    // receivers (about 400 bytes a pixel) are held for one band, not for the image. Every
+    // tile is computed alone, so the bands' size changes nothing in the images.
+    let band = BAND_TILES.max(4 * rayon::current_num_threads());
+    let done = AtomicUsize::new(0);
+    for band in tiles.chunks(band) {
+        let t = Instant::now();
+        let primary: Vec<TilePrimary> = band
+            .par_iter()
+            .map(|&(tx, ty)| {
+                stop()?;
+                Ok(primary_tile(
+                    &ctx,
+                    camera,
+                    &sampling,
+                    &primary_settings,
+                    tx,
+                    ty,
+                ))
+            })
+            .collect::<Result<_>>()?;
+        primary_seconds += t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let gathered: Vec<(Vec<Gathered>, GatherStats)> = primary
+            .par_iter()
+            .map(|tile| {
+                stop()?;
+                let (tx, ty) = (tile.origin.0 / TILE, tile.origin.1 / TILE);
+                let size = (TILE.min(w - tx * TILE), TILE.min(h - ty * TILE));
+                let rect = (tile.origin, size, w);
+                let r = gather_tile(&ctx, &senders, &tile.receivers, rect, settings);
+                let n = done.fetch_add(1, Ordering::Relaxed) + 1;
+                progress("render", n as f32 / tiles.len() as f32);
+                Ok(r)
+            })
+            .collect::<Result<_>>()?;
+        gather_seconds += t.elapsed().as_secs_f64();
+        for tile in &primary {
+            out.samples += tile.samples;
+            for (pixel, s) in &tile.pixels {
+                let Some(i) = in_crop(*pixel) else {
+                    continue;
                 };
-                part.pixels[i] += *l;
+                out.direct.pixels[i] = s.direct;
+                out.albedo.pixels[i] = s.albedo;
+                out.normal.pixels[i] = s.normal;
+                out.depth.pixels[i] = Vec3::splat(if s.depth.is_finite() { s.depth } else { 0.0 });
+                out.alpha[i] = s.alpha.min(1.0);
+            }
+        }
+        for (values, stats) in &gathered {
+            out.stats.add(stats);
+            for (pixel, l, glossy) in values {
+                if let Some(i) = in_crop(*pixel) {
+                    out.indirect.pixels[i] += *l;
+                    let part = if *glossy {
+                        &mut out.indirect_glossy
+                    } else {
+                        &mut out.indirect_diffuse
+                    };
+                    part.pixels[i] += *l;
+                }
             }
         }
     }
+    out.timings.push(("primary and direct", primary_seconds));
+    out.timings.push(("gather", gather_seconds));
     for i in 0..out.beauty.pixels.len() {
         for img in [
             &mut out.direct,
@@ -488,6 +521,28 @@ struct TilePrimary {
     pixels: Vec<(u32, PrimarySample)>,
     receivers: Vec<Receiver>,
     samples: u64,
+}
+
+/// Refuse, before any work, a render that cannot fit: the floor of what it holds (the
+/// crop's nine images, the centre hits of `rect` and one band's receivers, at least one per
+/// pixel) above the memory this machine has available. The centre hits of mirrors and glass
+/// keep their chains' ends besides, so a render it lets through may still need more.
+fn check_fits((cw, ch): (u32, u32), rect: [u32; 4]) -> Result<()> {
+    let crop = u64::from(cw) * u64::from(ch);
+    let centres = u64::from(rect[2] - rect[0]) * u64::from(rect[3] - rect[1]);
+    let band = (BAND_TILES.max(4 * rayon::current_num_threads()) * (TILE * TILE) as usize) as u64;
+    let floor = crop * (8 * size_of::<Rgb>() + size_of::<f32>()) as u64
+        + centres * PixelSampling::BYTES_PER_PIXEL as u64
+        + band.min(centres) * (size_of::<Receiver>() + size_of::<(u32, PrimarySample)>()) as u64;
+    match crate::machine::available_memory() {
+        Some(available) if floor > available => Err(Error::InvalidSetting(format!(
+            "a render of {cw}x{ch} pixels needs at least {} MB, and this machine has {} MB \
+             available; render it in crops (--crop, or --tile-grid for a farm)",
+            floor / 1_000_000,
+            available / 1_000_000
+        ))),
+        _ => Ok(()),
+    }
 }
 
 fn primary_tile(

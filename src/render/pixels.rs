@@ -86,10 +86,14 @@ struct CentreHit {
     ends: Option<Vec<ChainEnd>>,
 }
 
-/// Every pixel's centre hit, from which each pixel's sample count follows.
+/// The centre hits of a rectangle of the image (the pixels a render traces and their
+/// neighbours), from which each pixel's sample count follows.
 pub(crate) struct PixelSampling {
     width: u32,
     height: u32,
+    /// The rectangle `[x0, y0, x1, y1]` (x0 ≤ x < x1, y0 ≤ y < y1) whose centre hits are
+    /// kept, row by row.
+    rect: [u32; 4],
     centre: Vec<Option<CentreHit>>,
     /// Per pixel, the luminance of the light its centre ray sees emitted: an emitter's, the
     /// environment's where it leaves the scene, along a mirror's or glass's chain too.
@@ -113,13 +117,20 @@ pub(crate) enum PixelKind {
 }
 
 impl PixelSampling {
-    /// Trace the centre of every pixel of `camera`'s image, and the chains of those on a
-    /// mirror or clear glass.
-    pub fn new(ctx: &Tracer, camera: &Camera, settings: &PrimarySettings) -> Self {
+    /// What it keeps per pixel of its rectangle (besides the chain ends of mirrors and glass).
+    pub const BYTES_PER_PIXEL: usize = size_of::<Option<CentreHit>>() + size_of::<f32>();
+
+    /// Trace the centre of every pixel of the rectangle `rect` (`[x0, y0, x1, y1]`) of
+    /// `camera`'s image, and the chains of those on a mirror or clear glass. [`Self::kind`]
+    /// then serves the pixels whose neighbours lie in `rect` or outside the image.
+    pub fn new(ctx: &Tracer, camera: &Camera, settings: &PrimarySettings, rect: [u32; 4]) -> Self {
         let (w, h) = (camera.width, camera.height);
-        let (centre, emitted) = (0..w * h)
+        let [x0, y0, x1, y1] = rect;
+        let rect_width = x1 - x0;
+        let (centre, emitted) = (0..rect_width * (y1 - y0))
             .into_par_iter()
-            .map(|pixel| {
+            .map(|at| {
+                let pixel = (y0 + at / rect_width) * w + x0 + at % rect_width;
                 let film = Vec2::new((pixel % w) as f32 + 0.5, (pixel / w) as f32 + 0.5);
                 let (o, d) = camera.generate_ray(film);
                 let Some(hit) = intersect(ctx, o, d) else {
@@ -148,20 +159,28 @@ impl PixelSampling {
         PixelSampling {
             width: w,
             height: h,
+            rect,
             centre,
             emitted,
         }
     }
 
+    /// Where pixel `(x, y)`, which must lie in the rectangle, is kept.
+    fn index(&self, x: u32, y: u32) -> usize {
+        let [x0, y0, x1, y1] = self.rect;
+        debug_assert!((x0..x1).contains(&x) && (y0..y1).contains(&y));
+        ((y - y0) * (x1 - x0) + (x - x0)) as usize
+    }
+
     /// How pixel `(x, y)` is sampled (see the module docs).
     pub fn kind(&self, x: u32, y: u32) -> PixelKind {
-        let at = (y * self.width + x) as usize;
+        let at = self.index(x, y);
         let here = &self.centre[at];
         let neighbours = [(-1i64, 0i64), (1, 0), (0, -1), (0, 1)];
         let neighbours = neighbours.iter().filter_map(|(dx, dy)| {
             let (nx, ny) = (x as i64 + dx, y as i64 + dy);
             let inside = nx >= 0 && ny >= 0 && nx < self.width as i64 && ny < self.height as i64;
-            inside.then(|| (ny as u32 * self.width + nx as u32) as usize)
+            inside.then(|| self.index(nx as u32, ny as u32))
         });
         let mut edge = false;
         let mut outline = false;
