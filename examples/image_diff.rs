@@ -4,6 +4,8 @@
 //! `cargo run --release --example image_diff -- ours.exr reference.exr side_by_side.png [x,y,w,h]`
 //! (an image k times the reference's size each way is averaged down to it first).
 
+use std::fmt::Write as _;
+use std::io::Write as _;
 use wpbgi::image::{error_against, read_exr, write_png, Image};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -30,21 +32,25 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }
     }
     let (mse, rel) = error_against(&a, &b).ok_or("the images differ in size")?;
-    println!("MSE {mse:.4e}  relMSE {rel:.4e}");
-    println!("mean ours {:?}  reference {:?}", a.mean(), b.mean());
+    // The report is written at once, and a reader that stops early (`| head`) ends it
+    // quietly.
+    let mut report = String::new();
+    writeln!(report, "MSE {mse:.4e}  relMSE {rel:.4e}")?;
+    writeln!(report, "mean ours {:?}  reference {:?}", a.mean(), b.mean())?;
     let worst = (0..a.pixels.len())
         .max_by(|&i, &j| {
             let e = |k: usize| (a.pixels[k] - b.pixels[k]).abs().max_element();
             e(i).total_cmp(&e(j))
         })
         .unwrap_or(0);
-    println!(
+    writeln!(
+        report,
         "worst pixel ({}, {}): ours {:?} reference {:?}",
         worst as u32 % a.width,
         worst as u32 / a.width,
         a.pixels[worst],
         b.pixels[worst]
-    );
+    )?;
     // The pixels that add most to the relative MSE.
     let rel_of = |k: usize| {
         let (x, r) = (a.pixels[k], b.pixels[k]);
@@ -54,14 +60,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     order.sort_by(|&i, &j| rel_of(j).total_cmp(&rel_of(i)));
     let total: f32 = order.iter().map(|&k| rel_of(k)).sum();
     for &k in order.iter().take(8) {
-        println!(
+        writeln!(
+            report,
             "  ({}, {}): {:.1} % of relMSE, ours {:?} reference {:?}",
             k as u32 % a.width,
             k as u32 / a.width,
             100.0 * rel_of(k) / total,
             a.pixels[k],
             b.pixels[k]
-        );
+        )?;
+    }
+    match std::io::stdout().lock().write_all(report.as_bytes()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => return Err(e.into()),
+        _ => {}
     }
     if let Some(out) = args.get(3) {
         let mut s = Image::new(3 * a.width, a.height);
