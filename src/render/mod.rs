@@ -249,8 +249,8 @@ pub struct GatherStats {
     pub cluster_cut: CutStats,
     /// Microbuffer pixels (after refinement) over all receivers.
     pub pixels: u64,
-    /// Receivers that took their light from their cell's anchors instead of gathering
-    /// ([`sparse`]).
+    /// Receivers that took their light from their cell's anchors, or from quarters of their
+    /// pixel on their surface, instead of gathering ([`sparse`]).
     pub interpolated: u64,
     /// Of those, the glossy and rough-dielectric ones, which took their outgoing radiance
     /// from anchors with the same BSDF ([`sparse`]).
@@ -633,7 +633,7 @@ fn gather_tile(
         .enumerate()
         .map(|(k, r)| {
             let l = match &r.bsdf {
-                Bsdf::Diffuse(d) if plan.by_irradiance(receivers, k) => d.reflectance * value[k],
+                Bsdf::Diffuse(d) if plan.by_irradiance(k) => d.reflectance * value[k],
                 _ => value[k],
             };
             (r.pixel, r.weight * l, by_glossy_hit(r))
@@ -677,7 +677,7 @@ fn gather_set(
         prepare_buffer(&mut mb, r, settings);
         stats.receiver_cut += gather.fill(r.p, r.mesh, &mut mb, &mut stack);
         stats.pixels += mb.pixels.len() as u64;
-        let bsdf = if plan.by_irradiance(receivers, k) {
+        let bsdf = if plan.by_irradiance(k) {
             &white
         } else {
             &r.bsdf
