@@ -184,9 +184,13 @@ impl Default for FinalSettings {
 /// The image side of a tile.
 pub const TILE: u32 = 32;
 
-/// Tiles rendered together (at least four per thread): the render holds the receivers of one
-/// band of tiles at a time.
+/// Tiles rendered together: the render holds the receivers of one band of tiles at a time.
 const BAND_TILES: usize = 64;
+
+/// The tiles of a band: [`BAND_TILES`], and at least four per thread.
+fn band_tiles() -> usize {
+    BAND_TILES.max(4 * rayon::current_num_threads())
+}
 
 /// The crop (`[x0, y0, x1, y1]`, as [`FinalSettings::crop`]) of tile `[column, row]`
 /// (counted from 1, row 1 at the top) of a grid of `[columns, rows]` tiles over a
@@ -403,11 +407,10 @@ pub fn render_final_cancellable(
             .then(|| ((y - y0) * cw + (x - x0)) as usize)
     };
     // A band of tiles at a time, each traced, then gathered, then added to the images: the
-    // receivers (about 400 bytes a pixel) are held for one band, not for the image. Every
-    // tile is computed alone, so the bands' size changes nothing in the images.
-    let band = BAND_TILES.max(4 * rayon::current_num_threads());
+    // receivers (about 230 bytes a pixel, measured) are held for one band, not for the
+    // image. Every tile is computed alone, so the bands' size changes nothing in the images.
     let done = AtomicUsize::new(0);
-    for band in tiles.chunks(band) {
+    for band in tiles.chunks(band_tiles()) {
         let t = Instant::now();
         let primary: Vec<TilePrimary> = band
             .par_iter()
@@ -530,7 +533,7 @@ struct TilePrimary {
 fn check_fits((cw, ch): (u32, u32), rect: [u32; 4]) -> Result<()> {
     let crop = u64::from(cw) * u64::from(ch);
     let centres = u64::from(rect[2] - rect[0]) * u64::from(rect[3] - rect[1]);
-    let band = (BAND_TILES.max(4 * rayon::current_num_threads()) * (TILE * TILE) as usize) as u64;
+    let band = (band_tiles() * (TILE * TILE) as usize) as u64;
     let floor = crop * (8 * size_of::<Rgb>() + size_of::<f32>()) as u64
         + centres * PixelSampling::BYTES_PER_PIXEL as u64
         + band.min(centres) * (size_of::<Receiver>() + size_of::<(u32, PrimarySample)>()) as u64;
