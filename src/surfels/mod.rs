@@ -197,13 +197,21 @@ impl Hasher for CellHasher {
     }
 }
 
-/// A uniform hash grid over the candidates, which it reorders so each cell is one contiguous
-/// slice and neighbouring cells lie close in memory (Morton order of the cells): elimination
+/// A uniform grid over the candidates, which it reorders so each cell is one contiguous slice
+/// and neighbouring cells lie close in memory (Morton order of the cells): elimination
 /// touches each candidate's neighbours thousands of times, and random order made it
-/// memory-bound.
+/// memory-bound. Each cell's occupied neighbours (of the 3 × 3 × 3 around it) are listed once:
+/// looking the 27 cells up in a hash map for every candidate removed was a quarter of the
+/// sampling (300 000 surfels: 4.72 → 3.56 s; a million: 21.8 → 15.9 s; the same surfels).
 struct Grid {
-    cell: f32,
-    ranges: HashMap<IVec3, (u32, u32), BuildHasherDefault<CellHasher>>,
+    /// Per candidate, its cell.
+    cell_of: Vec<u32>,
+    /// Per cell, its candidates.
+    ranges: Vec<(u32, u32)>,
+    /// Per cell, the occupied cells around it (itself included) in a fixed order:
+    /// `around[around_start[c]..around_start[c + 1]]`.
+    around: Vec<u32>,
+    around_start: Vec<u32>,
 }
 
 /// Interleave the low 21 bits of three coordinates (a Morton code).
@@ -227,31 +235,60 @@ impl Grid {
             let k = key(s.p);
             (morton(k), k.x, k.y, k.z)
         });
-        let mut ranges = HashMap::default();
+        let mut index: HashMap<IVec3, u32, BuildHasherDefault<CellHasher>> = HashMap::default();
+        let mut keys = Vec::new();
+        let mut ranges = Vec::new();
+        let mut cell_of = vec![0u32; points.len()];
         let mut start = 0;
         for i in 1..=points.len() {
             let k = key(points[start].p);
             if i == points.len() || key(points[i].p) != k {
-                ranges.insert(k, (start as u32, i as u32));
+                let c = ranges.len() as u32;
+                index.insert(k, c);
+                keys.push(k);
+                ranges.push((start as u32, i as u32));
+                cell_of[start..i].fill(c);
                 start = i;
             }
         }
-        Grid { cell, ranges }
-    }
-
-    /// Call `f` for every candidate in the 3 × 3 × 3 cells around `p` (a superset of those
-    /// within one cell size), in a fixed order.
-    #[inline]
-    fn for_each_around(&self, p: Vec3, mut f: impl FnMut(u32)) {
-        let c = (p / self.cell).floor().as_ivec3();
-        for dz in -1..=1 {
-            for dy in -1..=1 {
-                for dx in -1..=1 {
-                    if let Some(&(a, b)) = self.ranges.get(&(c + IVec3::new(dx, dy, dz))) {
-                        (a..b).for_each(&mut f);
+        let lists: Vec<Vec<u32>> = keys
+            .par_iter()
+            .map(|&k| {
+                let mut list = Vec::new();
+                for dz in -1..=1 {
+                    for dy in -1..=1 {
+                        for dx in -1..=1 {
+                            if let Some(&c) = index.get(&(k + IVec3::new(dx, dy, dz))) {
+                                list.push(c);
+                            }
+                        }
                     }
                 }
-            }
+                list
+            })
+            .collect();
+        let mut around_start = Vec::with_capacity(lists.len() + 1);
+        around_start.push(0);
+        for list in &lists {
+            around_start.push(around_start[around_start.len() - 1] + list.len() as u32);
+        }
+        Grid {
+            cell_of,
+            ranges,
+            around: lists.concat(),
+            around_start,
+        }
+    }
+
+    /// Call `f` for every candidate in the 3 × 3 × 3 cells around candidate `i`'s (a superset
+    /// of those within one cell size), in a fixed order.
+    #[inline]
+    fn for_each_around(&self, i: usize, mut f: impl FnMut(u32)) {
+        let c = self.cell_of[i] as usize;
+        let cells = &self.around[self.around_start[c] as usize..self.around_start[c + 1] as usize];
+        for &n in cells {
+            let (a, b) = self.ranges[n as usize];
+            (a..b).for_each(&mut f);
         }
     }
 }
@@ -343,7 +380,7 @@ fn eliminate(c: &[Surfel], grid: &Grid, radii: &[f32], keep: usize) -> Vec<bool>
         .into_par_iter()
         .map(|i| {
             let mut sum = 0.0;
-            grid.for_each_around(c[i].p, |j| {
+            grid.for_each_around(i, |j| {
                 if j as usize != i {
                     sum += weight(&c[i], &c[j as usize], radii);
                 }
@@ -360,7 +397,7 @@ fn eliminate(c: &[Surfel], grid: &Grid, radii: &[f32], keep: usize) -> Vec<bool>
         };
         alive[i as usize] = false;
         remaining -= 1;
-        grid.for_each_around(c[i as usize].p, |j| {
+        grid.for_each_around(i as usize, |j| {
             if alive[j as usize] {
                 let dw = weight(&c[i as usize], &c[j as usize], radii);
                 if dw > 0.0 {
@@ -387,7 +424,7 @@ fn assign_areas(
                 return i as u32;
             }
             let mut best = (f32::INFINITY, u32::MAX);
-            grid.for_each_around(c[i].p, |j| {
+            grid.for_each_around(i, |j| {
                 let s = &c[j as usize];
                 if alive[j as usize] && s.n.dot(c[i].n) > 0.0 {
                     let d = s.p.distance_squared(c[i].p);
