@@ -230,9 +230,10 @@ fn split_leaf(
         let reach = REACH * side * radius;
         let offset = c + centre - p;
         let d2 = offset.length_squared();
+        let d = d2.sqrt();
         let piece_area = s.area * side * side;
         if level < max_level {
-            let nearest = (d2.sqrt() - reach).max(floor);
+            let nearest = (d - reach).max(floor);
             let straddles = !mb.spherical && offset.dot(mb.frame.n).abs() < reach;
             let bound = piece_area / (nearest * nearest);
             if bound > limit || (straddles && bound > 0.25 * limit) {
@@ -247,7 +248,7 @@ fn split_leaf(
         if !(d2 > 0.0) || (!mb.spherical && offset.dot(mb.frame.n) <= 0.0) {
             continue;
         }
-        let w = offset / d2.sqrt();
+        let w = offset / d;
         // Every piece is seen from the side the disc's centre is seen from.
         let cos = ns.dot(-w);
         if (cos > 0.0) != (front > 0.0) {

@@ -655,8 +655,8 @@ fn by_glossy_hit(r: &Receiver) -> bool {
     r.chain != 0 || !matches!(r.bsdf, Bsdf::Diffuse(_))
 }
 
-/// Gather receivers `which` into `value`: the irradiance of the eligible diffuse ones (see
-/// [`SparsePlan`]), the outgoing radiance of the others.
+/// Gather receivers `which` into `value`: the irradiance of those whose value the plan keeps
+/// as irradiance ([`SparsePlan::by_irradiance`]), the outgoing radiance of the others.
 fn gather_set(
     senders: &Senders,
     receivers: &[Receiver],

@@ -203,9 +203,7 @@ impl PixelSampling {
             _ => PixelKind::Plain,
         }
     }
-}
 
-impl PixelSampling {
     /// Trace the camera samples of pixel `(x, y)`, pushing its receivers: its emission and
     /// direct light (the mean of its samples) and the first hit's AOVs, and how many camera
     /// samples it took. A pixel of one sample takes its centre; a pixel of several the
@@ -489,27 +487,16 @@ mod tests {
             let values: Vec<f32> = (0..16).map(|i| if i < 8 { a } else { b }).collect();
             Spread::of(&values)
         };
-        assert!(
-            needs_more(&round(18.0, 0.5), 16, 16),
-            "an emitter's outline"
-        );
-        assert!(
-            needs_more(&round(0.5, 0.05), 16, 16),
-            "a lit wall beside a dark one"
-        );
-        assert!(
-            !needs_more(&round(0.5, 0.4), 16, 16),
-            "two walls of one brightness"
-        );
-        assert!(!needs_more(&round(0.3, 0.3), 16, 16), "equal samples");
-        assert!(
-            needs_more(&round(0.3, 0.3), 12, 16),
-            "some samples miss the scene"
-        );
-        assert!(
-            !needs_more(&round(0.0, 0.0), 0, 16),
-            "all miss, a black sky"
-        );
+        for (first, hits, more, what) in [
+            (round(18.0, 0.5), 16, true, "an emitter's outline"),
+            (round(0.5, 0.05), 16, true, "a lit wall beside a dark one"),
+            (round(0.5, 0.4), 16, false, "two walls of one brightness"),
+            (round(0.3, 0.3), 16, false, "equal samples"),
+            (round(0.3, 0.3), 12, true, "some samples miss the scene"),
+            (round(0.0, 0.0), 0, false, "all miss, a black sky"),
+        ] {
+            assert_eq!(needs_more(&first, hits, 16), more, "{what}");
+        }
         // The outline test on the centre rays' emitted light, by the same rule.
         let wide = |v: &[f32]| Spread::of(v).wide();
         assert!(wide(&[18.0, 0.0]) && wide(&[0.0, 1.0]));

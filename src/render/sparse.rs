@@ -114,6 +114,11 @@ fn lends_to(c: &Receiver, r: &Receiver) -> bool {
         && interpolates_with(&c.bsdf, &r.bsdf)
 }
 
+/// Whether values whose luminances range from `lo` to `hi` agree to [`CONTRAST`].
+fn agree(lo: f32, hi: f32) -> bool {
+    hi <= (1.0 + CONTRAST) * lo
+}
+
 /// Whether receiver `r` is a quarter of a geometric edge's pixel (a primary hit's).
 fn on_geometric_edge(r: &Receiver) -> bool {
     r.chain == 0 && r.quarter.is_some()
@@ -252,7 +257,7 @@ impl SparsePlan {
                 Some((a, b)) => {
                     let (a, b) = (a as usize, b as usize);
                     let (la, lb) = (luminance(value[a]), luminance(value[b]));
-                    if la.max(lb) <= (1.0 + CONTRAST) * la.min(lb) {
+                    if agree(la.min(lb), la.max(lb)) {
                         let p = receivers[k].p;
                         let nearer = if (receivers[a].p - p).length_squared()
                             <= (receivers[b].p - p).length_squared()
@@ -350,7 +355,7 @@ impl SparsePlan {
             (lo, hi) = (lo.min(luminance(e)), hi.max(luminance(e)));
             sum += e * w;
         }
-        (hi <= (1.0 + CONTRAST) * lo).then_some(sum)
+        agree(lo, hi).then_some(sum)
     }
 }
 
