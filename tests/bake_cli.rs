@@ -441,6 +441,50 @@ fn ctrl_c_stops_bake_and_render_with_130_and_keeps_the_previous_outputs() {
     assert!(left.is_empty(), "{left:?}");
 }
 
+/// A crop of a 512² frame, whose sparse grid has anchors every 8 pixels (every 4 below 512),
+/// renders the frame's own pixels bit for bit: the spacing is the frame's, not the crop's
+/// (64 pixels wide, it would be 4).
+#[test]
+fn a_crop_of_a_large_frame_interpolates_as_the_frame() {
+    let d = dir("large-crop");
+    let cache = d.join("scene.wpc");
+    bake_ok(&cache);
+    let scene = scene();
+    let render = |out: &Path, crop: &[&str]| {
+        let mut args = vec![
+            "render",
+            scene.to_str().expect("utf-8 path"),
+            "--cache",
+            cache.to_str().expect("utf-8 path"),
+            "-o",
+            out.to_str().expect("utf-8 path"),
+            "--size",
+            "512x512",
+        ];
+        args.extend(crop);
+        assert_ok(&wpbgi(&args));
+        wpbgi::image::read_exr(out).expect("reads")
+    };
+    let whole = render(&d.join("whole.exr"), &[]);
+    let [x0, y0, x1, y1] = [200u32, 264, 264, 328];
+    let part = render(&d.join("part.exr"), &["--crop", "200,264,264,328"]);
+    assert_eq!((part.width, part.height), (x1 - x0, y1 - y0));
+    for y in y0..y1 {
+        for x in x0..x1 {
+            let (a, b) = (
+                part.pixels[((y - y0) * (x1 - x0) + x - x0) as usize],
+                whole.pixels[(y * 512 + x) as usize],
+            );
+            assert_eq!(
+                a.to_array().map(f32::to_bits),
+                b.to_array().map(f32::to_bits),
+                "({x}, {y})"
+            );
+        }
+    }
+    let _ = std::fs::remove_dir_all(&d);
+}
+
 /// `render --crop`: four crops, cut across tiles and image edges, assemble into the whole
 /// image bit for bit in every channel, each EXR placing its data window in the whole image's
 /// display window; a crop past the image is refused in one sentence.

@@ -410,6 +410,7 @@ pub fn render_final_cancellable(
     // receivers (about 230 bytes a pixel, measured) are held for one band, not for the
     // image. Every tile is computed alone, so the bands' size changes nothing in the images.
     let done = AtomicUsize::new(0);
+    let cell = sparse::coarsest_cell(w, h);
     for band in tiles.chunks(band_tiles()) {
         let t = Instant::now();
         let primary: Vec<TilePrimary> = band
@@ -435,7 +436,7 @@ pub fn render_final_cancellable(
                 let (tx, ty) = (tile.origin.0 / TILE, tile.origin.1 / TILE);
                 let size = (TILE.min(w - tx * TILE), TILE.min(h - ty * TILE));
                 let rect = (tile.origin, size, w);
-                let r = gather_tile(&ctx, &senders, &tile.receivers, rect, settings);
+                let r = gather_tile(&ctx, &senders, &tile.receivers, rect, cell, settings);
                 let n = done.fetch_add(1, Ordering::Relaxed) + 1;
                 progress("render", n as f32 / tiles.len() as f32);
                 Ok(r)
@@ -592,13 +593,15 @@ fn is_glossy(r: &Receiver, settings: &FinalSettings) -> bool {
     r.bsdf.alpha().is_some_and(|a| a < settings.glossy_below)
 }
 
-/// Gather every receiver of a tile (at `origin`, `size` pixels, in an image `width` wide);
-/// returns (pixel, weighted indirect radiance, whether it came by a glossy first hit).
+/// Gather every receiver of a tile (at `origin`, `size` pixels, in an image `width` wide, with
+/// the sparse plan's anchors every `cell` pixels); returns (pixel, weighted indirect radiance,
+/// whether it came by a glossy first hit).
 fn gather_tile(
     ctx: &Tracer,
     senders: &Senders,
     receivers: &[Receiver],
     (origin, size, width): ((u32, u32), (u32, u32), u32),
+    cell: u32,
     settings: &FinalSettings,
 ) -> (Vec<Gathered>, GatherStats) {
     let mut stats = GatherStats {
@@ -622,7 +625,7 @@ fn gather_tile(
     }
     // The grid's anchors and the receivers that cannot interpolate gather first; then the
     // others interpolate where their cell allows, finer grids gathering where it does not.
-    let plan = SparsePlan::new(receivers, origin, size, width, settings.sparse);
+    let plan = SparsePlan::new(receivers, origin, size, width, cell, settings.sparse);
     let mut value = vec![Rgb::ZERO; receivers.len()];
     let (interpolated, glossy) = plan.run(receivers, &mut value, |which, value| {
         gather_set(

@@ -37,8 +37,11 @@
 //!   pixels its viewer turns by a fraction of a degree, far less than the narrowest lobe that
 //!   gathers (α ≥ 0.03, about 2°), so the reflected light there is as smooth as the
 //!   irradiance of a diffuse surface, and the same contrast rule guards its edges.
-//! - **Anchors**: the eligible receivers on the grid of every `CELLS[0]`-th row and column of
-//!   the tile (and its last row and column). They gather.
+//! - **Anchors**: the eligible receivers on the grid of every [`coarsest_cell`]-th row and
+//!   column of the tile (and its last row and column): every 4th in frames under 512 pixels
+//!   on their shorter side, every 8th from 512. They gather. The light's smoothness belongs to the
+//!   scene, so the anchors' spacing follows the frame, not the pixel: 8 pixels of a 512²
+//!   frame span what 4 of a 256² frame span.
 //! - The others take their value from the receivers at the corners of their cell,
 //!   bilinearly, when all four exist, lie on the receiver's mesh and plane (normals within
 //!   18°, offsets from its tangent plane within a tenth of the distance), carry a BSDF that
@@ -46,9 +49,10 @@
 //!   luminance. A corner is the receiver of the same quarter, else that of a whole pixel,
 //!   else the first quarter on the receiver's surface.
 //! - **Finer cells.** Where a cell fails (an edge or a contact crosses it, a corner is
-//!   missing), the receivers on the grid of the next of [`CELLS`] inside it gather, and the rest interpolate from the finer cells around them by the same rules;
-//!   what fails there gathers. An edge through a cell then costs the gathers along it, not
-//!   the whole cell.
+//!   missing), the receivers on the grid of half its size inside it gather, and the rest
+//!   interpolate from the finer cells around them by the same rules, down to cells of 2
+//!   pixels; what fails there gathers. An edge through a cell then costs the gathers along
+//!   it, not the whole cell.
 //!
 //! Everything is decided within the tile, in receiver order: the image is the same for any
 //! thread count.
@@ -58,9 +62,33 @@ use crate::bsdf::Bsdf;
 use crate::spectrum::{luminance, Rgb};
 use std::collections::HashMap;
 
-/// Pixels between the gathering receivers along a row or column: the anchors' grid first,
-/// then the finer grids inside the cells that cannot interpolate.
-pub const CELLS: [u32; 2] = [4, 2];
+/// Pixels between the anchors along a row or column in frames under 512 pixels on their
+/// shorter side ([`coarsest_cell`]).
+pub const ANCHOR_SPACING: u32 = 4;
+
+/// The frame size (shorter side) for which [`ANCHOR_SPACING`] was chosen: the spacing doubles
+/// in frames at least twice as large, up to [`WIDEST_CELL`].
+pub const ANCHOR_FRAME: u32 = 256;
+
+/// The widest anchor spacing. At 1024², 16 saved 5–9 % more time than 8 but made the MSE
+/// 10–19 % worse on cbox-rough and cbox-glossy (docs/render.md).
+pub const WIDEST_CELL: u32 = 8;
+
+/// The anchors' spacing in a frame of `width` × `height` pixels: [`ANCHOR_SPACING`], doubled
+/// for each doubling of the shorter side past [`ANCHOR_FRAME`], up to [`WIDEST_CELL`]. It depends on the whole frame only, so a crop interpolates as the frame
+/// does.
+pub fn coarsest_cell(width: u32, height: u32) -> u32 {
+    let mut cell = ANCHOR_SPACING;
+    let mut frame = ANCHOR_FRAME;
+    while cell < WIDEST_CELL && width.min(height) >= 2 * frame {
+        cell *= 2;
+        frame *= 2;
+    }
+    cell
+}
+
+/// The finest cells: 2 pixels, whose receivers are the next pixel over from their corners.
+const FINEST_CELL: u32 = 2;
 
 /// The most the brightest corner of a cell may exceed the darkest, relative to it, for the
 /// receivers inside to interpolate (see docs/render.md for the measure).
@@ -83,6 +111,8 @@ pub(crate) struct SparsePlan {
     irradiance: Vec<bool>,
     /// Every eligible receiver by its place in the tile's layers.
     at: HashMap<Key, u32>,
+    /// The cells' sizes, coarsest first, halving down to [`FINEST_CELL`].
+    cell_sizes: Vec<u32>,
     /// The tile's origin in the image, its size, and the image's width.
     origin: (u32, u32),
     size: (u32, u32),
@@ -149,14 +179,20 @@ fn cell_of(c: u32, n: u32, cell: u32) -> (u32, u32, f32) {
 
 impl SparsePlan {
     /// The plan for the receivers of the tile at `origin` of `size` pixels, in an image
-    /// `width` wide. With `sparse` false every receiver gathers.
+    /// `width` wide, with anchors every `coarsest` pixels (a power of two, at least
+    /// [`FINEST_CELL`]: [`coarsest_cell`]). With `sparse` false every receiver gathers.
     pub fn new(
         receivers: &[Receiver],
         origin: (u32, u32),
         size: (u32, u32),
         width: u32,
+        coarsest: u32,
         sparse: bool,
     ) -> SparsePlan {
+        let cell_sizes: Vec<u32> =
+            std::iter::successors(Some(coarsest.max(FINEST_CELL)), |&c| Some(c / 2))
+                .take_while(|&c| c >= FINEST_CELL)
+                .collect();
         // Each receiver's tile-local pixel, and its place in the layers.
         let cells: Vec<(u32, u32, Key)> = receivers
             .iter()
@@ -216,7 +252,8 @@ impl SparsePlan {
                     at.insert(key, k as u32);
                 }
                 l.is_none()
-                    && (!e || (on_grid(x, size.0, CELLS[0]) && on_grid(y, size.1, CELLS[0])))
+                    && (!e
+                        || (on_grid(x, size.0, cell_sizes[0]) && on_grid(y, size.1, cell_sizes[0])))
             })
             .collect();
         let irradiance = receivers
@@ -231,6 +268,7 @@ impl SparsePlan {
             lender,
             irradiance,
             at,
+            cell_sizes,
             origin,
             size,
             width,
@@ -277,8 +315,8 @@ impl SparsePlan {
             }
         }
         gather(&disagree, value);
-        for (level, &cell) in CELLS.iter().enumerate() {
-            let finer = CELLS.get(level + 1).copied();
+        for (level, &cell) in self.cell_sizes.iter().enumerate() {
+            let finer = self.cell_sizes.get(level + 1).copied();
             let (mut now, mut later) = (Vec::new(), Vec::new());
             for k in pending {
                 match self.interpolate(receivers, k, cell, |j| value[j]) {
@@ -370,11 +408,16 @@ mod tests {
     /// Receivers on the plane z = 0 (mesh 0), one per pixel of an 8 × 8 tile at the image's
     /// corner, pixel (x, y) at (x, y, 0) facing +z.
     fn plane() -> Vec<Receiver> {
-        (0..64u32)
+        plane_of(8)
+    }
+
+    /// [`plane`] over an `n` × `n` tile.
+    fn plane_of(n: u32) -> Vec<Receiver> {
+        (0..n * n)
             .map(|pixel| Receiver {
                 pixel,
                 weight: Rgb::ONE,
-                p: Vec3::new((pixel % 8) as f32, (pixel / 8) as f32, 0.0),
+                p: Vec3::new((pixel % n) as f32, (pixel / n) as f32, 0.0),
                 err: Vec3::ZERO,
                 ng: Vec3::Z,
                 mesh: 0,
@@ -396,7 +439,7 @@ mod tests {
     #[test]
     fn interpolates_within_a_surface_where_the_corners_agree() {
         let receivers = plane();
-        let plan = SparsePlan::new(&receivers, (0, 0), (8, 8), 8, true);
+        let plan = SparsePlan::new(&receivers, (0, 0), (8, 8), 8, ANCHOR_SPACING, true);
         let anchors: Vec<u32> = (0..64).filter(|&k| plan.first[k as usize]).collect();
         let expected: Vec<u32> = (0..64)
             .filter(|k| [0, 4, 7].contains(&(k % 8)) && [0, 4, 7].contains(&(k / 8)))
@@ -409,7 +452,7 @@ mod tests {
         };
         for k in (0..64).filter(|&k| !plan.first[k]) {
             let got = plan
-                .interpolate(&receivers, k, CELLS[0], e)
+                .interpolate(&receivers, k, ANCHOR_SPACING, e)
                 .expect("interpolates");
             assert!(
                 (got - e(k)).abs().max_element() < 1e-6,
@@ -423,7 +466,12 @@ mod tests {
         let changed = |f: &dyn Fn(&mut Receiver)| {
             let mut r = receivers.clone();
             f(&mut r[corner]);
-            SparsePlan::new(&r, (0, 0), (8, 8), 8, true).interpolate(&r, k, CELLS[0], e)
+            SparsePlan::new(&r, (0, 0), (8, 8), 8, ANCHOR_SPACING, true).interpolate(
+                &r,
+                k,
+                ANCHOR_SPACING,
+                e,
+            )
         };
         assert!(changed(&|r| r.mesh = 1).is_none(), "another mesh");
         let turned = Frame::from_normal(Vec3::new(0.0, 0.4, 1.0).normalize());
@@ -431,7 +479,8 @@ mod tests {
         assert!(changed(&|r| r.p.z = 0.5).is_none(), "a step off the plane");
         let bright = |j: usize| if j == corner { e(j) * 1.4 } else { e(j) };
         assert!(
-            plan.interpolate(&receivers, k, CELLS[0], bright).is_none(),
+            plan.interpolate(&receivers, k, ANCHOR_SPACING, bright)
+                .is_none(),
             "disagreeing corners"
         );
         // A conductor among diffuse corners cannot take their irradiance: it interpolates
@@ -446,33 +495,33 @@ mod tests {
         };
         let mut shiny = receivers.clone();
         shiny[k].bsdf = gold(0.3);
-        let plan = SparsePlan::new(&shiny, (0, 0), (8, 8), 8, true);
-        assert!(plan.interpolate(&shiny, k, CELLS[0], e).is_none());
+        let plan = SparsePlan::new(&shiny, (0, 0), (8, 8), 8, ANCHOR_SPACING, true);
+        assert!(plan.interpolate(&shiny, k, ANCHOR_SPACING, e).is_none());
         for r in shiny.iter_mut() {
             r.bsdf = gold(0.3);
         }
-        let plan = SparsePlan::new(&shiny, (0, 0), (8, 8), 8, true);
+        let plan = SparsePlan::new(&shiny, (0, 0), (8, 8), 8, ANCHOR_SPACING, true);
         let got = plan
-            .interpolate(&shiny, k, CELLS[0], e)
+            .interpolate(&shiny, k, ANCHOR_SPACING, e)
             .expect("interpolates");
         assert!((got - e(k)).abs().max_element() < 1e-6);
         assert!(
             !plan.by_irradiance(k),
             "a conductor's value is its radiance"
         );
-        let diffuse = SparsePlan::new(&receivers, (0, 0), (8, 8), 8, true);
+        let diffuse = SparsePlan::new(&receivers, (0, 0), (8, 8), 8, ANCHOR_SPACING, true);
         assert!(
             diffuse.by_irradiance(k),
             "a diffuse one's is its irradiance"
         );
         shiny[corner].bsdf = gold(0.31);
-        let plan = SparsePlan::new(&shiny, (0, 0), (8, 8), 8, true);
+        let plan = SparsePlan::new(&shiny, (0, 0), (8, 8), 8, ANCHOR_SPACING, true);
         assert!(
-            plan.interpolate(&shiny, k, CELLS[0], e).is_none(),
+            plan.interpolate(&shiny, k, ANCHOR_SPACING, e).is_none(),
             "a corner of another roughness"
         );
         // Off, everyone gathers.
-        let dense = SparsePlan::new(&receivers, (0, 0), (8, 8), 8, false);
+        let dense = SparsePlan::new(&receivers, (0, 0), (8, 8), 8, ANCHOR_SPACING, false);
         assert!((0..64).all(|k| dense.first[k]));
     }
 
@@ -495,7 +544,7 @@ mod tests {
         size: (u32, u32),
         light: impl Fn(Vec3) -> Rgb,
     ) -> Vec<(Rgb, bool)> {
-        let plan = SparsePlan::new(receivers, (0, 0), size, size.0, true);
+        let plan = SparsePlan::new(receivers, (0, 0), size, size.0, ANCHOR_SPACING, true);
         let mut value = vec![Rgb::splat(f32::NAN); receivers.len()];
         let mut gathered = vec![false; receivers.len()];
         let (interpolated, _) = plan.run(receivers, &mut value, |which, value| {
@@ -579,7 +628,7 @@ mod tests {
             r.chain = 0;
             r.mesh = 0;
         }
-        let plan = SparsePlan::new(&edge, (0, 0), (8, 8), 8, true);
+        let plan = SparsePlan::new(&edge, (0, 0), (8, 8), 8, ANCHOR_SPACING, true);
         let quarters: Vec<usize> = (0..edge.len())
             .filter(|&k| edge[k].quarter.is_some())
             .collect();
@@ -591,7 +640,7 @@ mod tests {
         let pixel = 64 + 5 * 8 + 6;
         let mut twice = receivers.clone();
         twice.push(twice[pixel].clone());
-        let plan = SparsePlan::new(&twice, (0, 0), (8, 8), 8, true);
+        let plan = SparsePlan::new(&twice, (0, 0), (8, 8), 8, ANCHOR_SPACING, true);
         assert!(plan.first[pixel] && plan.first[twice.len() - 1]);
     }
 
@@ -624,6 +673,70 @@ mod tests {
         let out = passes_with(&receivers, (8, 8), step);
         assert!([q0, q1, q2, q3].iter().all(|&q| out[q].1));
         assert_eq!(out[q1].0, step(receivers[q1].p));
+    }
+
+    /// The anchors' spacing doubles with the frame's shorter side from 512 pixels, up to 8,
+    /// and a crop's spacing is its frame's (the argument is the frame).
+    #[test]
+    fn anchor_spacing_follows_the_frame() {
+        for ((w, h), cell) in [
+            ((64, 64), 4),
+            ((256, 256), 4),
+            ((511, 4096), 4),
+            ((4096, 511), 4),
+            ((512, 512), 8),
+            ((1920, 1080), 8),
+            ((16384, 16384), 8),
+        ] {
+            assert_eq!(coarsest_cell(w, h), cell, "{w} × {h}");
+        }
+    }
+
+    /// Anchors every 8 pixels in a 16 × 16 tile: only the 3 × 3 grid (0, 8 and the last line)
+    /// gathers on a plane lit bilinearly (half [`bilinear`]'s slopes, so that corners 8 pixels
+    /// apart agree to [`CONTRAST`]), and the rest interpolates exactly. With a corner
+    /// of the grid on another mesh, the cells refine through 4 to 2 pixels around it: the
+    /// failed cell's grid of 4 gathers, then only the pixels next to the foreign corner.
+    #[test]
+    fn coarser_anchors_refine_down_to_pairs() {
+        let n = 16;
+        let run = |receivers: &[Receiver]| {
+            let plan = SparsePlan::new(receivers, (0, 0), (n, n), n, 8, true);
+            let mut value = vec![Rgb::splat(f32::NAN); receivers.len()];
+            let mut gathered = Vec::new();
+            plan.run(receivers, &mut value, |which, value| {
+                for &k in which {
+                    gathered.push(k as u32);
+                    value[k] = bilinear(0.5 * receivers[k].p);
+                }
+            });
+            for (k, e) in value.iter().enumerate() {
+                let want = bilinear(0.5 * receivers[k].p);
+                assert!((*e - want).abs().max_element() < 1e-5, "{k}: {e} vs {want}");
+            }
+            gathered.sort_unstable();
+            gathered
+        };
+        let on = |lines: &[u32]| -> Vec<u32> {
+            (0..n * n)
+                .filter(|k| lines.contains(&(k % n)) && lines.contains(&(k / n)))
+                .collect()
+        };
+        let mut receivers = plane_of(n);
+        assert_eq!(run(&receivers), on(&[0, 8, 15]));
+        let corner = 15 * n + 15;
+        receivers[corner as usize].mesh = 1;
+        // The failed cell (8..15)²: its grid of 4 gathers where no grid line of 8 clear of
+        // (15, 15) holds it ((12, 8) and (8, 12) take their line's two corners), then the
+        // failed cell of 4 (12..15)²'s grid of 2 beside the foreign corner.
+        let mut want: Vec<u32> = on(&[0, 8, 15]);
+        want.extend(
+            [(12, 12), (15, 12), (12, 15), (14, 14), (15, 14), (14, 15)]
+                .iter()
+                .map(|&(x, y)| y * n + x),
+        );
+        want.sort_unstable();
+        assert_eq!(run(&receivers), want);
     }
 
     /// A tile narrower than a cell past a grid line (5 pixels: columns 0, 4 on the grid, 4 the

@@ -111,8 +111,9 @@ pub struct RenderArgs {
     #[arg(long)]
     pub uniform: bool,
     /// Every receiver gathers (by default receivers gather on a grid of every 4th pixel, every
-    /// 2nd where a cell fails, and interpolate between where the light is smooth on one
-    /// surface, seen directly or through the same mirrors and glass: docs/render.md).
+    /// 8th in frames of 512 pixels a side or more, halved where a cell fails down to every
+    /// 2nd, and interpolate between where the light is smooth on one surface, seen directly or
+    /// through the same mirrors and glass: docs/render.md).
     #[arg(long)]
     pub dense: bool,
     /// Emitter samples per pixel for direct light (at each rough hit; a pixel of many camera
