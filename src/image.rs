@@ -559,5 +559,6 @@ mod tests {
         let jpeg = std::fs::read(&c).expect("c");
         assert_eq!(&jpeg[..2], &[0xff, 0xd8], "not a JPEG");
         assert!(write_display(&a, &img, f32::NAN, ViewTransform::Srgb).is_err());
+        let _ = std::fs::remove_dir_all(&dir);
     }
 }

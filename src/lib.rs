@@ -33,8 +33,10 @@
 //! let camera = scene.default_camera(64, 64)?;
 //! let frame = render(&scene, &cache, &camera, &RenderSettings::default(), &|_, _| {})?;
 //! assert!(frame.beauty.pixels.iter().all(|p| p.is_finite()));
-//! wpbgi::image::write_exr(&std::env::temp_dir().join("wpbgi-doc.exr"), &frame.beauty)?;
+//! let image_path = std::env::temp_dir().join(format!("wpbgi-doc-{}.exr", std::process::id()));
+//! wpbgi::image::write_exr(&image_path, &frame.beauty)?;
 //! # std::fs::remove_file(&cache_path).ok();
+//! # std::fs::remove_file(&image_path).ok();
 //! # Ok(()) }
 //! ```
 

@@ -1,6 +1,8 @@
 //! The bake as a whole (issue 3 acceptance): scale invariance, thread-count independence, and
 //! the cache written from it read back.
 
+mod common;
+
 use std::path::Path;
 use wpbgi::bake::store::write;
 use wpbgi::bake::{bake, BakeSettings, Baked};
@@ -159,8 +161,7 @@ fn radiance_field_is_independent_of_decimal_scales() {
 #[test]
 fn cache_is_identical_for_any_thread_count_and_reads_back() {
     let scene = cbox();
-    let dir = std::env::temp_dir().join(format!("wpbgi-bake-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
+    let dir = common::Scratch::new("bake");
     let hash = bake_hash(&scene, &settings().to_json());
     let mut files = Vec::new();
     for threads in [1, 2] {
@@ -384,8 +385,7 @@ fn surfel_density_refines_the_named_material() {
 fn multi_bounce_cache_is_identical_for_any_thread_count_and_transport_budget() {
     use wpbgi::bake::bounce::BounceSettings;
     let scene = cbox();
-    let dir = std::env::temp_dir().join(format!("wpbgi-transport-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
+    let dir = common::Scratch::new("transport");
     let with_budget = |budget: Option<u64>| BakeSettings {
         bounces: BounceSettings {
             transport_budget: budget,

@@ -1,6 +1,8 @@
 //! `wpbgi bake`, `inspect` and `render` from the outside: byte-identical caches for any thread
 //! count, a killed bake never damages the target, stale caches refused, inspect and PLY output.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use std::time::Duration;
@@ -11,10 +13,8 @@ fn scene() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mitsuba/cbox-rough.gltf")
 }
 
-fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("wpbgi-cli-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&d).expect("temp dir");
-    d
+fn dir(name: &str) -> common::Scratch {
+    common::Scratch::new(&format!("cli-{name}"))
 }
 
 fn wpbgi(args: &[&str]) -> Output {
@@ -482,7 +482,6 @@ fn a_crop_of_a_large_frame_interpolates_as_the_frame() {
             );
         }
     }
-    let _ = std::fs::remove_dir_all(&d);
 }
 
 /// `render --crop`: four crops, cut across tiles and image edges, assemble into the whole

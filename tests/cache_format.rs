@@ -1,14 +1,14 @@
 //! The `.wpc` container: round trip, and every kind of damage refused with its own error.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use wpbgi::cache::{content_hash, write, Cache, CacheError, ALIGNMENT, FORMAT_VERSION};
 use xxhash_rust::xxh3::xxh3_64;
 
 /// A folder of its own per test (tests run in parallel, and one checks for leftover files).
-fn dir(test: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("wpbgi-cache-{test}-{}", std::process::id()));
-    std::fs::create_dir_all(&d).expect("temp dir");
-    d
+fn dir(test: &str) -> common::Scratch {
+    common::Scratch::new(&format!("cache-{test}"))
 }
 
 fn sections() -> Vec<(&'static str, Vec<u8>)> {
@@ -23,19 +23,22 @@ fn sections() -> Vec<(&'static str, Vec<u8>)> {
     ]
 }
 
-fn sample_file(name: &str) -> (PathBuf, Vec<u8>, [u8; 16]) {
-    let path = dir(name).join(name);
+/// A sample cache `name` in a scratch folder of its own (kept while the first value lives),
+/// its bytes and its hash.
+fn sample_file(name: &str) -> (common::Scratch, PathBuf, Vec<u8>, [u8; 16]) {
+    let dir = dir(name);
+    let path = dir.join(name);
     let hash = content_hash(&[b"scene bytes", b"settings"]);
     let s = sections();
     let refs: Vec<(&str, &[u8])> = s.iter().map(|(n, b)| (*n, b.as_slice())).collect();
     write(&path, hash, &refs).expect("writes");
     let bytes = std::fs::read(&path).expect("reads");
-    (path, bytes, hash)
+    (dir, path, bytes, hash)
 }
 
 #[test]
 fn round_trip() {
-    let (path, bytes, hash) = sample_file("round.wpc");
+    let (_dir, path, bytes, hash) = sample_file("round.wpc");
     let c = Cache::read(&path, Some(hash)).expect("valid");
     assert_eq!(c.version, FORMAT_VERSION);
     assert_eq!(c.len(), bytes.len());
@@ -67,7 +70,7 @@ fn round_trip() {
 /// to its end: the rule farm renders rely on (docs/farm.md).
 #[test]
 fn a_mapped_cache_survives_a_new_one_renamed_over_it() {
-    let (path, _, hash) = sample_file("replaced.wpc");
+    let (_dir, path, _, hash) = sample_file("replaced.wpc");
     let old = Cache::read(&path, Some(hash)).expect("valid");
     let new_hash = content_hash(&[b"another scene"]);
     write(&path, new_hash, &[("plan", b"{}".as_slice())]).expect("writes");
@@ -80,7 +83,7 @@ fn a_mapped_cache_survives_a_new_one_renamed_over_it() {
 
 #[test]
 fn every_truncation_is_reported_as_truncated() {
-    let (path, bytes, _) = sample_file("trunc.wpc");
+    let (_dir, path, bytes, _) = sample_file("trunc.wpc");
     for len in 0..bytes.len() {
         match Cache::parse(&path, bytes[..len].to_vec(), None) {
             Err(CacheError::Truncated { .. }) => {}
@@ -91,7 +94,7 @@ fn every_truncation_is_reported_as_truncated() {
 
 #[test]
 fn every_flipped_byte_is_refused() {
-    let (path, bytes, _) = sample_file("flip.wpc");
+    let (_dir, path, bytes, _) = sample_file("flip.wpc");
     let c = Cache::parse(&path, bytes.clone(), None).expect("valid");
     for at in 0..bytes.len() {
         let mut b = bytes.clone();
@@ -125,7 +128,7 @@ fn reseal(mut b: Vec<u8>, at: usize, value: &[u8]) -> Vec<u8> {
 
 #[test]
 fn foreign_newer_byte_order_and_stale_files_have_their_own_errors() {
-    let (path, bytes, hash) = sample_file("kinds.wpc");
+    let (_dir, path, bytes, hash) = sample_file("kinds.wpc");
     let p = Path::new(&path);
     let mut foreign = bytes.clone();
     foreign[1] = b'X';

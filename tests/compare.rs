@@ -3,6 +3,8 @@
 //! writes report.json as docs/commands.md documents it, a plot with both curves as SVG and PNG, and
 //! a summary; render stores the error it prints, equal to the error recomputed from the files.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 use wpbgi::image::{read_exr, write_exr};
@@ -13,10 +15,8 @@ fn root(path: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(path)
 }
 
-fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("wpbgi-compare-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&d).expect("temp dir");
-    d
+fn dir(name: &str) -> common::Scratch {
+    common::Scratch::new(&format!("compare-{name}"))
 }
 
 fn wpbgi(args: &[&str]) -> Output {

@@ -11,10 +11,8 @@ use std::path::{Path, PathBuf};
 use wpbgi::reference::{render, RenderSettings};
 use wpbgi::scene::Scene;
 
-fn dir() -> PathBuf {
-    let d = std::env::temp_dir().join(format!("wpbgi-cutout-{}", std::process::id()));
-    std::fs::create_dir_all(&d).expect("temp dir");
-    d
+fn dir() -> common::Scratch {
+    common::Scratch::new("cutout")
 }
 
 /// The scene as glTF text: `occluder` is the occluder's material (`None`: no occluder).

@@ -2,6 +2,8 @@
 //! as `wpbgi bake` does by default (bounces included), renders from the cache, measures the
 //! error against Mitsuba 3's max_depth-8 render, and draws the headless preview.
 
+mod common;
+
 use std::path::Path;
 use std::process::Command;
 
@@ -14,10 +16,10 @@ const MOST_REL_MSE: f64 = 2.5e-3;
 
 #[test]
 fn the_demo_bakes_bounces_renders_compares_and_previews() {
-    let dir = std::env::temp_dir().join(format!("wpbgi-demo-{}", std::process::id()));
+    let dir = common::Scratch::new("demo");
     let out = Command::new(env!("CARGO_BIN_EXE_wpbgi"))
         .args(["demo", "--json", "-o"])
-        .arg(&dir)
+        .arg(&*dir)
         .output()
         .expect("runs");
     assert!(
@@ -64,5 +66,4 @@ fn the_demo_bakes_bounces_renders_compares_and_previews() {
         ((a - b).length() / b.length()) < 0.05,
         "mean {a} against Mitsuba's {b}"
     );
-    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -3,6 +3,8 @@
 //! to Mitsuba's reference, the same bytes for 1 and 2 threads, and without the library the
 //! command stops with one sentence that says what to install.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -12,10 +14,8 @@ fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
 }
 
-fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("wpbgi-denoise-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&d).expect("temp dir");
-    d
+fn dir(name: &str) -> common::Scratch {
+    common::Scratch::new(&format!("denoise-{name}"))
 }
 
 fn utf8(p: &Path) -> &str {

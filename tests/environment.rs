@@ -148,8 +148,6 @@ fn environment_map_lights_the_floor_by_its_orientation() {
     }
 }
 
-fn tempdir() -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("wpbgi-environment-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir
+fn tempdir() -> common::Scratch {
+    common::Scratch::new("environment")
 }

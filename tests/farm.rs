@@ -3,6 +3,8 @@
 //! single-node Slurm started by the test. Every route must give frames equal byte for byte
 //! to a single-process `render --frames` of the same cache.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output, Stdio};
 use std::time::{Duration, Instant};
@@ -19,11 +21,8 @@ fn root() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
 }
 
-fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("wpbgi-farm-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).expect("temp dir");
-    d
+fn dir(name: &str) -> common::Scratch {
+    common::Scratch::new(&format!("farm-{name}"))
 }
 
 fn utf8(p: &Path) -> &str {

@@ -75,8 +75,7 @@ fn irradiance(p: Vec3, n: Vec3, l: f64) -> f64 {
 }
 
 fn senders() -> Senders {
-    let dir = std::env::temp_dir().join(format!("wpbgi-gather-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::Scratch::new("gather");
     let gltf = dir.join("square.gltf");
     std::fs::write(&gltf, lit_square()).unwrap();
     let scene = Scene::load(&gltf).unwrap();
@@ -188,8 +187,7 @@ fn a_solid_reaches_only_its_own_solid_as_leaves() {
             buffer["uri"] = format!("{data}{uri}").into();
         }
     }
-    let dir = std::env::temp_dir().join(format!("wpbgi-two-solids-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    let dir = common::Scratch::new("two-solids");
     let gltf = dir.join("two-spheres.gltf");
     std::fs::write(&gltf, g.to_string()).unwrap();
     let scene = Scene::load(&gltf).unwrap();

@@ -1,7 +1,7 @@
 //! Bad input never panics: each broken file gives its own clear error naming the file and the
 //! object (or, for degenerate triangles, a warning and a dropped triangle).
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use wpbgi::scene::Scene;
 use wpbgi::Error;
 
@@ -10,14 +10,13 @@ use common::{b64, triangle_gltf};
 
 const TRI: [[f32; 3]; 3] = [[0., 0., 0.], [1., 0., 0.], [0., 1., 0.]];
 
-fn dir() -> PathBuf {
-    let d = std::env::temp_dir().join(format!("wpbgi-import-{}", std::process::id()));
-    std::fs::create_dir_all(&d).unwrap();
-    d
+fn dir() -> common::Scratch {
+    common::Scratch::new("import")
 }
 
 fn load_str(name: &str, text: &str) -> Result<Scene, Error> {
-    let p = dir().join(name);
+    let dir = dir();
+    let p = dir.join(name);
     std::fs::write(&p, text).unwrap();
     Scene::load(&p)
 }
@@ -52,7 +51,8 @@ fn minimal_glb() -> Vec<u8> {
 #[test]
 fn truncated_glb() {
     let glb = minimal_glb();
-    let p = dir().join("truncated.glb");
+    let dir = dir();
+    let p = dir.join("truncated.glb");
     std::fs::write(&p, &glb[..glb.len() - 9]).unwrap();
     let m = message(Scene::load(&p));
     assert!(m.contains("truncated.glb") && m.contains("GLB"), "{m}");
@@ -62,7 +62,8 @@ fn truncated_glb() {
 fn wrong_magic() {
     let mut glb = minimal_glb();
     glb[..4].copy_from_slice(b"gLTF");
-    let p = dir().join("magic.glb");
+    let dir = dir();
+    let p = dir.join("magic.glb");
     std::fs::write(&p, &glb).unwrap();
     let m = message(Scene::load(&p));
     assert!(m.contains("magic.glb") && m.contains("magic"), "{m}");

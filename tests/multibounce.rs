@@ -33,8 +33,7 @@ fn against_depth_8(name: &str, bounces: BounceSettings, window: [u32; 4]) -> Aga
         bounces,
         ..BakeSettings::preset(Quality::Draft).direct_only()
     };
-    let dir = std::env::temp_dir().join(format!("wpbgi-multibounce-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
+    let dir = common::Scratch::new("multibounce");
     let cache = common::bake_to_cache(&scene, &settings, &dir.join(format!("{name}.wpc")));
     // The cache records what the bake did: exactly the bounces asked for, when a number was.
     if bounces.tolerance == 0.0 {

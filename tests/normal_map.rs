@@ -24,10 +24,8 @@ use wpbgi::scene::Scene;
 const ALBEDO: f32 = 0.5;
 const IRRADIANCE: f32 = 3.0;
 
-fn dir() -> PathBuf {
-    let d = std::env::temp_dir().join(format!("wpbgi-normal-map-{}", std::process::id()));
-    std::fs::create_dir_all(&d).expect("temp dir");
-    d
+fn dir() -> common::Scratch {
+    common::Scratch::new("normal-map")
 }
 
 /// The stage with the normal map `texel` (8-bit RGB) and the light travelling along

@@ -2,6 +2,8 @@
 //! Xvfb (a scripted orbit, then a screenshot read back from the swapchain that must match the
 //! headless frame). CI installs Xvfb and lavapipe (scripts/test.sh); a missing one fails.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -11,10 +13,8 @@ fn scene() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cbox-rough.gltf")
 }
 
-fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("wpbgi-preview-{name}-{}", std::process::id()));
-    std::fs::create_dir_all(&d).expect("temp dir");
-    d
+fn dir(name: &str) -> common::Scratch {
+    common::Scratch::new(&format!("preview-{name}"))
 }
 
 fn run(cmd: &mut Command) -> Output {

@@ -5,6 +5,8 @@
 //! the array is bit for bit the EXR `wpbgi render` writes from it. The USD pipeline example
 //! (python/examples/usd_pipeline.py) runs on the same installed package with Pixar's usd-core.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -81,8 +83,7 @@ fn pip_installed_package_bakes_and_renders_what_the_cli_does() {
         return;
     };
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cbox-rough.gltf");
-    let dir = std::env::temp_dir().join(format!("wpbgi-python-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
+    let dir = common::Scratch::new("python");
     let (py_cache, py_image) = (dir.join("python.wpc"), dir.join("python.f32"));
     let out = Command::new(&python)
         .args(["-c", SCRIPT])
@@ -142,7 +143,6 @@ fn pip_installed_package_bakes_and_renders_what_the_cli_does() {
     let from_python = std::fs::read(&py_image).expect("python's array");
     assert_eq!(from_python.len(), 48 * 32 * 3 * 4);
     assert!(from_python == from_cli, "the images differ");
-    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// The example's JSON line for `stage`.
@@ -185,8 +185,7 @@ fn usd_pipeline_records_the_cache_and_reuses_it_while_it_is_good() {
         );
         return;
     }
-    let dir = std::env::temp_dir().join(format!("wpbgi-usd-pipeline-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
+    let dir = common::Scratch::new("usd-pipeline");
     let stage = dir.join("cbox.usda");
     let source = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/usd/cbox-diffuse.usda");
     std::fs::copy(&source, &stage).expect("copy the stage");
@@ -237,5 +236,4 @@ fn usd_pipeline_records_the_cache_and_reuses_it_while_it_is_good() {
     assert_eq!(fourth["baked"], true, "{fourth}");
     assert_eq!(fourth["reason"], "the recorded cache is missing or stale");
     assert_eq!(fourth["hash"], third["hash"]);
-    let _ = std::fs::remove_dir_all(dir);
 }

@@ -22,11 +22,8 @@ fn settings() -> BakeSettings {
 }
 
 /// A fresh scratch folder for test `name`.
-fn scratch(name: &str) -> std::path::PathBuf {
-    let d = std::env::temp_dir().join(format!("wpbgi-relight-{name}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).expect("scratch folder");
-    d
+fn scratch(name: &str) -> common::Scratch {
+    common::Scratch::new(&format!("relight-{name}"))
 }
 
 fn edits(list: &[&str]) -> Vec<Edit> {

@@ -26,8 +26,7 @@ fn baked(name: &str) -> (Scene, BakedCache) {
     static CALLS: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
     let call = CALLS.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     let scene = Scene::load(&common::mitsuba_data(&format!("{name}.gltf"))).expect("scene");
-    let dir = std::env::temp_dir().join(format!("wpbgi-render-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
+    let dir = common::Scratch::new(&format!("render-{name}"));
     let settings = BakeSettings::preset(Quality::Draft).direct_only();
     let path = dir.join(format!("{name}-{call}.wpc"));
     let cache = common::bake_to_cache(&scene, &settings, &path);

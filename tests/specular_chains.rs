@@ -31,8 +31,7 @@ const BIAS: f64 = 0.05;
 
 #[test]
 fn mirror_box_and_glass_sphere_match_the_path_tracer() {
-    let dir = std::env::temp_dir().join(format!("wpbgi-chains-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
+    let dir = common::Scratch::new("chains");
     let original = std::fs::read_to_string(
         Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mitsuba/cbox-rough.gltf"),
     )

@@ -4,6 +4,8 @@
 //! compose; a third-party Cornell box renders with its own camera; broken files give errors.
 //! Fixtures: tests/data/usd (tests/data/README.md).
 
+mod common;
+
 use glam::{Vec2, Vec3};
 use std::path::{Path, PathBuf};
 use wpbgi::bsdf::Bsdf;
@@ -195,8 +197,7 @@ fn third_party_cornell_box_renders_with_its_own_camera() {
 
 #[test]
 fn broken_usd_files_give_clear_errors() {
-    let dir = std::env::temp_dir().join(format!("wpbgi-usd-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
+    let dir = common::Scratch::new("usd");
     let write = |name: &str, bytes: &[u8]| {
         let p = dir.join(name);
         std::fs::write(&p, bytes).expect("write");

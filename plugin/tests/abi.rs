@@ -197,7 +197,6 @@ fn bake_and_render_equal_the_rust_api_byte_for_byte() {
         same_bits(&from_file, &rust_rgb),
         "the EXR holds the same floats"
     );
-    let _ = std::fs::remove_dir_all(dir);
 }
 
 /// When to ask for a stop, given the stage and its fraction.
@@ -314,7 +313,6 @@ fn cancelling_from_the_callback_stops_promptly_and_writes_nothing() {
         .collect();
     left.sort();
     assert_eq!(left, ["full.wpc"]);
-    let _ = std::fs::remove_dir_all(dir);
 }
 
 #[test]
@@ -325,7 +323,6 @@ fn a_cancelled_bake_keeps_the_previous_cache() {
     let (status, _, _) = watched_bake(|s, f| s == "direct light" && f > 0.0, &path);
     assert_eq!(status, WPBGI_CANCELLED);
     assert_eq!(std::fs::read(&path).expect("read"), b"the previous cache");
-    let _ = std::fs::remove_dir_all(dir);
 }
 
 /// Assert `status` is `expected` and the message mentions every word of `words`.
@@ -555,7 +552,6 @@ fn invalid_arguments_return_a_code_and_a_message() {
         wpbgi_scene_free(null_mut());
         wpbgi_cache_free(null_mut());
     }
-    let _ = std::fs::remove_dir_all(dir);
 }
 
 #[test]
@@ -568,7 +564,6 @@ fn a_cache_of_another_scene_or_setting_is_refused() {
     let (status, message) = Cache::open(&other, &path).err().expect("refused");
     assert_eq!(status, WPBGI_FAILED);
     assert!(message.contains("glossy.wpc"), "{message}");
-    let _ = std::fs::remove_dir_all(dir);
 }
 
 #[test]
@@ -621,7 +616,6 @@ fn headless_preview_equals_the_rust_api() {
         "the ABI's preview differs from the Rust API's"
     );
     assert!(rgb.iter().any(|&v| v > 0.0));
-    let _ = std::fs::remove_dir_all(dir);
 }
 
 /// `wpbgi_scene_load_at`: a USD stage whose mesh moves between time codes 1 and 10 (the

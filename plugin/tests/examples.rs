@@ -183,9 +183,8 @@ print("python errors ok")
     let log = run(Command::new(&python)
         .args(["-c", check])
         .arg(scene_path())
-        .arg(&dir)
+        .arg(&*dir)
         .env("PYTHONPATH", plugin_dir().join("python"))
         .env("WPBGI_LIBRARY", library_path()));
     assert!(log.contains("python errors ok"), "{log}");
-    let _ = std::fs::remove_dir_all(dir);
 }

@@ -2,6 +2,11 @@
 //! subset, hence the `dead_code` allowance.
 #![allow(dead_code)]
 
+mod scratch;
+
+#[allow(unused_imports)] // not every test binary writes files
+pub use scratch::Scratch;
+
 use glam::Vec3;
 use wpbgi::scene::Mesh;
 

@@ -15,12 +15,12 @@ pub fn scene_path() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/mitsuba/cbox-glossy.gltf")
 }
 
-/// A fresh, empty folder for one test.
-pub fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("wpbgi-plugin-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).expect("create a scratch folder");
-    dir
+#[path = "../../../tests/common/scratch.rs"]
+mod scratch;
+
+/// A fresh, empty folder for one test, removed when it passes.
+pub fn scratch(name: &str) -> scratch::Scratch {
+    scratch::Scratch::new(&format!("plugin-{name}"))
 }
 
 /// The small bake every test uses: the default preset (`wpbgi_bake_settings_init`'s) with
