@@ -122,7 +122,11 @@ fn modes() -> Vec<Mode> {
         },
         Mode {
             name: "paths, 16 rays, denoised",
-            settings: paths,
+            // As `render --denoise` sets it: through glossy hits, for the denoiser.
+            settings: FinalSettings {
+                paths_through_glossy: true,
+                ..paths
+            },
             denoised: true,
         },
     ]

@@ -322,6 +322,7 @@ const RENDER_KEYS: &[&str] = &[
     "clusters",
     "far_eps",
     "spp",
+    "paths_through_glossy",
     "sparse",
     "seed",
 ];
@@ -359,6 +360,7 @@ fn render_settings(settings: Option<&Bound<'_, PyDict>>) -> PyResult<wpbgi::Rend
             "clusters" => s.clusters = value.extract()?,
             "far_eps" => s.far_eps = value.extract()?,
             "spp" => s.spp = value.extract()?,
+            "paths_through_glossy" => s.paths_through_glossy = value.extract()?,
             "sparse" => s.sparse = value.extract()?,
             "seed" => s.seed = value.extract()?,
             other => return Err(refuse(other, "render", RENDER_KEYS)),

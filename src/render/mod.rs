@@ -89,6 +89,12 @@ pub struct FinalSettings {
     pub far_eps: f32,
     /// The path-traced gather's rays per receiver.
     pub spp: u32,
+    /// The path-traced gather goes on through glossy hits to the first rough one, instead of
+    /// reading the cache's directional maps there ([`paths`]): no bias from the maps' blur,
+    /// more noise. Worth it under a denoiser (`render --denoise` turns it on), not in a raw
+    /// image. Only where the cache holds every bounce beyond (a multi-bounce cache, no
+    /// `max_depth`).
+    pub paths_through_glossy: bool,
     /// Receivers gather on a sparse grid and interpolate between where the light is smooth
     /// ([`sparse`]); off, every receiver gathers.
     pub sparse: bool,
@@ -174,6 +180,7 @@ impl Default for FinalSettings {
             clusters: 100,
             far_eps: 0.1,
             spp: 16,
+            paths_through_glossy: false,
             sparse: true,
             seed: 0,
             crop: None,
@@ -410,7 +417,12 @@ pub fn render_final_cancellable(
     // receivers (about 230 bytes a pixel, measured) are held for one band, not for the
     // image. Every tile is computed alone, so the bands' size changes nothing in the images.
     let done = AtomicUsize::new(0);
-    let cell = sparse::coarsest_cell(w, h);
+    let frame = FramePlan {
+        cell: sparse::coarsest_cell(w, h),
+        through_glossy: settings.paths_through_glossy
+            && settings.max_depth < 0
+            && cache.bounces() > 0,
+    };
     for band in tiles.chunks(band_tiles()) {
         let t = Instant::now();
         let primary: Vec<TilePrimary> = band
@@ -436,7 +448,7 @@ pub fn render_final_cancellable(
                 let (tx, ty) = (tile.origin.0 / TILE, tile.origin.1 / TILE);
                 let size = (TILE.min(w - tx * TILE), TILE.min(h - ty * TILE));
                 let rect = (tile.origin, size, w);
-                let r = gather_tile(&ctx, &senders, &tile.receivers, rect, cell, settings);
+                let r = gather_tile(&ctx, &senders, &tile.receivers, rect, frame, settings);
                 let n = done.fetch_add(1, Ordering::Relaxed) + 1;
                 progress("render", n as f32 / tiles.len() as f32);
                 Ok(r)
@@ -593,15 +605,24 @@ fn is_glossy(r: &Receiver, settings: &FinalSettings) -> bool {
     r.bsdf.alpha().is_some_and(|a| a < settings.glossy_below)
 }
 
-/// Gather every receiver of a tile (at `origin`, `size` pixels, in an image `width` wide, with
-/// the sparse plan's anchors every `cell` pixels); returns (pixel, weighted indirect radiance,
-/// whether it came by a glossy first hit).
+/// What the gather decides once for the whole frame (so a crop decides it as the frame does).
+#[derive(Clone, Copy, Debug)]
+struct FramePlan {
+    /// The sparse plan's anchor spacing ([`sparse::coarsest_cell`]).
+    cell: u32,
+    /// The paths gather goes on through glossy hits: asked for, and the cache holds every
+    /// bounce beyond them and no `max_depth` limits the paths ([`paths::Continuation`]).
+    through_glossy: bool,
+}
+
+/// Gather every receiver of a tile (at `origin`, `size` pixels, in an image `width` wide);
+/// returns (pixel, weighted indirect radiance, whether it came by a glossy first hit).
 fn gather_tile(
     ctx: &Tracer,
     senders: &Senders,
     receivers: &[Receiver],
     (origin, size, width): ((u32, u32), (u32, u32), u32),
-    cell: u32,
+    frame: FramePlan,
     settings: &FinalSettings,
 ) -> (Vec<Gathered>, GatherStats) {
     let mut stats = GatherStats {
@@ -609,6 +630,11 @@ fn gather_tile(
         ..Default::default()
     };
     if settings.gather == GatherMode::Paths {
+        let continuation = paths::Continuation {
+            through_glossy: frame.through_glossy,
+            glossy_below: settings.glossy_below,
+            most: settings.chain_depth,
+        };
         let out = receivers
             .iter()
             .enumerate()
@@ -616,7 +642,7 @@ fn gather_tile(
                 let key = (settings.seed, k as u64);
                 (
                     r.pixel,
-                    paths::path_gather(ctx, senders, r, settings.spp, key),
+                    paths::path_gather(ctx, senders, r, settings.spp, continuation, key),
                     by_glossy_hit(r),
                 )
             })
@@ -625,7 +651,7 @@ fn gather_tile(
     }
     // The grid's anchors and the receivers that cannot interpolate gather first; then the
     // others interpolate where their cell allows, finer grids gathering where it does not.
-    let plan = SparsePlan::new(receivers, origin, size, width, cell, settings.sparse);
+    let plan = SparsePlan::new(receivers, origin, size, width, frame.cell, settings.sparse);
     let mut value = vec![Rgb::ZERO; receivers.len()];
     let (interpolated, glossy) = plan.run(receivers, &mut value, |which, value| {
         gather_set(

@@ -138,7 +138,9 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
     /// Denoise the beauty with Intel Open Image Denoise (its RT filter, HDR, guided by the
-    /// first hit's albedo and normal), for the noisy `--gather paths` mode. The library is
+    /// first hit's albedo and normal), for the noisy `--gather paths` mode, whose rays then go
+    /// on through glossy and glass hits to the first rough one rather than reading the cache's
+    /// blurred maps there (less bias, more noise, for the denoiser to take). The library is
     /// loaded at run time: `pip install pyoidn` and set WPBGI_OIDN_LIBRARY to its
     /// pyoidn/oidn/lib/libOpenImageDenoise.so.2 (docs/render.md).
     #[arg(long)]
@@ -364,6 +366,7 @@ fn render_frame(
             GatherArg::Paths => GatherMode::Paths,
         },
         spp: a.spp,
+        paths_through_glossy: a.denoise,
         mb_size: a.mb_size,
         adaptive: !a.uniform,
         sparse: !a.dense,
