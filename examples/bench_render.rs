@@ -332,6 +332,8 @@ fn compare_modes(names: &[String]) -> Result<(), Box<dyn std::error::Error>> {
             None => None,
         };
         anchors.push((name.clone(), [this, before, oidn]));
+        // Up to 240 MB a scene: not left in the temporary folder (the mapping stays valid).
+        let _ = std::fs::remove_file(&cache.cache.path);
     }
     println!();
     println!(

@@ -45,11 +45,7 @@ pub fn bake_cache(
     let hash = bake_hash(scene, &settings.to_json());
     write(&path, hash, &baked, serde_json::json!({}))?;
     let seconds = start.elapsed().as_secs_f64();
-    let cache = BakedCache::read(&path, None)?;
-    // The cache is mapped: its name can go at once (the data stays while the mapping does;
-    // where the system refuses, the file stays), so the benchmarks leave no gigabytes behind.
-    let _ = std::fs::remove_file(&path);
-    Ok((baked, cache, seconds))
+    Ok((baked, BakedCache::read(&path, None)?, seconds))
 }
 
 /// The final render of `scene` from `cache` through `camera` with `settings`, and its seconds.
