@@ -1,14 +1,17 @@
 //! What both path tracers share (the reference one in [`crate::reference`] and the final
 //! render's in [`crate::render`](mod@crate::render)): the scene with its acceleration structure and emitter
 //! sampler ([`Tracer`]), the description of a ray's closest hit that shading reads
-//! ([`SurfaceHit`]), and the multiple-importance weight ([`mis`]). Neither path tracer knows
+//! ([`SurfaceHit`]), next-event estimation ([`Tracer::next_event`]) and the
+//! multiple-importance weight ([`mis`]). Neither path tracer knows
 //! the other; both build on this.
 
 use crate::accel::Accel;
+use crate::bsdf::{Bsdf, TransportMode};
 use crate::emitters::EmitterSampler;
 use crate::geometry::frame::Frame;
 use crate::geometry::offset::{interpolate_with_error, offset_origin};
 use crate::scene::Scene;
+use crate::spectrum::Rgb;
 use glam::{Vec2, Vec3, Vec3A};
 
 /// A scene ready to trace: its triangles' acceleration structure and its emitters' sampler,
@@ -30,6 +33,35 @@ impl<'a> Tracer<'a> {
             accel: Accel::build(scene),
             emitters: EmitterSampler::new(scene),
         }
+    }
+
+    /// Next-event estimation at `hit`, shaded by `bsdf` and seen from local direction
+    /// `view`: one emitter sample (drawn with `u_sel` and `u`), its light reflected towards
+    /// `view` times `throughput`, weighted by the power heuristic against the BSDF samples
+    /// that could find the same emitter (a delta light fully). Zero where it is occluded or
+    /// the BSDF sends nothing its way.
+    pub fn next_event(
+        &self,
+        hit: &SurfaceHit,
+        bsdf: &Bsdf,
+        view: Vec3,
+        (u_sel, u): (f32, Vec2),
+        throughput: Rgb,
+    ) -> Rgb {
+        let Some(es) = self.emitters.sample(self.scene, hit.p, u_sel, u) else {
+            return Rgb::ZERO;
+        };
+        let wo = hit.frame.to_local(es.wi);
+        let f = bsdf.eval(view, wo, TransportMode::Radiance);
+        if f == Rgb::ZERO || !es.visible_from(&self.accel, hit.spawn(es.wi)) {
+            return Rgb::ZERO;
+        }
+        let w = if es.delta {
+            1.0
+        } else {
+            mis(es.pdf, bsdf.pdf(view, wo))
+        };
+        throughput * f * es.value * w
     }
 }
 

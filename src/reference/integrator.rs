@@ -111,21 +111,12 @@ pub fn radiance(ctx: &RenderContext, mut o: Vec3, mut d: Vec3, sampler: &mut Sam
         // Next-event estimation.
         let u_sel = sampler.next_1d();
         let u_em = sampler.next_2d();
-        if !nee {
-            // A chain vertex: the emission found next counts fully (the render's chains).
-        } else if let Some(es) = ctx.tracer.emitters.sample(scene, si.p, u_sel, u_em) {
-            let wo = si.frame.to_local(es.wi);
-            let f = bsdf.eval(wi, wo, TransportMode::Radiance);
-            if f != Rgb::ZERO && es.visible_from(&ctx.tracer.accel, si.spawn(es.wi)) {
-                let w = if es.delta {
-                    1.0
-                } else {
-                    mis(es.pdf, bsdf.pdf(wi, wo))
-                };
-                result += throughput * f * es.value * w;
-            }
-        }
-        // BSDF sampling.
+        if nee {
+            result += ctx
+                .tracer
+                .next_event(&si, &bsdf, wi, (u_sel, u_em), throughput);
+        } // else a chain vertex: the emission found next counts fully (the render's chains).
+          // BSDF sampling.
         let u0 = sampler.next_1d();
         let u = sampler.next_2d();
         let Some(bs) = bsdf.sample(wi, u0, u, TransportMode::Radiance) else {

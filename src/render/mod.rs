@@ -419,9 +419,13 @@ pub fn render_final_cancellable(
     let done = AtomicUsize::new(0);
     let frame = FramePlan {
         cell: sparse::coarsest_cell(w, h),
-        through_glossy: settings.paths_through_glossy
-            && settings.max_depth < 0
-            && cache.bounces() > 0,
+        paths: paths::Continuation {
+            through_glossy: settings.paths_through_glossy
+                && settings.max_depth < 0
+                && cache.bounces() > 0,
+            glossy_below: settings.glossy_below,
+            most: settings.chain_depth,
+        },
     };
     for band in tiles.chunks(band_tiles()) {
         let t = Instant::now();
@@ -610,9 +614,9 @@ fn is_glossy(r: &Receiver, settings: &FinalSettings) -> bool {
 struct FramePlan {
     /// The sparse plan's anchor spacing ([`sparse::coarsest_cell`]).
     cell: u32,
-    /// The paths gather goes on through glossy hits: asked for, and the cache holds every
-    /// bounce beyond them and no `max_depth` limits the paths ([`paths::Continuation`]).
-    through_glossy: bool,
+    /// Where the paths gather reads the cache: through glossy hits where asked for, the
+    /// cache holds every bounce beyond them and no `max_depth` limits the paths.
+    paths: paths::Continuation,
 }
 
 /// Gather every receiver of a tile (at `origin`, `size` pixels, in an image `width` wide);
@@ -630,11 +634,6 @@ fn gather_tile(
         ..Default::default()
     };
     if settings.gather == GatherMode::Paths {
-        let continuation = paths::Continuation {
-            through_glossy: frame.through_glossy,
-            glossy_below: settings.glossy_below,
-            most: settings.chain_depth,
-        };
         let out = receivers
             .iter()
             .enumerate()
@@ -642,7 +641,7 @@ fn gather_tile(
                 let key = (settings.seed, k as u64);
                 (
                     r.pixel,
-                    paths::path_gather(ctx, senders, r, settings.spp, continuation, key),
+                    paths::path_gather(ctx, senders, r, settings.spp, frame.paths, key),
                     by_glossy_hit(r),
                 )
             })

@@ -151,19 +151,8 @@ fn into_cache(
             break;
         }
         // A glossy hit: one emitter sample, then a BSDF sample onwards.
-        let (u_sel, u_em) = (sampler.next_1d(), sampler.next_2d());
-        if let Some(es) = ctx.emitters.sample(scene, hit.p, u_sel, u_em) {
-            let wo = hit.frame.to_local(es.wi);
-            let f = bsdf.eval(view, wo, TransportMode::Radiance);
-            if f != Rgb::ZERO && es.visible_from(&ctx.accel, hit.spawn(es.wi)) {
-                let weight = if es.delta {
-                    1.0
-                } else {
-                    mis(es.pdf, bsdf.pdf(view, wo))
-                };
-                sum += throughput * f * es.value * weight;
-            }
-        }
+        let u = (sampler.next_1d(), sampler.next_2d());
+        sum += ctx.next_event(&hit, &bsdf, view, u, throughput);
         let (u0, u) = (sampler.next_1d(), sampler.next_2d());
         let Some(bs) = bsdf.sample(view, u0, u, TransportMode::Radiance) else {
             break;

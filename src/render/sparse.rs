@@ -39,9 +39,9 @@
 //!   irradiance of a diffuse surface, and the same contrast rule guards its edges.
 //! - **Anchors**: the eligible receivers on the grid of every [`coarsest_cell`]-th row and
 //!   column of the tile (and its last row and column): every 4th in frames under 512 pixels
-//!   on their shorter side, every 8th from 512. They gather. The light's smoothness belongs to the
-//!   scene, so the anchors' spacing follows the frame, not the pixel: 8 pixels of a 512²
-//!   frame span what 4 of a 256² frame span.
+//!   on their shorter side, every 8th from 512. They gather. The light's smoothness belongs
+//!   to the scene, so the anchors' spacing follows the frame, not the pixel: 8 pixels of a
+//!   512² frame span what 4 of a 256² frame span.
 //! - The others take their value from the receivers at the corners of their cell,
 //!   bilinearly, when all four exist, lie on the receiver's mesh and plane (normals within
 //!   18°, offsets from its tangent plane within a tenth of the distance), carry a BSDF that
@@ -75,8 +75,8 @@ pub const ANCHOR_FRAME: u32 = 256;
 pub const WIDEST_CELL: u32 = 8;
 
 /// The anchors' spacing in a frame of `width` × `height` pixels: [`ANCHOR_SPACING`], doubled
-/// for each doubling of the shorter side past [`ANCHOR_FRAME`], up to [`WIDEST_CELL`]. It depends on the whole frame only, so a crop interpolates as the frame
-/// does.
+/// for each doubling of the shorter side past [`ANCHOR_FRAME`], up to [`WIDEST_CELL`]. It
+/// depends on the whole frame only, so a crop interpolates as the frame does.
 pub fn coarsest_cell(width: u32, height: u32) -> u32 {
     let mut cell = ANCHOR_SPACING;
     let mut frame = ANCHOR_FRAME;
@@ -535,16 +535,18 @@ mod tests {
     /// returning `bilinear` at the receiver; returns each receiver's value and whether it
     /// gathered.
     fn passes(receivers: &[Receiver], size: (u32, u32)) -> Vec<(Rgb, bool)> {
-        passes_with(receivers, size, bilinear)
+        passes_with(receivers, size, ANCHOR_SPACING, bilinear)
     }
 
-    /// [`passes`] with every gather returning `light` at the receiver.
+    /// [`passes`] with anchors every `coarsest` pixels and every gather returning `light` at
+    /// the receiver.
     fn passes_with(
         receivers: &[Receiver],
         size: (u32, u32),
+        coarsest: u32,
         light: impl Fn(Vec3) -> Rgb,
     ) -> Vec<(Rgb, bool)> {
-        let plan = SparsePlan::new(receivers, (0, 0), size, size.0, ANCHOR_SPACING, true);
+        let plan = SparsePlan::new(receivers, (0, 0), size, size.0, coarsest, true);
         let mut value = vec![Rgb::splat(f32::NAN); receivers.len()];
         let mut gathered = vec![false; receivers.len()];
         let (interpolated, _) = plan.run(receivers, &mut value, |which, value| {
@@ -670,7 +672,7 @@ mod tests {
         assert_eq!(out[q1].0, out[q0].0);
         assert_eq!(out[q2].0, out[q0].0);
         let step = |p: Vec3| Rgb::splat(if p.x > 5.0 { 2.0 } else { 1.0 });
-        let out = passes_with(&receivers, (8, 8), step);
+        let out = passes_with(&receivers, (8, 8), ANCHOR_SPACING, step);
         assert!([q0, q1, q2, q3].iter().all(|&q| out[q].1));
         assert_eq!(out[q1].0, step(receivers[q1].p));
     }
@@ -700,22 +702,14 @@ mod tests {
     #[test]
     fn coarser_anchors_refine_down_to_pairs() {
         let n = 16;
-        let run = |receivers: &[Receiver]| {
-            let plan = SparsePlan::new(receivers, (0, 0), (n, n), n, 8, true);
-            let mut value = vec![Rgb::splat(f32::NAN); receivers.len()];
-            let mut gathered = Vec::new();
-            plan.run(receivers, &mut value, |which, value| {
-                for &k in which {
-                    gathered.push(k as u32);
-                    value[k] = bilinear(0.5 * receivers[k].p);
-                }
-            });
-            for (k, e) in value.iter().enumerate() {
-                let want = bilinear(0.5 * receivers[k].p);
-                assert!((*e - want).abs().max_element() < 1e-5, "{k}: {e} vs {want}");
+        let light = |p: Vec3| bilinear(0.5 * p);
+        let run = |receivers: &[Receiver]| -> Vec<u32> {
+            let out = passes_with(receivers, (n, n), 8, light);
+            for (k, &(e, _)) in out.iter().enumerate() {
+                let want = light(receivers[k].p);
+                assert!((e - want).abs().max_element() < 1e-5, "{k}: {e} vs {want}");
             }
-            gathered.sort_unstable();
-            gathered
+            (0..n * n).filter(|&k| out[k as usize].1).collect()
         };
         let on = |lines: &[u32]| -> Vec<u32> {
             (0..n * n)
