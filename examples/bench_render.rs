@@ -21,7 +21,8 @@
 //! `WPBGI_PREVIOUS=/path/to/an/older/wpbgi`, that binary's, and with `WPBGI_ANCHOR_PYTHON`
 //! (see `bench_bounces`) Mitsuba + OIDN at 256 spp, with the ratios; then, for cbox-diffuse,
 //! cbox-rough and cbox-glossy, the whole job (`wpbgi bake` + `wpbgi render`) at Mitsuba +
-//! OIDN's error. `WPBGI_SIZES=256` renders 256² only.
+//! OIDN's error (the defaults, then the denoised paths gather at rays in steps of √2 up to
+//! 256, until one reaches it). `WPBGI_SIZES=256` renders 256² only.
 
 use wpbgi::bake::bounce::BounceSettings;
 use wpbgi::bake::{BakeSettings, Quality};
@@ -198,6 +199,9 @@ fn oidn_anchor(python: &std::path::Path, name: &str) -> Result<Anchor, Box<dyn s
         .and_then(|(_, v)| Some((v["oidn_total_s"].as_f64()?, v["oidn"][1].as_f64()?))))
 }
 
+/// The paths gather's rays per receiver that [`equal_error`] tries, cheapest first.
+const EQUAL_ERROR_SPP: [u32; 9] = [16, 24, 32, 48, 64, 96, 128, 192, 256];
+
 /// The whole job at equal error (issue 20): this version's `wpbgi bake` and `wpbgi render`
 /// (fresh processes, default bake), tried from the cheapest render up, until one reaches
 /// the relMSE of Mitsuba + OIDN at 256 spp (`oidn`). Prints each try's bake + render
@@ -208,22 +212,21 @@ fn equal_error(
     oidn: (f64, f64),
 ) -> Result<(), Box<dyn std::error::Error>> {
     let (cache, bake_s) = cli_bake(bin, name)?;
-    let tries: [(&str, &[&str]); 4] = [
-        ("defaults", &[]),
-        ("paths 16, denoised", &["--gather", "paths", "--denoise"]),
-        (
-            "paths 64, denoised",
-            &["--gather", "paths", "--spp", "64", "--denoise"],
-        ),
-        (
-            "paths 256, denoised",
-            &["--gather", "paths", "--spp", "256", "--denoise"],
-        ),
-    ];
+    // The path-traced gather's rays per receiver in steps of √2, so that the first try to
+    // reach the error costs at most about √2 times what the exact count would.
+    let mut tries: Vec<(String, Vec<String>)> = vec![("defaults".into(), Vec::new())];
+    for spp in EQUAL_ERROR_SPP {
+        let args = ["--gather", "paths", "--spp", &spp.to_string(), "--denoise"];
+        tries.push((
+            format!("paths {spp}, denoised"),
+            args.map(String::from).to_vec(),
+        ));
+    }
     let mut reached = None;
     let mut shown = Vec::new();
-    for (what, args) in tries {
-        let (render_s, rel) = match cli_render(bin, name, &cache, args) {
+    for (what, args) in &tries {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let (render_s, rel) = match cli_render(bin, name, &cache, &args) {
             Ok(r) => r,
             Err(e) => {
                 shown.push(format!("{what}: not run ({e})"));
