@@ -63,6 +63,48 @@ impl<'a> Tracer<'a> {
         };
         throughput * f * es.value * w
     }
+
+    /// The light of an emitter that a BSDF sample of density `bsdf_pdf` (`None`: a delta lobe
+    /// or the camera) hits at `hit` along `w`, times `throughput`, weighted by the power
+    /// heuristic against the next-event estimation that could have sampled it (fully for
+    /// `None`). Zero where `hit` emits nothing.
+    pub fn emission_hit(
+        &self,
+        hit: &SurfaceHit,
+        w: Vec3,
+        bsdf_pdf: Option<f32>,
+        throughput: Rgb,
+    ) -> Rgb {
+        let material = &self.scene.materials[self.scene.meshes[hit.mesh as usize].material];
+        if material.emission.is_none() {
+            return Rgb::ZERO;
+        }
+        let le = material.emission_at(&self.scene.textures, hit.uv, hit.frame.to_local(-w).z > 0.0);
+        if le == Rgb::ZERO {
+            return Rgb::ZERO;
+        }
+        let weight = bsdf_pdf.map_or(1.0, |pdf| {
+            mis(
+                pdf,
+                self.emitters
+                    .pdf_hit(hit.mesh, hit.triangle, hit.t, w, hit.ng),
+            )
+        });
+        throughput * le * weight
+    }
+
+    /// The environment's light along `w` for a ray that escaped after a BSDF sample of
+    /// density `bsdf_pdf` (`None`: a delta lobe or the camera), weighted as
+    /// [`Tracer::emission_hit`] weighs an emitter's. Zero without an environment.
+    pub fn environment_hit(&self, w: Vec3, bsdf_pdf: Option<f32>, throughput: Rgb) -> Rgb {
+        let Some(env) = &self.scene.environment else {
+            return Rgb::ZERO;
+        };
+        let weight = bsdf_pdf.map_or(1.0, |pdf| {
+            mis(pdf, self.emitters.pdf_environment(self.scene, w))
+        });
+        throughput * env.radiance(w) * weight
+    }
 }
 
 /// A ray–surface intersection with what shading needs.

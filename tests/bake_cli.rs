@@ -37,6 +37,22 @@ fn bake(out: &Path, threads: &str, points: &str) -> Output {
     ])
 }
 
+/// `wpbgi render` of `scene` from `cache` into `out` at `size` (`WxH`), with `extra` arguments.
+fn render_scene(scene: &Path, cache: &Path, out: &Path, size: &str, extra: &[&str]) -> Output {
+    let mut args = vec![
+        "render",
+        scene.to_str().expect("utf-8 path"),
+        "--cache",
+        cache.to_str().expect("utf-8 path"),
+        "-o",
+        out.to_str().expect("utf-8 path"),
+        "--size",
+        size,
+    ];
+    args.extend(extra);
+    wpbgi(&args)
+}
+
 /// `out` succeeded (its standard error in the message otherwise).
 fn assert_ok(out: &Output) {
     assert!(
@@ -449,20 +465,8 @@ fn a_crop_of_a_large_frame_interpolates_as_the_frame() {
     let d = dir("large-crop");
     let cache = d.join("scene.wpc");
     bake_ok(&cache);
-    let scene = scene();
     let render = |out: &Path, crop: &[&str]| {
-        let mut args = vec![
-            "render",
-            scene.to_str().expect("utf-8 path"),
-            "--cache",
-            cache.to_str().expect("utf-8 path"),
-            "-o",
-            out.to_str().expect("utf-8 path"),
-            "--size",
-            "512x512",
-        ];
-        args.extend(crop);
-        assert_ok(&wpbgi(&args));
+        assert_ok(&render_scene(&scene(), &cache, out, "512x512", crop));
         wpbgi::image::read_exr(out).expect("reads")
     };
     let whole = render(&d.join("whole.exr"), &[]);
@@ -493,22 +497,9 @@ fn crops_assemble_into_the_whole_image() {
     let cache = d.join("scene.wpc");
     bake_ok(&cache);
     let render = |out: &Path, crop: Option<&str>| {
-        let mut args = vec![
-            "render".to_string(),
-            scene().to_string_lossy().into_owned(),
-            "--cache".into(),
-            cache.to_string_lossy().into_owned(),
-            "-o".into(),
-            out.to_string_lossy().into_owned(),
-            "--size".into(),
-            "80x72".into(),
-            "--aov".into(),
-            "all".into(),
-        ];
-        if let Some(c) = crop {
-            args.extend(["--crop".to_string(), c.to_string()]);
-        }
-        Command::new(WPBGI).args(&args).output().expect("runs")
+        let mut extra = vec!["--aov", "all"];
+        extra.extend(crop.map(|c| ["--crop", c]).into_iter().flatten());
+        render_scene(&scene(), &cache, out, "80x72", &extra)
     };
     let whole = d.join("whole.exr");
     let out = render(&whole, None);

@@ -3,7 +3,7 @@
 use crate::bsdf::TransportMode;
 use crate::sampler::Sampler;
 use crate::spectrum::{max_component, Rgb};
-use crate::trace::{intersect, mis, Tracer};
+use crate::trace::{intersect, Tracer};
 use glam::Vec3;
 
 /// Which paths the path tracer sums.
@@ -46,43 +46,21 @@ pub fn radiance(ctx: &RenderContext, mut o: Vec3, mut d: Vec3, sampler: &mut Sam
     let mut throughput = Rgb::ONE;
     let mut eta = 1.0_f32;
     let mut depth: u32 = 0;
-    // The BSDF density of the direction that led here (for MIS at emitter hits).
-    let mut prev_bsdf_pdf = 1.0_f32;
-    let mut prev_delta = true;
+    // The BSDF density of the direction that led here, for MIS at emitter hits (`None` for
+    // the camera ray and after a chain vertex, whose emitters count fully).
+    let mut from: Option<f32> = None;
     // For `Transport::CacheOneBounce`: rough vertices and chain vertices so far.
     let (mut rough, mut chain) = (0u32, 0u32);
     loop {
         let Some(si) = intersect(&ctx.tracer, o, d) else {
             // Escaped: the environment, weighted as emission is.
-            if let Some(env) = &scene.environment {
-                let w = if prev_delta {
-                    1.0
-                } else {
-                    mis(prev_bsdf_pdf, ctx.tracer.emitters.pdf_environment(scene, d))
-                };
-                result += throughput * env.radiance(d) * w;
-            }
+            result += ctx.tracer.environment_hit(d, from, throughput);
             break;
         };
         let material = &scene.materials[scene.meshes[si.mesh as usize].material];
         let wi = si.frame.to_local(-d);
         // Emission, weighted against the emitter sampling that could have found it.
-        if material.emission.is_some() {
-            let le = material.emission_at(&scene.textures, si.uv, wi.z > 0.0);
-            if le != Rgb::ZERO {
-                let w = if prev_delta {
-                    1.0
-                } else {
-                    mis(
-                        prev_bsdf_pdf,
-                        ctx.tracer
-                            .emitters
-                            .pdf_hit(si.mesh, si.triangle, si.t, d, si.ng),
-                    )
-                };
-                result += throughput * le * w;
-            }
-        }
+        result += ctx.tracer.emission_hit(&si, d, from, throughput);
         if ctx.max_depth >= 0 && depth as i64 + 1 >= ctx.max_depth as i64 {
             break;
         }
@@ -115,8 +93,9 @@ pub fn radiance(ctx: &RenderContext, mut o: Vec3, mut d: Vec3, sampler: &mut Sam
             result += ctx
                 .tracer
                 .next_event(&si, &bsdf, wi, (u_sel, u_em), throughput);
-        } // else a chain vertex: the emission found next counts fully (the render's chains).
-          // BSDF sampling.
+        }
+        // (Else a chain vertex: the emission found next counts fully, as the render's chains.)
+        // BSDF sampling.
         let u0 = sampler.next_1d();
         let u = sampler.next_2d();
         let Some(bs) = bsdf.sample(wi, u0, u, TransportMode::Radiance) else {
@@ -125,8 +104,7 @@ pub fn radiance(ctx: &RenderContext, mut o: Vec3, mut d: Vec3, sampler: &mut Sam
         let wo_world = si.frame.to_world(bs.wo);
         throughput *= bs.weight;
         eta *= bs.eta;
-        prev_bsdf_pdf = bs.pdf;
-        prev_delta = !nee;
+        from = nee.then_some(bs.pdf);
         o = si.spawn(wo_world);
         d = wo_world.normalize();
         depth += 1;

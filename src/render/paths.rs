@@ -39,7 +39,7 @@ use crate::gather::Senders;
 use crate::geometry::offset::offset_origin;
 use crate::sampler::{sobol02, Sampler};
 use crate::spectrum::{max_component, Rgb};
-use crate::trace::{intersect, mis, Tracer};
+use crate::trace::{intersect, Tracer};
 use glam::{Vec3, Vec3A};
 
 /// Where a path-traced gather's rays read the cache.
@@ -127,20 +127,15 @@ fn into_cache(
     let mut reader = receiver_mesh;
     for through in 0..=continuation.most {
         let Some(hit) = intersect(ctx, o, w) else {
-            if let (Some(pdf), Some(env)) = (from_glossy, &scene.environment) {
-                let weight = mis(pdf, ctx.emitters.pdf_environment(scene, w));
-                sum += throughput * env.radiance(w) * weight;
+            if from_glossy.is_some() {
+                sum += ctx.environment_hit(w, from_glossy, throughput);
             }
             break;
         };
         let material = &scene.materials[scene.meshes[hit.mesh as usize].material];
         let view = hit.frame.to_local(-w);
-        if let Some(pdf) = from_glossy.filter(|_| material.emission.is_some()) {
-            let le = material.emission_at(&scene.textures, hit.uv, view.z > 0.0);
-            let light = ctx
-                .emitters
-                .pdf_hit(hit.mesh, hit.triangle, hit.t, w, hit.ng);
-            sum += throughput * le * mis(pdf, light);
+        if from_glossy.is_some() {
+            sum += ctx.emission_hit(&hit, w, from_glossy, throughput);
         }
         let bsdf = material.bsdf_at(&scene.textures, hit.uv);
         let glossy = bsdf.alpha().is_some_and(|a| a < continuation.glossy_below);
