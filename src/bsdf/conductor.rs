@@ -21,6 +21,7 @@ pub struct RoughConductor {
 }
 
 impl RoughConductor {
+    #[inline(always)]
     fn fresnel(&self, cos_theta: f32) -> Rgb {
         fresnel_conductor(cos_theta, self.eta, self.k) * self.specular_reflectance
     }

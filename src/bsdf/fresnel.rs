@@ -50,6 +50,7 @@ pub fn fresnel_dielectric(cos_theta_i: f32, eta: f32) -> DielectricFresnel {
 
 /// Conductor Fresnel reflectance for the complex index `eta + i k` (per channel), after
 /// K. D. Moeller, "Optics" (1988), as in Mitsuba. `eta = 0, k = 1` gives exactly 1.
+#[inline(always)]
 pub(crate) fn fresnel_conductor(cos_theta_i: f32, eta: Rgb, k: Rgb) -> Rgb {
     let ch = |eta_r: f32, eta_i: f32| -> f32 {
         let cos2 = cos_theta_i * cos_theta_i;

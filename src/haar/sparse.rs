@@ -76,6 +76,8 @@ impl<T: Coefficient> SparseHaar<T> {
         if h.levels > 0 {
             let alive = kept_subtrees(h, cut);
             if alive[0] {
+                out.nodes
+                    .reserve_exact(alive.iter().filter(|&&a| a).count());
                 out.build(h, cut, &alive, 0, 0, 0);
             }
         }
@@ -496,10 +498,16 @@ impl<T: Coefficient> SparseSum<T> {
         let scale = terms
             .iter()
             .fold(T::default(), |acc, (m, w)| acc * 1.0 + m.scale * *w);
+        // At most every term's nodes, and at most every cell of the finest levels.
+        let cells = terms
+            .iter()
+            .map(|(m, _)| m.nodes.len())
+            .sum::<usize>()
+            .min(((1usize << (2 * levels)) - 1) / 3);
         let mut sum = SparseSum {
             levels,
             scale,
-            cells: Vec::new(),
+            cells: Vec::with_capacity(cells),
         };
         // Per level, the terms' nodes at the cell being visited.
         let mut nodes = vec![NONE; terms.len() * (levels as usize + 1)];
@@ -582,7 +590,9 @@ impl<T: Coefficient> SparseSum<T> {
             nodes: Vec::new(),
         };
         if !self.cells.is_empty() {
+            out.nodes.reserve_exact(self.cells.len());
             self.keep_cell(&mut out, &mut 0, cut);
+            out.nodes.shrink_to_fit();
         }
         out
     }

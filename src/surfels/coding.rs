@@ -83,6 +83,11 @@ pub fn encode<T: Coefficient + Send + Sync>(
     CodedTree { split_level, nodes }
 }
 
+/// Subtrees of at most this many surfels are coded on one thread, appending to their
+/// parent's list: below it a task costs more than it shares, and every level of tasks
+/// copied its subtree's list into its parent's once more.
+const SERIAL_BELOW: u32 = 512;
+
 /// What [`encode`] codes with.
 struct Coder<'a, T> {
     tree: &'a SurfelTree,
@@ -111,10 +116,15 @@ impl<T: Coefficient + Send + Sync> Coder<'_, T> {
             return g;
         }
         let [l, r] = node.children;
-        let (mut out_l, mut out_r) = (Vec::new(), Vec::new());
-        let (gl, gr) = rayon::join(|| self.node(l, &mut out_l), || self.node(r, &mut out_r));
-        out.append(&mut out_l);
-        out.append(&mut out_r);
+        let (gl, gr) = if node.count > SERIAL_BELOW {
+            let (mut out_l, mut out_r) = (Vec::new(), Vec::new());
+            let g = rayon::join(|| self.node(l, &mut out_l), || self.node(r, &mut out_r));
+            out.append(&mut out_l);
+            out.append(&mut out_r);
+            g
+        } else {
+            (self.node(l, out), self.node(r, out))
+        };
         let g = SparseSum::of(&[(&gl, 1.0), (&gr, 1.0)]);
         let cut = tau * g.norm();
         let stored = NodeCoding {
@@ -164,13 +174,21 @@ fn sum_below<T: Coefficient + Send + Sync>(
         needed.then(|| leaf(tree.order[node.first as usize]))
     } else {
         let [l, r] = node.children;
-        let (mut out_l, mut out_r) = (Vec::new(), Vec::new());
-        let (gl, gr) = rayon::join(
-            || sum_below(tree, leaf, wanted, l, needed, &mut out_l),
-            || sum_below(tree, leaf, wanted, r, needed, &mut out_r),
-        );
-        out.append(&mut out_l);
-        out.append(&mut out_r);
+        let (gl, gr) = if node.count > SERIAL_BELOW {
+            let (mut out_l, mut out_r) = (Vec::new(), Vec::new());
+            let g = rayon::join(
+                || sum_below(tree, leaf, wanted, l, needed, &mut out_l),
+                || sum_below(tree, leaf, wanted, r, needed, &mut out_r),
+            );
+            out.append(&mut out_l);
+            out.append(&mut out_r);
+            g
+        } else {
+            (
+                sum_below(tree, leaf, wanted, l, needed, out),
+                sum_below(tree, leaf, wanted, r, needed, out),
+            )
+        };
         gl.zip(gr)
             .map(|(gl, gr)| SparseSum::of(&[(&gl, 1.0), (&gr, 1.0)]).keep(0.0))
     };

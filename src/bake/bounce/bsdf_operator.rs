@@ -250,36 +250,49 @@ impl Columns {
     /// coefficients add up (11 % extra flux through one texel of α = 0.02 glass).
     fn thresholded(columns: &[Vec<Rgb>], tau: f32) -> Columns {
         let energy = |v: &Rgb| f64::from(v.abs().max_element()).powi(2);
+        // Per column, in parallel: its kept entries and the energy dropped.
+        let per_column: Vec<(Vec<(u32, Rgb)>, f64)> = columns
+            .par_iter()
+            .map(|column| {
+                let energies: Vec<f64> = column.iter().map(energy).collect();
+                let norm2: f64 = energies.iter().sum();
+                // Smallest first, ties by index: every key is distinct.
+                let mut order: Vec<(f64, u32)> = energies
+                    .iter()
+                    .enumerate()
+                    .map(|(b, &e)| (e, b as u32))
+                    .collect();
+                order.sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
+                let budget = f64::from(tau).powi(2) * norm2;
+                let mut keep = vec![true; column.len()];
+                let mut lost = 0.0f64;
+                for &(e, b) in &order {
+                    if lost + e > budget {
+                        break;
+                    }
+                    lost += e;
+                    keep[b as usize] = false;
+                }
+                let entries = column
+                    .iter()
+                    .enumerate()
+                    .filter(|&(b, v)| keep[b] && *v != Rgb::ZERO)
+                    .map(|(b, v)| (b as u32, *v))
+                    .collect();
+                (entries, lost)
+            })
+            .collect();
+        // The norms summed in column order, as one pass over the columns would.
         let mut starts = Vec::with_capacity(columns.len() + 1);
-        let mut entries = Vec::new();
-        let (mut kept, mut dropped) = (0.0f64, 0.0f64);
         starts.push(0);
-        for column in columns {
-            let norm2: f64 = column.iter().map(energy).sum();
-            let mut order: Vec<u32> = (0..column.len() as u32).collect();
-            order.sort_by(|&a, &b| {
-                energy(&column[a as usize])
-                    .total_cmp(&energy(&column[b as usize]))
-                    .then(a.cmp(&b))
-            });
-            let budget = f64::from(tau).powi(2) * norm2;
-            let mut keep = vec![true; column.len()];
-            let mut lost = 0.0f64;
-            for &b in &order {
-                let e = energy(&column[b as usize]);
-                if lost + e > budget {
-                    break;
-                }
-                lost += e;
-                keep[b as usize] = false;
-            }
+        let mut entries = Vec::with_capacity(per_column.iter().map(|(e, _)| e.len()).sum());
+        let (mut kept, mut dropped) = (0.0f64, 0.0f64);
+        for (column, lost) in per_column {
             dropped += lost;
-            for (b, v) in column.iter().enumerate() {
-                if keep[b] && *v != Rgb::ZERO {
-                    entries.push((b as u32, *v));
-                    kept += energy(v);
-                }
+            for (_, v) in &column {
+                kept += energy(v);
             }
+            entries.extend_from_slice(&column);
             starts.push(entries.len() as u32);
         }
         Columns {
@@ -421,17 +434,36 @@ pub fn kernel(bsdf: &Bsdf, n: u32) -> Kernel {
     // right energy anyway.
     let s = if n >= 32 { 2 } else { 4 };
     let so = (s / 2).max(1);
+    // Every incoming point of every texel as lanes (x, y, z), texel by texel: each outgoing
+    // point is evaluated against all of them at once (`Bsdf::eval_lanes`, the same values
+    // bit for bit as one by one), and the sums below take them in the same order as before.
+    let per_texel = (s * s) as usize;
+    let mut lanes = [Vec::new(), Vec::new(), Vec::new()];
+    for i in 0..texels {
+        for wi in texel_points(i, n, s) {
+            for (lane, v) in lanes.iter_mut().zip(wi.to_array()) {
+                lane.push(v);
+            }
+        }
+    }
+    let lanes = [&lanes[0][..], &lanes[1][..], &lanes[2][..]];
     let mut k: Vec<Vec<Rgb>> = (0..texels)
         .into_par_iter()
         .map(|o| {
-            let outs: Vec<Vec3> = texel_points(o, n, so).collect();
-            (0..texels)
+            // Mitsuba's convention: eval(towards the viewer, towards the light).
+            let values: Vec<Vec<Rgb>> = texel_points(o, n, so)
+                .map(|wo| {
+                    let mut out = Vec::new();
+                    bsdf.eval_lanes(wo, lanes, TransportMode::Radiance, &mut out);
+                    out
+                })
+                .collect();
+            (0..texels as usize)
                 .map(|i| {
                     let mut sum = Rgb::ZERO;
-                    for wi in texel_points(i, n, s) {
-                        for &wo in &outs {
-                            // Mitsuba's convention: eval(towards the viewer, towards the light).
-                            sum += bsdf.eval(wo, wi, TransportMode::Radiance);
+                    for p in i * per_texel..(i + 1) * per_texel {
+                        for v in &values {
+                            sum += v[p];
                         }
                     }
                     sum * (solid_angle / (s * s * so * so) as f32)
