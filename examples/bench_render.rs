@@ -164,23 +164,26 @@ fn cli_render(
     Ok((field("render_s")?, field("rel_mse")?))
 }
 
-/// `wpbgi bake` of binary `bin` (its defaults) on scene `name`, as a user runs it: the
-/// cache's path and the seconds the process took.
+/// `wpbgi bake` of binary `bin` on scene `name` at `quality` (`None`: its defaults), as a
+/// user runs it: the cache's path and the seconds the process took.
 fn cli_bake(
     bin: &std::path::Path,
     name: &str,
+    quality: Option<&str>,
 ) -> Result<(std::path::PathBuf, f64), Box<dyn std::error::Error>> {
     let cache = std::env::temp_dir().join(format!("wpbgi-bench-cli-{name}.wpc"));
     let start = std::time::Instant::now();
-    common::run_ok(
-        &bin.display().to_string(),
-        std::process::Command::new(bin)
-            .arg("bake")
-            .arg(data(&format!("{name}.gltf")))
-            .arg("-o")
-            .arg(&cache)
-            .arg("-q"),
-    )?;
+    let mut command = std::process::Command::new(bin);
+    command
+        .arg("bake")
+        .arg(data(&format!("{name}.gltf")))
+        .arg("-o")
+        .arg(&cache)
+        .arg("-q");
+    if let Some(q) = quality {
+        command.args(["--quality", q]);
+    }
+    common::run_ok(&bin.display().to_string(), &mut command)?;
     Ok((cache, start.elapsed().as_secs_f64()))
 }
 
@@ -202,16 +205,18 @@ fn oidn_anchor(python: &std::path::Path, name: &str) -> Result<Anchor, Box<dyn s
 /// The paths gather's rays per receiver that [`equal_error`] tries, cheapest first.
 const EQUAL_ERROR_SPP: [u32; 9] = [16, 24, 32, 48, 64, 96, 128, 192, 256];
 
-/// The whole job at equal error (issue 20): this version's `wpbgi bake` and `wpbgi render`
-/// (fresh processes, default bake), tried from the cheapest render up, until one reaches
-/// the relMSE of Mitsuba + OIDN at 256 spp (`oidn`). Prints each try's bake + render
-/// seconds and relMSE, and the first that reaches it as a ratio of Mitsuba + OIDN's seconds.
+/// The whole job at equal error (issue 20): this version's `wpbgi bake` (at `quality`,
+/// `None` for its defaults) and `wpbgi render` (fresh processes), tried from the cheapest
+/// render up, until one reaches the relMSE of Mitsuba + OIDN at 256 spp (`oidn`). Prints
+/// each try's bake + render seconds and relMSE, and the first that reaches it as a ratio of
+/// Mitsuba + OIDN's seconds.
 fn equal_error(
     bin: &std::path::Path,
     name: &str,
+    quality: Option<&str>,
     oidn: (f64, f64),
 ) -> Result<(), Box<dyn std::error::Error>> {
-    let (cache, bake_s) = cli_bake(bin, name)?;
+    let (cache, bake_s) = cli_bake(bin, name, quality)?;
     // The path-traced gather's rays per receiver in steps of √2, so that the first try to
     // reach the error costs at most about √2 times what the exact count would.
     let mut tries: Vec<(String, Vec<String>)> = vec![("defaults".into(), Vec::new())];
@@ -242,7 +247,8 @@ fn equal_error(
     }
     let _ = std::fs::remove_file(&cache);
     println!(
-        "| {name} | {:.2} s, {:.3e} | {bake_s:.2} | {} | {} |",
+        "| {name} | {} | {:.2} s, {:.3e} | {bake_s:.2} | {} | {} |",
+        quality.unwrap_or("default"),
         oidn.0,
         oidn.1,
         shown.join("; "),
@@ -373,18 +379,25 @@ fn compare_modes(names: &[String]) -> Result<(), Box<dyn std::error::Error>> {
     println!();
     println!(
         "The whole job at Mitsuba + OIDN's error (256 spp), same run: this version's `wpbgi \
-         bake` (defaults) and `wpbgi render` from the cheapest render up, bake + render seconds \
-         and relMSE per try, until one reaches it:"
+         bake` (its default preset, then the draft preset, whose cache the paths gather reads \
+         only at secondary hits) and `wpbgi render` from the cheapest render up, bake + render \
+         seconds and relMSE per try, until one reaches it:"
     );
-    println!("| scene | Mitsuba + OIDN | bake s | tries | time / OIDN's at its error |");
-    println!("|---|---|---:|---|---:|");
+    println!(
+        "| scene | bake preset | Mitsuba + OIDN | bake s | tries | time / OIDN's at its error |"
+    );
+    println!("|---|---|---|---:|---|---:|");
     for (name, [_, _, oidn]) in &anchors {
         if !["cbox-diffuse", "cbox-rough", "cbox-glossy"].contains(&name.as_str()) {
             continue;
         }
         match oidn {
-            Some(oidn) => equal_error(&this_bin, name, *oidn)?,
-            None => println!("| {name} | not run (`WPBGI_ANCHOR_PYTHON`) | | | |"),
+            Some(oidn) => {
+                for quality in [None, Some("draft")] {
+                    equal_error(&this_bin, name, quality, *oidn)?;
+                }
+            }
+            None => println!("| {name} | | not run (`WPBGI_ANCHOR_PYTHON`) | | | |"),
         }
     }
     Ok(())

@@ -20,7 +20,8 @@ pub enum GatherArg {
     /// Receivers clustered per 32×32 tile share the far field (faster, the same image).
     Fpbgi,
     /// Rays drawn from each receiver's BSDF (--spp of them), taking the cache's light where
-    /// they hit: the first bounce traced, the rest from the cache.
+    /// they hit: the first bounce traced, the rest from the cache (which a draft bake
+    /// serves nearly as well).
     Paths,
 }
 
