@@ -71,9 +71,10 @@ fn mesh_densities(scene: &Scene, densities: &[(String, f32)]) -> Result<Vec<f32>
 /// Refuse, before any work, a bake that cannot fit: bounces whose transport slots overflow
 /// 32 bits, or a floor of what the bake must hold (surfels, their radiance, the tree and its
 /// coding, the cache's records, and for bounces the tree as senders and the slots' bitmap,
-/// with no transport kept: that part gives way, see [`BounceSettings::transport_budget`])
-/// above the memory the machine has available. The floor counts the structures only, not
-/// the maps' coefficients, so a bake it lets through may still need more.
+/// with no transport kept: that part gives way, see [`BounceSettings::transport_budget`]; or
+/// the surfel sampling's, where larger) above the memory the machine has available. The
+/// floor counts the structures only, not the maps' coefficients, so a bake it lets through
+/// may still need more.
 fn check_fits(settings: &BakeSettings, map_levels: u32) -> Result<()> {
     let points = settings.points as u64;
     let bounces = settings.bounces.max > 0;
@@ -94,7 +95,9 @@ fn check_fits(settings: &BakeSettings, map_levels: u32) -> Result<()> {
             super::bounce::settings::memory_floor(points, map_levels)
         } else {
             0
-        });
+        })
+        // Drawing the surfels holds more a surfel than the structures, for a while.
+        .max(crate::surfels::sampling_memory(points));
     match crate::machine::available_memory() {
         Some(available) if floor > available => Err(Error::InvalidSetting(format!(
             "a bake of {points} surfels needs at least {} MB, and this machine has {} MB \

@@ -114,6 +114,21 @@ pub fn sample_surfels_with_density(
     assign_areas(&candidates, &grid, &alive, &area_each)
 }
 
+/// About the most memory (bytes) drawing `n` surfels holds at once: the candidates and their
+/// grid cells, the elimination's weights, heap and liveness, and every candidate's weighted
+/// neighbours ([`Neighbours`]), on a flat surface π (2 r_max)² times the candidates' density
+/// 5N/A, that is 20π / (2√3) ≈ 18 each. About 1.1 kB a surfel.
+pub(crate) fn sampling_memory(n: u64) -> u64 {
+    let neighbours =
+        (CANDIDATES_PER_SURFEL as f64 * 4.0 * std::f64::consts::PI / (2.0 * 3f64.sqrt())).ceil();
+    let per_candidate = size_of::<Surfel>()
+        + size_of::<u32>() // its cell
+        + size_of::<f32>() + size_of::<u64>() + size_of::<u32>() + size_of::<bool>() // heap
+        + size_of::<u32>() // where its neighbours end
+        + neighbours as usize * size_of::<(u32, f32)>();
+    n.saturating_mul((CANDIDATES_PER_SURFEL * per_candidate) as u64)
+}
+
 /// Whether candidate `c` lies in a hole of its material's alpha cut-out.
 fn in_hole(scene: &Scene, c: &Surfel) -> bool {
     let m = &scene.meshes[c.mesh as usize];
@@ -390,28 +405,30 @@ impl WeightHeap {
 }
 
 /// Every candidate's neighbours of non-zero weight with their weights, in the grid's fixed
-/// order (compressed rows: candidate `i`'s are `entries[start[i]..start[i + 1]]`).
-/// Elimination visits a removed candidate's neighbours once each; weighing them here, in
-/// parallel, leaves the sequential loop only the heap updates (and a third of the
-/// candidates it looked at before, those of the 27 cells that lie beyond 2 r_max). About 18
-/// entries a candidate, 8 bytes each: 0.7 kB a surfel while the surfels are drawn, less than
-/// the bake holds per surfel later.
+/// order (compressed rows, chunk by chunk). Elimination visits a removed candidate's
+/// neighbours once each; weighing them here, in parallel, leaves the sequential loop only the
+/// heap updates (and a third of the candidates it looked at before, those of the 27 cells
+/// that lie beyond 2 r_max). About 18 entries a candidate, 8 bytes each: most of
+/// [`sampling_memory`].
 struct Neighbours {
-    start: Vec<usize>,
-    entries: Vec<(u32, f32)>,
+    chunks: Vec<NeighbourChunk>,
 }
 
+/// The neighbours of [`Neighbours::CHUNK`] candidates: where each one's entries end (u32: a
+/// chunk holds far fewer), and the entries (neighbour, weight).
+type NeighbourChunk = (Vec<u32>, Vec<(u32, f32)>);
+
 impl Neighbours {
+    /// Candidates weighed by one task. The chunks are kept as they are: joined into one
+    /// list, they were held twice while it was filled (the sampling's peak).
+    const CHUNK: usize = 4096;
+
     fn of(c: &[Surfel], grid: &Grid, radii: &[f32]) -> Neighbours {
-        const CHUNK: usize = 4096;
-        // Per chunk of candidates: each one's count, and their entries.
-        type Chunk = (Vec<u32>, Vec<(u32, f32)>);
-        let chunks: Vec<Chunk> = (0..c.len().div_ceil(CHUNK))
+        let chunks = (0..c.len().div_ceil(Self::CHUNK))
             .into_par_iter()
             .map(|k| {
-                let (mut counts, mut entries) = (Vec::with_capacity(CHUNK), Vec::new());
-                for i in k * CHUNK..((k + 1) * CHUNK).min(c.len()) {
-                    let before = entries.len();
+                let (mut ends, mut entries) = (Vec::with_capacity(Self::CHUNK), Vec::new());
+                for i in k * Self::CHUNK..((k + 1) * Self::CHUNK).min(c.len()) {
                     grid.for_each_around(i, |j| {
                         if j as usize != i {
                             let w = weight(&c[i], &c[j as usize], radii);
@@ -420,25 +437,20 @@ impl Neighbours {
                             }
                         }
                     });
-                    counts.push((entries.len() - before) as u32);
+                    ends.push(entries.len() as u32);
                 }
-                (counts, entries)
+                entries.shrink_to_fit();
+                (ends, entries)
             })
             .collect();
-        let mut start = Vec::with_capacity(c.len() + 1);
-        start.push(0);
-        let mut entries = Vec::with_capacity(chunks.iter().map(|(_, e)| e.len()).sum());
-        for (counts, chunk) in chunks {
-            for n in counts {
-                start.push(start[start.len() - 1] + n as usize);
-            }
-            entries.extend_from_slice(&chunk);
-        }
-        Neighbours { start, entries }
+        Neighbours { chunks }
     }
 
     fn of_candidate(&self, i: usize) -> &[(u32, f32)] {
-        &self.entries[self.start[i]..self.start[i + 1]]
+        let (ends, entries) = &self.chunks[i / Self::CHUNK];
+        let k = i % Self::CHUNK;
+        let start = if k == 0 { 0 } else { ends[k - 1] as usize };
+        &entries[start..ends[k] as usize]
     }
 }
 
@@ -517,4 +529,50 @@ fn assign_areas(
             ..*s
         })
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The heap pops what an exhaustive search finds, the heaviest alive candidate by float
+    /// comparison with ties to the higher index (±0 equal), through lowered weights, ties and
+    /// negative weights (a sum that rounds below zero once its terms are taken back).
+    #[test]
+    fn weight_heap_pops_the_heaviest_with_ties_to_the_higher_index() {
+        let mut rng = Sampler::new(7, 0, 0);
+        let n = 1000;
+        // Weights from a few values, so that ties are common; -0.0 beside 0.0.
+        let values = [0.0f32, -0.0, 0.25, 0.5, 1.0, -1e-7, 2.0];
+        let w: Vec<f32> = (0..n)
+            .map(|_| values[(rng.next_1d() * values.len() as f32) as usize % values.len()])
+            .collect();
+        let mut heap = WeightHeap::new(w.clone());
+        let mut w = w;
+        let mut alive = vec![true; n];
+        for _ in 0..n {
+            let expected = (0..n)
+                .filter(|&i| alive[i])
+                .reduce(|a, b| {
+                    if w[b] > w[a] || (w[b] == w[a] && b > a) {
+                        b
+                    } else {
+                        a
+                    }
+                })
+                .expect("a candidate is alive");
+            assert_eq!(heap.pop(), Some(expected as u32));
+            alive[expected] = false;
+            // Lower a few alive weights, some to a value another candidate has.
+            for _ in 0..3 {
+                let j = (rng.next_1d() * n as f32) as usize % n;
+                if alive[j] {
+                    let dw = [0.25f32, 0.5, 1e-7][(rng.next_1d() * 3.0) as usize % 3];
+                    w[j] -= dw;
+                    heap.decrease(j as u32, dw);
+                }
+            }
+        }
+        assert_eq!(heap.pop(), None);
+    }
 }
