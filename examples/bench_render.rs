@@ -205,13 +205,13 @@ fn oidn_anchor(python: &std::path::Path, name: &str) -> Result<Anchor, Box<dyn s
 /// The paths gather's rays per receiver that [`equal_error`] tries, cheapest first.
 const EQUAL_ERROR_SPP: [u32; 9] = [16, 24, 32, 48, 64, 96, 128, 192, 256];
 
-/// The whole job at equal error (issue 20): this version's `wpbgi bake` (at `quality`,
-/// `None` for its defaults) and `wpbgi render` (fresh processes), tried from the cheapest
-/// render up, until one reaches the relMSE of Mitsuba + OIDN at 256 spp (`oidn`). Prints
-/// each try's bake + render seconds and relMSE, and the first that reaches it as a ratio of
-/// Mitsuba + OIDN's seconds.
+/// The whole job at equal error (issue 20): `wpbgi bake` of binary `bin` (the version
+/// `version`) at `quality` (`None` for its defaults) and its `wpbgi render` (fresh
+/// processes), tried from the cheapest render up, until one reaches the relMSE of Mitsuba +
+/// OIDN at 256 spp (`oidn`). Prints each try's bake + render seconds and relMSE, and the
+/// first that reaches it as a ratio of Mitsuba + OIDN's seconds.
 fn equal_error(
-    bin: &std::path::Path,
+    (bin, version): (&std::path::Path, &str),
     name: &str,
     quality: Option<&str>,
     oidn: (f64, f64),
@@ -247,7 +247,7 @@ fn equal_error(
     }
     let _ = std::fs::remove_file(&cache);
     println!(
-        "| {name} | {} | {:.2} s, {:.3e} | {bake_s:.2} | {} | {} |",
+        "| {name} | {version} | {} | {:.2} s, {:.3e} | {bake_s:.2} | {} | {} |",
         quality.unwrap_or("default"),
         oidn.0,
         oidn.1,
@@ -380,24 +380,28 @@ fn compare_modes(names: &[String]) -> Result<(), Box<dyn std::error::Error>> {
     println!(
         "The whole job at Mitsuba + OIDN's error (256 spp), same run: this version's `wpbgi \
          bake` (its default preset, then the draft preset, whose cache the paths gather reads \
-         only at secondary hits) and `wpbgi render` from the cheapest render up, bake + render \
-         seconds and relMSE per try, until one reaches it:"
+         only at secondary hits; and the previous version's, `WPBGI_PREVIOUS`, at its default) \
+         and `wpbgi render` from the cheapest render up, bake + render seconds and relMSE per \
+         try, until one reaches it:"
     );
     println!(
-        "| scene | bake preset | Mitsuba + OIDN | bake s | tries | time / OIDN's at its error |"
+        "| scene | version | bake preset | Mitsuba + OIDN | bake s | tries | time / OIDN's at its error |"
     );
-    println!("|---|---|---|---:|---|---:|");
+    println!("|---|---|---|---|---:|---|---:|");
     for (name, [_, _, oidn]) in &anchors {
         if !["cbox-diffuse", "cbox-rough", "cbox-glossy"].contains(&name.as_str()) {
             continue;
         }
         match oidn {
             Some(oidn) => {
+                if let Some(bin) = &previous {
+                    equal_error((std::path::Path::new(bin), "previous"), name, None, *oidn)?;
+                }
                 for quality in [None, Some("draft")] {
-                    equal_error(&this_bin, name, quality, *oidn)?;
+                    equal_error((&this_bin, "this"), name, quality, *oidn)?;
                 }
             }
-            None => println!("| {name} | | not run (`WPBGI_ANCHOR_PYTHON`) | | | |"),
+            None => println!("| {name} | | | not run (`WPBGI_ANCHOR_PYTHON`) | | | |"),
         }
     }
     Ok(())

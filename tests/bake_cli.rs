@@ -37,20 +37,25 @@ fn bake(out: &Path, threads: &str, points: &str) -> Output {
     ])
 }
 
-/// `wpbgi render` of `scene` from `cache` into `out` at `size` (`WxH`), with `extra` arguments.
+/// `wpbgi render` of `scene` from `cache` into `out` at `size` (`WxH`), with `extra` arguments
+/// (global options among them too), with a fixed capture date and no render time in the
+/// header: the same render is then the same file byte for byte.
 fn render_scene(scene: &Path, cache: &Path, out: &Path, size: &str, extra: &[&str]) -> Output {
-    let mut args = vec![
-        "render",
-        scene.to_str().expect("utf-8 path"),
-        "--cache",
-        cache.to_str().expect("utf-8 path"),
-        "-o",
-        out.to_str().expect("utf-8 path"),
-        "--size",
-        size,
-    ];
-    args.extend(extra);
-    wpbgi(&args)
+    Command::new(WPBGI)
+        .args([
+            "render",
+            scene.to_str().expect("utf-8 path"),
+            "--cache",
+            cache.to_str().expect("utf-8 path"),
+            "-o",
+            out.to_str().expect("utf-8 path"),
+            "--size",
+            size,
+        ])
+        .args(extra)
+        .env("SOURCE_DATE_EPOCH", "1764000000")
+        .output()
+        .expect("runs")
 }
 
 /// `out` succeeded (its standard error in the message otherwise).
@@ -225,26 +230,13 @@ fn render_writes_layers_and_refuses_stale_caches() {
     bake_ok(&cache);
     let image = d.join("out.exr");
     let render_with = |scene: &Path, image: &Path, threads: &str| {
-        Command::new(WPBGI)
-            .args([
-                "render",
-                scene.to_str().expect("utf-8"),
-                "--cache",
-                cache.to_str().expect("utf-8"),
-                "-o",
-                image.to_str().expect("utf-8"),
-                "--size",
-                "128x128",
-                "--aov",
-                "all",
-                "--threads",
-                threads,
-            ])
-            // A fixed capture date and no render time in the header: the file is then the
-            // same byte for byte.
-            .env("SOURCE_DATE_EPOCH", "1764000000")
-            .output()
-            .expect("runs")
+        render_scene(
+            scene,
+            &cache,
+            image,
+            "128x128",
+            &["--aov", "all", "--threads", threads],
+        )
     };
     let render = |scene: &Path| render_with(scene, &image, "2");
     let out = render(&scene());
@@ -341,20 +333,13 @@ fn render_writes_layers_and_refuses_stale_caches() {
     }
     // Half precision: the same channels, a smaller file, values within half's rounding.
     let half = d.join("half.exr");
-    let out = wpbgi(&[
-        "render",
-        scene().to_str().expect("utf-8"),
-        "--cache",
-        cache.to_str().expect("utf-8"),
-        "-o",
-        half.to_str().expect("utf-8"),
-        "--size",
+    let out = render_scene(
+        &scene(),
+        &cache,
+        &half,
         "128x128",
-        "--exr-precision",
-        "half",
-        "--exr-compression",
-        "piz",
-    ]);
+        &["--exr-precision", "half", "--exr-compression", "piz"],
+    );
     assert_ok(&out);
     let h = wpbgi::image::read_exr(&half).expect("half EXR");
     for (x, y) in h.pixels.iter().zip(&beauty.pixels) {
@@ -382,16 +367,7 @@ fn ctrl_c_stops_bake_and_render_with_130_and_keeps_the_previous_outputs() {
     let cache = d.join("scene.wpc");
     bake_ok(&cache);
     let image = d.join("out.exr");
-    let rendered = wpbgi(&[
-        "render",
-        scene().to_str().expect("utf-8"),
-        "--cache",
-        cache.to_str().expect("utf-8"),
-        "-o",
-        image.to_str().expect("utf-8"),
-        "--size",
-        "32x32",
-    ]);
+    let rendered = render_scene(&scene(), &cache, &image, "32x32", &[]);
     assert!(rendered.status.success());
     let (cache_before, image_before) = (
         std::fs::read(&cache).expect("cache"),
@@ -610,23 +586,8 @@ fn render_frames_write_one_file_per_frame() {
         "0",
     ]);
     assert_ok(&out);
-    let render = |output: &Path, extra: &[&str]| {
-        Command::new(WPBGI)
-            .args([
-                "render",
-                stage.to_str().expect("utf-8"),
-                "--cache",
-                cache.to_str().expect("utf-8"),
-                "-o",
-                output.to_str().expect("utf-8"),
-                "--size",
-                "32x32",
-            ])
-            .args(extra)
-            .env("SOURCE_DATE_EPOCH", "1764000000")
-            .output()
-            .expect("runs")
-    };
+    let render =
+        |output: &Path, extra: &[&str]| render_scene(&stage, &cache, output, "32x32", extra);
     let out = render(&d.join("beauty.$F4.exr"), &["--frames", "1-3"]);
     assert_ok(&out);
     let frame = |n: u32| std::fs::read(d.join(format!("beauty.{n:04}.exr"))).expect("a frame");
@@ -636,22 +597,7 @@ fn render_frames_write_one_file_per_frame() {
         "the camera moved: frames 1 and 3 cannot be the same"
     );
     let at_two = d.join("at-two.exr");
-    let out = Command::new(WPBGI)
-        .args([
-            "--time-code",
-            "2",
-            "render",
-            stage.to_str().expect("utf-8"),
-            "--cache",
-            cache.to_str().expect("utf-8"),
-            "-o",
-            at_two.to_str().expect("utf-8"),
-            "--size",
-            "32x32",
-        ])
-        .env("SOURCE_DATE_EPOCH", "1764000000")
-        .output()
-        .expect("runs");
+    let out = render(&at_two, &["--time-code", "2"]);
     assert_ok(&out);
     assert!(std::fs::read(&at_two).expect("time code 2") == two);
     // A step, and the '#' convention.
@@ -769,16 +715,8 @@ fn a_constant_environment_gives_the_furnace_answer() {
     assert_ok(&out);
     let image = d.join("render.exr");
     let render = |env: Option<&str>| {
-        let mut args: Vec<&str> = Vec::new();
-        if let Some(e) = env {
-            args.extend(["--env", e]);
-        }
-        let cache = cache.to_str().expect("utf-8");
-        let image = image.to_str().expect("utf-8");
-        args.extend([
-            "render", cube, "--cache", cache, "-o", image, "--size", "48x48",
-        ]);
-        wpbgi(&args)
+        let args: Vec<&str> = env.map(|e| ["--env", e]).into_iter().flatten().collect();
+        render_scene(Path::new(cube), &cache, &image, "48x48", &args)
     };
     let out = render(Some("0.5,1,2"));
     assert_ok(&out);
@@ -800,19 +738,7 @@ fn json_reports_on_standard_output() {
     let cache = d.join("scene.wpc");
     bake_ok(&cache);
     let image = d.join("out.exr");
-    let render = |scene: &Path| {
-        wpbgi(&[
-            "render",
-            scene.to_str().expect("utf-8"),
-            "--cache",
-            cache.to_str().expect("utf-8"),
-            "-o",
-            image.to_str().expect("utf-8"),
-            "--size",
-            "32x32",
-            "--json",
-        ])
-    };
+    let render = |scene: &Path| render_scene(scene, &cache, &image, "32x32", &["--json"]);
     let out = render(&scene());
     assert_ok(&out);
     let doc: serde_json::Value = serde_json::from_slice(&out.stdout).expect("one JSON document");

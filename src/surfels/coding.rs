@@ -88,6 +88,25 @@ pub fn encode<T: Coefficient + Send + Sync>(
 /// copied its subtree's list into its parent's once more.
 const SERIAL_BELOW: u32 = 512;
 
+/// `visit` of inner node `node`'s children, left then right, each appending what its subtree
+/// stores to `out` in that order: as two tasks whose lists are joined, or on this thread
+/// for a subtree of at most [`SERIAL_BELOW`] surfels.
+fn children<R: Send, T: Send>(
+    node: &crate::surfels::tree::Node,
+    out: &mut Vec<T>,
+    visit: impl Fn(u32, &mut Vec<T>) -> R + Sync,
+) -> (R, R) {
+    let [l, r] = node.children;
+    if node.count <= SERIAL_BELOW {
+        return (visit(l, out), visit(r, out));
+    }
+    let (mut out_l, mut out_r) = (Vec::new(), Vec::new());
+    let g = rayon::join(|| visit(l, &mut out_l), || visit(r, &mut out_r));
+    out.append(&mut out_l);
+    out.append(&mut out_r);
+    g
+}
+
 /// What [`encode`] codes with.
 struct Coder<'a, T> {
     tree: &'a SurfelTree,
@@ -115,16 +134,7 @@ impl<T: Coefficient + Send + Sync> Coder<'_, T> {
             }
             return g;
         }
-        let [l, r] = node.children;
-        let (gl, gr) = if node.count > SERIAL_BELOW {
-            let (mut out_l, mut out_r) = (Vec::new(), Vec::new());
-            let g = rayon::join(|| self.node(l, &mut out_l), || self.node(r, &mut out_r));
-            out.append(&mut out_l);
-            out.append(&mut out_r);
-            g
-        } else {
-            (self.node(l, out), self.node(r, out))
-        };
+        let (gl, gr) = children(node, out, |c, out| self.node(c, out));
         let g = SparseSum::of(&[(&gl, 1.0), (&gr, 1.0)]);
         let cut = tau * g.norm();
         let stored = NodeCoding {
@@ -173,22 +183,9 @@ fn sum_below<T: Coefficient + Send + Sync>(
     let g = if node.is_leaf() {
         needed.then(|| leaf(tree.order[node.first as usize]))
     } else {
-        let [l, r] = node.children;
-        let (gl, gr) = if node.count > SERIAL_BELOW {
-            let (mut out_l, mut out_r) = (Vec::new(), Vec::new());
-            let g = rayon::join(
-                || sum_below(tree, leaf, wanted, l, needed, &mut out_l),
-                || sum_below(tree, leaf, wanted, r, needed, &mut out_r),
-            );
-            out.append(&mut out_l);
-            out.append(&mut out_r);
-            g
-        } else {
-            (
-                sum_below(tree, leaf, wanted, l, needed, out),
-                sum_below(tree, leaf, wanted, r, needed, out),
-            )
-        };
+        let (gl, gr) = children(node, out, |c, out| {
+            sum_below(tree, leaf, wanted, c, needed, out)
+        });
         gl.zip(gr)
             .map(|(gl, gr)| SparseSum::of(&[(&gl, 1.0), (&gr, 1.0)]).keep(0.0))
     };

@@ -325,12 +325,12 @@ fn weight(a: &Surfel, b: &Surfel, radii: &[f32]) -> f32 {
 /// A max-heap over candidates by weight, ties to the higher index, whose weights can be
 /// lowered in place (they only ever decrease here). Removal then follows a total order:
 /// deterministic. Each entry holds its key, `(weight's order bits) << 32 | index`, so a
-/// comparison is one integer compare without a look-up.
+/// comparison is one integer compare without a look-up; the key is also where the weight is
+/// kept ([`weight_of`]).
 struct WeightHeap {
     heap: Vec<u64>,
-    /// Per candidate, where its entry is (`u32::MAX` once popped).
+    /// Per candidate still in the heap, where its entry is.
     pos: Vec<u32>,
-    w: Vec<f32>,
 }
 
 /// Children per entry of [`WeightHeap`]: four keys share a cache line, and the heap is half
@@ -348,11 +348,22 @@ fn weight_bits(w: f32) -> u64 {
     }) << 32
 }
 
+/// The weight of a heap key ([`weight_bits`]'s inverse; −0 comes back as +0, which lowers
+/// to the same values).
+fn weight_of(key: u64) -> f32 {
+    let bits = (key >> 32) as u32;
+    f32::from_bits(if bits >> 31 == 1 {
+        bits & !(1 << 31)
+    } else {
+        !bits
+    })
+}
+
 impl WeightHeap {
-    fn new(w: Vec<f32>) -> Self {
+    fn new(w: &[f32]) -> Self {
         let heap: Vec<u64> = (0..w.len()).map(|i| weight_bits(w[i]) | i as u64).collect();
         let pos = (0..w.len() as u32).collect();
-        let mut h = WeightHeap { heap, pos, w };
+        let mut h = WeightHeap { heap, pos };
         for i in (0..h.heap.len().div_ceil(ARITY)).rev() {
             h.sift_down(i);
         }
@@ -387,7 +398,6 @@ impl WeightHeap {
     fn pop(&mut self) -> Option<u32> {
         let top = *self.heap.first()? as u32;
         let last = self.heap.pop()?;
-        self.pos[top as usize] = u32::MAX;
         if !self.heap.is_empty() {
             self.heap[0] = last;
             self.sift_down(0);
@@ -397,9 +407,8 @@ impl WeightHeap {
 
     /// Lower the weight of `i` (still in the heap) by `dw ≥ 0`.
     fn decrease(&mut self, i: u32, dw: f32) {
-        self.w[i as usize] -= dw;
         let at = self.pos[i as usize] as usize;
-        self.heap[at] = weight_bits(self.w[i as usize]) | u64::from(i);
+        self.heap[at] = weight_bits(weight_of(self.heap[at]) - dw) | u64::from(i);
         self.sift_down(at);
     }
 }
@@ -462,7 +471,7 @@ fn eliminate(c: &[Surfel], grid: &Grid, radii: &[f32], keep: usize) -> Vec<bool>
         .into_par_iter()
         .map(|i| neighbours.of_candidate(i).iter().map(|&(_, w)| w).sum())
         .collect();
-    let mut heap = WeightHeap::new(w);
+    let mut heap = WeightHeap::new(&w);
     let mut alive = vec![true; c.len()];
     let mut remaining = c.len();
     while remaining > keep {
@@ -547,7 +556,7 @@ mod tests {
         let w: Vec<f32> = (0..n)
             .map(|_| values[(rng.next_1d() * values.len() as f32) as usize % values.len()])
             .collect();
-        let mut heap = WeightHeap::new(w.clone());
+        let mut heap = WeightHeap::new(&w);
         let mut w = w;
         let mut alive = vec![true; n];
         for _ in 0..n {
