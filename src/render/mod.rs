@@ -377,11 +377,12 @@ pub fn render_final_cancellable(
         (x1.div_ceil(TILE) * TILE).min(w),
         (y1.div_ceil(TILE) * TILE).min(h),
     );
+    let border = sparse::CLEARANCE_PIXELS.max(1);
     let rect = [
-        tx0.saturating_sub(1),
-        ty0.saturating_sub(1),
-        (tx1 + 1).min(w),
-        (ty1 + 1).min(h),
+        tx0.saturating_sub(border),
+        ty0.saturating_sub(border),
+        (tx1 + border).min(w),
+        (ty1 + border).min(h),
     ];
     check_fits((x1 - x0, y1 - y0), rect)?;
     let sampling = PixelSampling::new(&ctx, camera, &primary_settings, rect);
@@ -452,7 +453,7 @@ pub fn render_final_cancellable(
                 let (tx, ty) = (tile.origin.0 / TILE, tile.origin.1 / TILE);
                 let size = (TILE.min(w - tx * TILE), TILE.min(h - ty * TILE));
                 let rect = (tile.origin, size, w);
-                let r = gather_tile(&ctx, &senders, &tile.receivers, rect, frame, settings);
+                let r = gather_tile(&ctx, &senders, tile, rect, frame, settings);
                 let n = done.fetch_add(1, Ordering::Relaxed) + 1;
                 progress("render", n as f32 / tiles.len() as f32);
                 Ok(r)
@@ -540,6 +541,9 @@ struct TilePrimary {
     origin: (u32, u32),
     pixels: Vec<(u32, PrimarySample)>,
     receivers: Vec<Receiver>,
+    /// Per receiver, its [`sparse::clearance`] if it is a geometric edge's quarter, else
+    /// infinite.
+    clearance: Vec<f32>,
     samples: u64,
 }
 
@@ -578,6 +582,7 @@ fn primary_tile(
         origin: (tx * TILE, ty * TILE),
         pixels: Vec::new(),
         receivers: Vec::new(),
+        clearance: Vec::new(),
         samples: 0,
     };
     for y in ty * TILE..((ty + 1) * TILE).min(h) {
@@ -588,6 +593,19 @@ fn primary_tile(
             out.pixels.push((y * w + x, sample));
         }
     }
+    let needed = sparse::edge_quarters_borrow(sparse::coarsest_cell(w, h));
+    out.clearance = out
+        .receivers
+        .iter()
+        .map(|r| match needed && sparse::on_geometric_edge(r) {
+            true => {
+                let around =
+                    sampling.surfaces_around((r.pixel % w, r.pixel / w), sparse::CLEARANCE_PIXELS);
+                sparse::clearance(r, around)
+            }
+            false => f32::INFINITY,
+        })
+        .collect();
     out
 }
 
@@ -624,11 +642,12 @@ struct FramePlan {
 fn gather_tile(
     ctx: &Tracer,
     senders: &Senders,
-    receivers: &[Receiver],
+    tile: &TilePrimary,
     (origin, size, width): ((u32, u32), (u32, u32), u32),
     frame: FramePlan,
     settings: &FinalSettings,
 ) -> (Vec<Gathered>, GatherStats) {
+    let receivers = &tile.receivers;
     let mut stats = GatherStats {
         receivers: receivers.len() as u64,
         ..Default::default()
@@ -650,7 +669,15 @@ fn gather_tile(
     }
     // The grid's anchors and the receivers that cannot interpolate gather first; then the
     // others interpolate where their cell allows, finer grids gathering where it does not.
-    let plan = SparsePlan::new(receivers, origin, size, width, frame.cell, settings.sparse);
+    let plan = SparsePlan::new(
+        receivers,
+        origin,
+        size,
+        width,
+        frame.cell,
+        settings.sparse,
+        &tile.clearance,
+    );
     let mut value = vec![Rgb::ZERO; receivers.len()];
     let (interpolated, glossy) = plan.run(receivers, &mut value, |which, value| {
         gather_set(

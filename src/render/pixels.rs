@@ -79,6 +79,7 @@ struct ChainEnd {
 #[derive(Clone, Debug)]
 struct CentreHit {
     mesh: u32,
+    point: Vec3,
     normal: Vec3,
     depth: f32,
     /// For a mirror or clear glass: the ends of its specular chain, by chain signature.
@@ -149,6 +150,7 @@ impl PixelSampling {
                 };
                 let centre = CentreHit {
                     mesh: hit.mesh,
+                    point: hit.p,
                     normal: hit.frame.n,
                     depth: hit.t,
                     ends,
@@ -170,6 +172,21 @@ impl PixelSampling {
         let [x0, y0, x1, y1] = self.rect;
         debug_assert!((x0..x1).contains(&x) && (y0..y1).contains(&y));
         ((y - y0) * (x1 - x0) + (x - x0)) as usize
+    }
+
+    /// The surfaces that the centre rays of the pixels within `reach` of pixel `(x, y)` (in
+    /// the image and the rectangle) hit: mesh, point and shading normal.
+    pub fn surfaces_around(
+        &self,
+        (x, y): (u32, u32),
+        reach: u32,
+    ) -> impl Iterator<Item = (u32, Vec3, Vec3)> + '_ {
+        let [x0, y0, x1, y1] = self.rect;
+        let xs = x.saturating_sub(reach).max(x0)..(x + reach + 1).min(x1);
+        let ys = y.saturating_sub(reach).max(y0)..(y + reach + 1).min(y1);
+        ys.flat_map(move |y| xs.clone().map(move |x| (x, y)))
+            .filter_map(|(x, y)| self.centre[self.index(x, y)].as_ref())
+            .map(|c| (c.mesh, c.point, c.normal))
     }
 
     /// How pixel `(x, y)` is sampled (see the module docs).

@@ -15,9 +15,19 @@
 //!   gathers once per quarter of it; every other pixel once (`render/pixels.rs`). Seen
 //!   through a mirror or a clear glass, the receivers of one quarter over the pixels are a
 //!   layer too, which takes its corners from the same quarter of its anchors' pixels, else
-//!   from whole pixels, else from the first quarter there on its surface. On a geometric edge (the
-//!   quarters of primary hits) they are not interpolated from other pixels: from whole pixels
-//!   across the edge that cost 4–9 % relMSE at 128² (cbox-rough, cbox-glossy).
+//!   from whole pixels, else from the first quarter there on its surface.
+//! - **Quarters of a geometric edge** (of primary hits) are not interpolated across a cell:
+//!   from whole pixels across the edge that cost 4–9 % relMSE at 128² (cbox-rough,
+//!   cbox-glossy). In frames of 512 pixels and more (`edge_quarters_borrow`) they take,
+//!   once every whole pixel has its value, the light of the whole pixels within
+//!   [`NEIGHBOURS`] of their own on their surface (`SparsePlan::light_beside`): a
+//!   quarter lies within a pixel or two of them, where its cell's corners lie up to 8 away.
+//!   Three guards: the donors agree to [`CONTRAST`]; at least [`DONORS`] of them; and they
+//!   lie within [`REACH`] of the quarter's clearance (`clearance`), the distance to the nearest other
+//!   surface around that the quarter lies behind (the ceiling in the gap above a hanging
+//!   light's rim, dark beside the lit ceiling: without the guard, cbox-diffuse's relMSE at
+//!   256² doubled). A crease or a contact (a wall facing the quarter) does not count: the light
+//!   there changes smoothly enough at these sizes. What fails gathers, as before.
 //! - **Quarters on one surface.** Where three or four quarters of a geometric edge's pixel lie
 //!   on one surface (on each other's mesh and plane, with BSDFs that interpolate: the same
 //!   rules as corners, below), the two farthest apart gather, and the others take the nearer
@@ -60,6 +70,7 @@
 use super::primary::Receiver;
 use crate::bsdf::Bsdf;
 use crate::spectrum::{luminance, Rgb};
+use glam::Vec3;
 use std::collections::HashMap;
 
 /// Pixels between the anchors along a row or column in frames under 512 pixels on their
@@ -87,6 +98,27 @@ pub fn coarsest_cell(width: u32, height: u32) -> u32 {
     cell
 }
 
+/// How far (in pixels, along rows and columns) the centre hits lie whose surfaces bound an
+/// edge's quarter's clearance (`clearance`).
+pub const CLEARANCE_PIXELS: u32 = 4;
+
+/// How far (in pixels, along rows and columns) a geometric edge's quarter looks for whole
+/// pixels on its surface to take its value from (`SparsePlan::light_beside`).
+pub const NEIGHBOURS: u32 = 2;
+
+/// The farthest a pixel that lends an edge's quarter its light may lie, as a fraction of the
+/// quarter's clearance: irradiance caching's records are trusted to about a tenth to a half
+/// of the distance to the geometry around.
+pub const REACH: f32 = 0.25;
+
+/// A surface point lies in front of a receiver when it lies above the receiver's tangent
+/// plane by more than this fraction of its distance.
+pub const FRONT: f32 = 0.05;
+
+/// The fewest pixels an edge's quarter takes its light from: one alone is an extrapolation
+/// that no other checks.
+pub const DONORS: usize = 2;
+
 /// The finest cells: 2 pixels, whose receivers are the next pixel over from their corners.
 const FINEST_CELL: u32 = 2;
 
@@ -111,6 +143,9 @@ pub(crate) struct SparsePlan {
     irradiance: Vec<bool>,
     /// Every eligible receiver by its place in the tile's layers.
     at: HashMap<Key, u32>,
+    /// Per receiver: for a geometric edge's quarter, how far the nearest other surface in
+    /// front of it lies ([`clearance`]); infinite for the others.
+    clearance: Vec<f32>,
     /// The cells' sizes, coarsest first, halving down to [`FINEST_CELL`].
     cell_sizes: Vec<u32>,
     /// The tile's origin in the image, its size, and the image's width.
@@ -137,11 +172,34 @@ fn interpolates_with(corner: &Bsdf, bsdf: &Bsdf) -> bool {
 /// (normals within 18°, offset from `r`'s tangent plane within a tenth of the distance) and
 /// its BSDF [`interpolates_with`] `r`'s.
 fn lends_to(c: &Receiver, r: &Receiver) -> bool {
-    let offset = c.p - r.p;
-    c.mesh == r.mesh
-        && c.frame.n.dot(r.frame.n) >= SAME_NORMAL
+    on_surface_of(c.mesh, c.p, c.frame.n, r) && interpolates_with(&c.bsdf, &r.bsdf)
+}
+
+/// Whether the point `p` with normal `n` on mesh `mesh` lies on receiver `r`'s surface: its
+/// mesh, normals within 18°, offset from `r`'s tangent plane within a tenth of the distance.
+fn on_surface_of(mesh: u32, p: Vec3, n: Vec3, r: &Receiver) -> bool {
+    let offset = p - r.p;
+    mesh == r.mesh
+        && n.dot(r.frame.n) >= SAME_NORMAL
         && r.frame.n.dot(offset).abs() <= SAME_PLANE * offset.length()
-        && interpolates_with(&c.bsdf, &r.bsdf)
+}
+
+/// How far from receiver `r` the nearest of the surface points `around` (the centre hits
+/// of the pixels around its own: mesh, point, normal) lies that is another surface than
+/// `r`'s (as [`lends_to`] tells surfaces apart) and in front of its tangent plane (above it
+/// by [`FRONT`] of the distance): infinite where none is. Irradiance changes over distances
+/// of the order of the distance to the geometry around (the split-sphere bound of irradiance
+/// caching), so an edge's quarter takes its value only from pixels much nearer than that.
+pub(crate) fn clearance(r: &Receiver, around: impl Iterator<Item = (u32, Vec3, Vec3)>) -> f32 {
+    around
+        .filter(|&(mesh, p, n)| {
+            let offset = p - r.p;
+            !on_surface_of(mesh, p, n, r)
+                && r.frame.n.dot(offset) > FRONT * offset.length()
+                && n.dot(offset) > 0.0
+        })
+        .map(|(_, p, _)| (p - r.p).length())
+        .fold(f32::INFINITY, f32::min)
 }
 
 /// Whether values whose luminances range from `lo` to `hi` agree to [`CONTRAST`].
@@ -149,8 +207,18 @@ fn agree(lo: f32, hi: f32) -> bool {
     hi <= (1.0 + CONTRAST) * lo
 }
 
+/// Whether a geometric edge's quarters take their value from the pixels beside them
+/// ([`SparsePlan::light_beside`]) in a frame whose anchors lie every `coarsest` pixels
+/// ([`coarsest_cell`]): only in frames of [`WIDEST_CELL`] (512 pixels and more on the
+/// shorter side). At 256² two pixels span what four span at 512², and it cost cbox-rough
+/// and cbox-glossy 2–3 % of relMSE against Mitsuba where at 512² it cost none
+/// (docs/render.md).
+pub(crate) fn edge_quarters_borrow(coarsest: u32) -> bool {
+    coarsest >= WIDEST_CELL
+}
+
 /// Whether receiver `r` is a quarter of a geometric edge's pixel (a primary hit's).
-fn on_geometric_edge(r: &Receiver) -> bool {
+pub(crate) fn on_geometric_edge(r: &Receiver) -> bool {
     r.chain == 0 && r.quarter.is_some()
 }
 
@@ -188,6 +256,7 @@ impl SparsePlan {
         width: u32,
         coarsest: u32,
         sparse: bool,
+        clearance: &[f32],
     ) -> SparsePlan {
         let cell_sizes: Vec<u32> =
             std::iter::successors(Some(coarsest.max(FINEST_CELL)), |&c| Some(c / 2))
@@ -251,7 +320,10 @@ impl SparsePlan {
                 if e {
                     at.insert(key, k as u32);
                 }
+                let edge =
+                    sparse && edge_quarters_borrow(coarsest) && on_geometric_edge(&receivers[k]);
                 l.is_none()
+                    && !edge
                     && (!e
                         || (on_grid(x, size.0, cell_sizes[0]) && on_grid(y, size.1, cell_sizes[0])))
             })
@@ -268,6 +340,7 @@ impl SparsePlan {
             lender,
             irradiance,
             at,
+            clearance: clearance.to_vec(),
             cell_sizes,
             origin,
             size,
@@ -288,33 +361,18 @@ impl SparsePlan {
         let first: Vec<usize> = (0..receivers.len()).filter(|&k| self.first[k]).collect();
         gather(&first, value);
         let (mut interpolated, mut by_radiance) = (0, 0);
-        let mut pending = Vec::new();
-        let mut disagree = Vec::new();
+        let mut count = |k: usize| {
+            interpolated += 1;
+            by_radiance += usize::from(!self.irradiance[k]);
+        };
+        let (mut pending, mut edges, mut lent) = (Vec::new(), Vec::new(), Vec::new());
         for k in (0..receivers.len()).filter(|&k| !self.first[k]) {
-            match self.lender[k] {
-                Some((a, b)) => {
-                    let (a, b) = (a as usize, b as usize);
-                    let (la, lb) = (luminance(value[a]), luminance(value[b]));
-                    if agree(la.min(lb), la.max(lb)) {
-                        let p = receivers[k].p;
-                        let nearer = if (receivers[a].p - p).length_squared()
-                            <= (receivers[b].p - p).length_squared()
-                        {
-                            a
-                        } else {
-                            b
-                        };
-                        value[k] = value[nearer];
-                        interpolated += 1;
-                        by_radiance += usize::from(!self.irradiance[k]);
-                    } else {
-                        disagree.push(k);
-                    }
-                }
-                None => pending.push(k),
+            match (self.lender[k], on_geometric_edge(&receivers[k])) {
+                (Some(_), _) => lent.push(k),
+                (None, true) => edges.push(k),
+                (None, false) => pending.push(k),
             }
         }
-        gather(&disagree, value);
         for (level, &cell) in self.cell_sizes.iter().enumerate() {
             let finer = self.cell_sizes.get(level + 1).copied();
             let (mut now, mut later) = (Vec::new(), Vec::new());
@@ -322,8 +380,7 @@ impl SparsePlan {
                 match self.interpolate(receivers, k, cell, |j| value[j]) {
                     Some(e) => {
                         value[k] = e;
-                        interpolated += 1;
-                        by_radiance += usize::from(!self.irradiance[k]);
+                        count(k);
                     }
                     None => match finer {
                         Some(f) if !self.on_grid_of(receivers, k, f) => later.push(k),
@@ -334,7 +391,87 @@ impl SparsePlan {
             gather(&now, value);
             pending = later;
         }
+        // A geometric edge's quarters, once every whole pixel has its value: from the whole
+        // pixels beside them on their surface, else they gather.
+        let mut now = Vec::new();
+        for k in edges {
+            match self.light_beside(receivers, k, |j| value[j]) {
+                Some(e) => {
+                    value[k] = e;
+                    count(k);
+                }
+                None => now.push(k),
+            }
+        }
+        gather(&now, value);
+        // Then the quarters that share their pixel's two farthest apart on one surface.
+        let mut disagree = Vec::new();
+        for k in lent {
+            let Some((a, b)) = self.lender[k] else {
+                continue;
+            };
+            let (a, b) = (a as usize, b as usize);
+            let (la, lb) = (luminance(value[a]), luminance(value[b]));
+            if agree(la.min(lb), la.max(lb)) {
+                let p = receivers[k].p;
+                let nearer = if (receivers[a].p - p).length_squared()
+                    <= (receivers[b].p - p).length_squared()
+                {
+                    a
+                } else {
+                    b
+                };
+                value[k] = value[nearer];
+                count(k);
+            } else {
+                disagree.push(k);
+            }
+        }
+        gather(&disagree, value);
         (interpolated, by_radiance)
+    }
+
+    /// The value of receiver `k`, a quarter of a geometric edge's pixel, from the whole
+    /// pixels within [`NEIGHBOURS`] pixels of its own (in the tile) that can lend to it, as a
+    /// cell's corners must ([`lends_to`]), and lie within [`REACH`] of its clearance
+    /// ([`clearance`]), weighted by the inverse square of their distance to it, given their
+    /// values (`value(j)` for receiver j); `None` where fewer than [`DONORS`] do or their
+    /// luminances disagree by more than [`CONTRAST`].
+    fn light_beside(
+        &self,
+        receivers: &[Receiver],
+        k: usize,
+        value: impl Fn(usize) -> Rgb,
+    ) -> Option<Rgb> {
+        let r = &receivers[k];
+        let (x, y) = local(r.pixel, self.origin, self.width);
+        let (mut sum, mut weights, mut donors) = (Rgb::ZERO, 0.0f32, 0);
+        let (mut lo, mut hi) = (f32::INFINITY, 0.0f32);
+        let reach = i64::from(NEIGHBOURS);
+        for (dx, dy) in (-reach..=reach).flat_map(|dy| (-reach..=reach).map(move |dx| (dx, dy))) {
+            let (nx, ny) = (i64::from(x) + dx, i64::from(y) + dy);
+            let inside = (0..i64::from(self.size.0)).contains(&nx)
+                && (0..i64::from(self.size.1)).contains(&ny);
+            if (dx, dy) == (0, 0) || !inside {
+                continue;
+            }
+            let pixel = ny as u32 * self.size.0 + nx as u32;
+            let Some(&j) = self.at.get(&(pixel, r.chain, None)) else {
+                continue;
+            };
+            let c = &receivers[j as usize];
+            let distance = (c.p - r.p).length();
+            if !lends_to(c, r) || distance > REACH * self.clearance[k] {
+                continue;
+            }
+            let e = value(j as usize);
+            let w = 1.0 / (distance * distance).max(f32::MIN_POSITIVE);
+            (lo, hi) = (lo.min(luminance(e)), hi.max(luminance(e)));
+            sum += e * w;
+            weights += w;
+            donors += 1;
+        }
+        (donors >= DONORS && weights.is_finite() && agree(lo, hi)).then(|| sum * (1.0 / weights))
     }
 
     /// Whether receiver `k`'s value is its irradiance E, which its albedo multiplies
@@ -405,6 +542,24 @@ mod tests {
     use crate::geometry::frame::Frame;
     use glam::Vec3;
 
+    /// No receiver near another surface: every clearance infinite.
+    fn open(receivers: &[Receiver]) -> Vec<f32> {
+        vec![f32::INFINITY; receivers.len()]
+    }
+
+    /// The plan of an 8 × 8 tile at the image's corner with anchors every 4 pixels.
+    fn plan8(receivers: &[Receiver], sparse: bool) -> SparsePlan {
+        SparsePlan::new(
+            receivers,
+            (0, 0),
+            (8, 8),
+            8,
+            ANCHOR_SPACING,
+            sparse,
+            &open(receivers),
+        )
+    }
+
     /// Receivers on the plane z = 0 (mesh 0), one per pixel of an 8 × 8 tile at the image's
     /// corner, pixel (x, y) at (x, y, 0) facing +z.
     fn plane() -> Vec<Receiver> {
@@ -439,7 +594,7 @@ mod tests {
     #[test]
     fn interpolates_within_a_surface_where_the_corners_agree() {
         let receivers = plane();
-        let plan = SparsePlan::new(&receivers, (0, 0), (8, 8), 8, ANCHOR_SPACING, true);
+        let plan = plan8(&receivers, true);
         let anchors: Vec<u32> = (0..64).filter(|&k| plan.first[k as usize]).collect();
         let expected: Vec<u32> = (0..64)
             .filter(|k| [0, 4, 7].contains(&(k % 8)) && [0, 4, 7].contains(&(k / 8)))
@@ -466,12 +621,7 @@ mod tests {
         let changed = |f: &dyn Fn(&mut Receiver)| {
             let mut r = receivers.clone();
             f(&mut r[corner]);
-            SparsePlan::new(&r, (0, 0), (8, 8), 8, ANCHOR_SPACING, true).interpolate(
-                &r,
-                k,
-                ANCHOR_SPACING,
-                e,
-            )
+            plan8(&r, true).interpolate(&r, k, ANCHOR_SPACING, e)
         };
         assert!(changed(&|r| r.mesh = 1).is_none(), "another mesh");
         let turned = Frame::from_normal(Vec3::new(0.0, 0.4, 1.0).normalize());
@@ -495,12 +645,12 @@ mod tests {
         };
         let mut shiny = receivers.clone();
         shiny[k].bsdf = gold(0.3);
-        let plan = SparsePlan::new(&shiny, (0, 0), (8, 8), 8, ANCHOR_SPACING, true);
+        let plan = plan8(&shiny, true);
         assert!(plan.interpolate(&shiny, k, ANCHOR_SPACING, e).is_none());
         for r in shiny.iter_mut() {
             r.bsdf = gold(0.3);
         }
-        let plan = SparsePlan::new(&shiny, (0, 0), (8, 8), 8, ANCHOR_SPACING, true);
+        let plan = plan8(&shiny, true);
         let got = plan
             .interpolate(&shiny, k, ANCHOR_SPACING, e)
             .expect("interpolates");
@@ -509,19 +659,19 @@ mod tests {
             !plan.by_irradiance(k),
             "a conductor's value is its radiance"
         );
-        let diffuse = SparsePlan::new(&receivers, (0, 0), (8, 8), 8, ANCHOR_SPACING, true);
+        let diffuse = plan8(&receivers, true);
         assert!(
             diffuse.by_irradiance(k),
             "a diffuse one's is its irradiance"
         );
         shiny[corner].bsdf = gold(0.31);
-        let plan = SparsePlan::new(&shiny, (0, 0), (8, 8), 8, ANCHOR_SPACING, true);
+        let plan = plan8(&shiny, true);
         assert!(
             plan.interpolate(&shiny, k, ANCHOR_SPACING, e).is_none(),
             "a corner of another roughness"
         );
         // Off, everyone gathers.
-        let dense = SparsePlan::new(&receivers, (0, 0), (8, 8), 8, ANCHOR_SPACING, false);
+        let dense = plan8(&receivers, false);
         assert!((0..64).all(|k| dense.first[k]));
     }
 
@@ -546,7 +696,15 @@ mod tests {
         coarsest: u32,
         light: impl Fn(Vec3) -> Rgb,
     ) -> Vec<(Rgb, bool)> {
-        let plan = SparsePlan::new(receivers, (0, 0), size, size.0, coarsest, true);
+        let plan = SparsePlan::new(
+            receivers,
+            (0, 0),
+            size,
+            size.0,
+            coarsest,
+            true,
+            &open(receivers),
+        );
         let mut value = vec![Rgb::splat(f32::NAN); receivers.len()];
         let mut gathered = vec![false; receivers.len()];
         let (interpolated, _) = plan.run(receivers, &mut value, |which, value| {
@@ -630,7 +788,7 @@ mod tests {
             r.chain = 0;
             r.mesh = 0;
         }
-        let plan = SparsePlan::new(&edge, (0, 0), (8, 8), 8, ANCHOR_SPACING, true);
+        let plan = plan8(&edge, true);
         let quarters: Vec<usize> = (0..edge.len())
             .filter(|&k| edge[k].quarter.is_some())
             .collect();
@@ -642,7 +800,7 @@ mod tests {
         let pixel = 64 + 5 * 8 + 6;
         let mut twice = receivers.clone();
         twice.push(twice[pixel].clone());
-        let plan = SparsePlan::new(&twice, (0, 0), (8, 8), 8, ANCHOR_SPACING, true);
+        let plan = plan8(&twice, true);
         assert!(plan.first[pixel] && plan.first[twice.len() - 1]);
     }
 
@@ -675,6 +833,107 @@ mod tests {
         let out = passes_with(&receivers, (8, 8), ANCHOR_SPACING, step);
         assert!([q0, q1, q2, q3].iter().all(|&q| out[q].1));
         assert_eq!(out[q1].0, step(receivers[q1].p));
+    }
+
+    /// Pixel (7, 7) of a 16 × 16 tile on the plane made a geometric edge's four quarters (on
+    /// the plane too), each 0.25 pixel off the centre.
+    fn edge_quarters() -> (Vec<Receiver>, [usize; 4]) {
+        let mut receivers = plane_of(16);
+        let centre = 7 * 16 + 7;
+        let quarter = |q: u8| {
+            let (dx, dy) = (f32::from(q % 2) - 0.5, f32::from(q / 2) - 0.5);
+            Receiver {
+                quarter: Some(q),
+                p: receivers[centre].p + Vec3::new(0.5 * dx, 0.5 * dy, 0.0),
+                ..receivers[centre].clone()
+            }
+        };
+        let quarters: Vec<Receiver> = (0..4).map(quarter).collect();
+        receivers[centre] = quarters[0].clone();
+        receivers.extend(quarters[1..].iter().cloned());
+        (receivers, [centre, 256, 257, 258])
+    }
+
+    /// Which receivers gather, and every value, for a tile of 16 pixels with anchors every
+    /// `coarsest`, the given clearances and `light` at each receiver.
+    fn edge_passes(
+        receivers: &[Receiver],
+        coarsest: u32,
+        clearance: &[f32],
+        light: impl Fn(Vec3) -> Rgb,
+    ) -> Vec<(Rgb, bool)> {
+        let plan = SparsePlan::new(receivers, (0, 0), (16, 16), 16, coarsest, true, clearance);
+        let mut value = vec![Rgb::splat(f32::NAN); receivers.len()];
+        let mut gathered = vec![false; receivers.len()];
+        plan.run(receivers, &mut value, |which, value| {
+            for &k in which {
+                gathered[k] = true;
+                value[k] = light(receivers[k].p);
+            }
+        });
+        value.into_iter().zip(gathered).collect()
+    }
+
+    /// In a frame of 512 pixels or more (anchors every 8), a geometric edge's quarters take
+    /// the light of the whole pixels within two of theirs on their surface, weighted by the
+    /// inverse square of the distance: under constant light it (to rounding), under linear light
+    /// within the slope times the farthest donor's reach. They gather instead where the
+    /// donors disagree by more than [`CONTRAST`], where another surface lies near in front
+    /// (their clearance under 1/[`REACH`] of the donors' distance), and in smaller frames.
+    #[test]
+    fn edge_quarters_take_their_neighbours_light_where_clear() {
+        let (receivers, quarters) = edge_quarters();
+        let clear = open(&receivers);
+        let flat = |_: Vec3| Rgb::splat(0.7);
+        let out = edge_passes(&receivers, WIDEST_CELL, &clear, flat);
+        for q in quarters {
+            assert!(!out[q].1, "{q} gathered");
+            assert!((out[q].0 - Rgb::splat(0.7)).abs().max_element() < 1e-6);
+        }
+        let slope = |p: Vec3| Rgb::splat(1.0 + 0.01 * p.x + 0.02 * p.y);
+        let out = edge_passes(&receivers, WIDEST_CELL, &clear, slope);
+        for q in quarters {
+            let want = slope(receivers[q].p);
+            assert!(!out[q].1);
+            let bound = 0.03 * 2.0 * std::f32::consts::SQRT_2;
+            assert!((out[q].0 - want).abs().max_element() < bound, "{q}");
+        }
+        // A step of 2× through the pixel: its neighbours disagree, so the quarters gather.
+        let step = |p: Vec3| Rgb::splat(if p.x > 7.0 { 2.0 } else { 1.0 });
+        let out = edge_passes(&receivers, WIDEST_CELL, &clear, step);
+        assert!(quarters.iter().all(|&q| out[q].1));
+        // Another surface half a pixel in front: only donors within an eighth of a pixel
+        // would do, and none is that near. The two farthest apart gather, and the others,
+        // on their surface, share their gathers (`quarters_on_one_surface_share_the_farthest_two`).
+        let mut near = clear.clone();
+        for q in quarters {
+            near[q] = 0.5;
+        }
+        let out = edge_passes(&receivers, WIDEST_CELL, &near, flat);
+        let [q0, q1, q2, q3] = quarters;
+        assert!(out[q0].1 && out[q3].1 && !out[q1].1 && !out[q2].1);
+        // Anchors every 4 pixels (frames under 512): the two gather as before.
+        let out = edge_passes(&receivers, ANCHOR_SPACING, &clear, flat);
+        assert!(out[q0].1 && out[q3].1 && !out[q1].1 && !out[q2].1);
+    }
+
+    /// A receiver's clearance counts the other surfaces in front of its tangent plane that
+    /// it lies behind (a lid over it, the back of a hanging light), not a wall facing it (a
+    /// crease), nor what is behind its plane or on it.
+    #[test]
+    fn clearance_counts_the_surfaces_a_receiver_lies_behind() {
+        let r = &plane()[0];
+        let lid = (1, Vec3::new(0.3, 0.0, 1.0), Vec3::Z);
+        let wall = (
+            2,
+            Vec3::new(0.2, 0.0, 0.2),
+            Vec3::new(-1.0, 0.0, 1.0).normalize(),
+        );
+        let below = (1, Vec3::new(0.0, 0.0, -0.1), Vec3::Z);
+        let same = (0, Vec3::new(0.1, 0.0, 0.0), Vec3::Z);
+        let around = [lid, wall, below, same];
+        assert_eq!(clearance(r, around.into_iter()), lid.1.length());
+        assert_eq!(clearance(r, [wall, below, same].into_iter()), f32::INFINITY);
     }
 
     /// The anchors' spacing doubles with the frame's shorter side from 512 pixels, up to 8,
