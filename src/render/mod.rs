@@ -541,8 +541,8 @@ struct TilePrimary {
     origin: (u32, u32),
     pixels: Vec<(u32, PrimarySample)>,
     receivers: Vec<Receiver>,
-    /// Per receiver, its [`sparse::clearance`] if it is a geometric edge's quarter, else
-    /// infinite.
+    /// Per receiver, its [`sparse::clearance`] if it is a primary hit in a frame whose edges
+    /// borrow their neighbours' light ([`sparse::edge_quarters_borrow`]), else infinite.
     clearance: Vec<f32>,
     samples: u64,
 }
@@ -597,7 +597,7 @@ fn primary_tile(
     out.clearance = out
         .receivers
         .iter()
-        .map(|r| match needed && sparse::on_geometric_edge(r) {
+        .map(|r| match needed && r.chain == 0 {
             true => {
                 let around =
                     sampling.surfaces_around((r.pixel % w, r.pixel / w), sparse::CLEARANCE_PIXELS);

@@ -27,7 +27,10 @@
 //!   surface around that the quarter lies behind (the ceiling in the gap above a hanging
 //!   light's rim, dark beside the lit ceiling: without the guard, cbox-diffuse's relMSE at
 //!   256² doubled). A crease or a contact (a wall facing the quarter) does not count: the light
-//!   there changes smoothly enough at these sizes. What fails gathers, as before.
+//!   there changes smoothly enough at these sizes. What fails gathers, as before. A primary
+//!   hit whose finest cell fails (a corner on another surface or across a contrast) does the
+//!   same before it gathers: it feeds no other cell, and the pixels beside it that have their
+//!   value by then are its donors.
 //! - **Quarters on one surface.** Where three or four quarters of a geometric edge's pixel lie
 //!   on one surface (on each other's mesh and plane, with BSDFs that interpolate: the same
 //!   rules as corners, below), the two farthest apart gather, and the others take the nearer
@@ -143,9 +146,12 @@ pub(crate) struct SparsePlan {
     irradiance: Vec<bool>,
     /// Every eligible receiver by its place in the tile's layers.
     at: HashMap<Key, u32>,
-    /// Per receiver: for a geometric edge's quarter, how far the nearest other surface in
-    /// front of it lies ([`clearance`]); infinite for the others.
+    /// Per receiver: for a primary hit, how far the nearest other surface around lies that
+    /// it lies behind ([`clearance`]); infinite for the others.
     clearance: Vec<f32>,
+    /// Whether edges' quarters and the finest cells' primary hits that fail take the light of
+    /// the pixels beside them ([`edge_quarters_borrow`]).
+    borrow: bool,
     /// The cells' sizes, coarsest first, halving down to [`FINEST_CELL`].
     cell_sizes: Vec<u32>,
     /// The tile's origin in the image, its size, and the image's width.
@@ -310,6 +316,7 @@ impl SparsePlan {
                 lender[k] = Some((pair.0 as u32, pair.1 as u32));
             }
         }
+        let borrow = sparse && edge_quarters_borrow(coarsest);
         let mut at = HashMap::new();
         let first = cells
             .iter()
@@ -320,8 +327,7 @@ impl SparsePlan {
                 if e {
                     at.insert(key, k as u32);
                 }
-                let edge =
-                    sparse && edge_quarters_borrow(coarsest) && on_geometric_edge(&receivers[k]);
+                let edge = borrow && on_geometric_edge(&receivers[k]);
                 l.is_none()
                     && !edge
                     && (!e
@@ -341,6 +347,7 @@ impl SparsePlan {
             irradiance,
             at,
             clearance: clearance.to_vec(),
+            borrow,
             cell_sizes,
             origin,
             size,
@@ -358,12 +365,19 @@ impl SparsePlan {
         value: &mut [Rgb],
         mut gather: impl FnMut(&[usize], &mut [Rgb]),
     ) -> (usize, usize) {
+        // Which receivers have their value yet.
+        let mut known = vec![false; receivers.len()];
+        let mut gather = |which: &[usize], value: &mut [Rgb], known: &mut [bool]| {
+            gather(which, value);
+            which.iter().for_each(|&k| known[k] = true);
+        };
         let first: Vec<usize> = (0..receivers.len()).filter(|&k| self.first[k]).collect();
-        gather(&first, value);
+        gather(&first, value, &mut known);
         let (mut interpolated, mut by_radiance) = (0, 0);
-        let mut count = |k: usize| {
+        let mut count = |k: usize, known: &mut [bool]| {
             interpolated += 1;
             by_radiance += usize::from(!self.irradiance[k]);
+            known[k] = true;
         };
         let (mut pending, mut edges, mut lent) = (Vec::new(), Vec::new(), Vec::new());
         for k in (0..receivers.len()).filter(|&k| !self.first[k]) {
@@ -380,7 +394,7 @@ impl SparsePlan {
                 match self.interpolate(receivers, k, cell, |j| value[j]) {
                     Some(e) => {
                         value[k] = e;
-                        count(k);
+                        count(k, &mut known);
                     }
                     None => match finer {
                         Some(f) if !self.on_grid_of(receivers, k, f) => later.push(k),
@@ -388,22 +402,36 @@ impl SparsePlan {
                     },
                 }
             }
-            gather(&now, value);
+            // The finest cells' failures feed no other cell: a primary hit among them may
+            // take the light of the pixels beside it, as an edge's quarter does.
+            if finer.is_none() && self.borrow {
+                now.retain(|&k| {
+                    let beside = (receivers[k].chain == 0)
+                        .then(|| self.light_beside(receivers, k, |j| known[j].then(|| value[j])))
+                        .flatten();
+                    if let Some(e) = beside {
+                        value[k] = e;
+                        count(k, &mut known);
+                    }
+                    beside.is_none()
+                });
+            }
+            gather(&now, value, &mut known);
             pending = later;
         }
         // A geometric edge's quarters, once every whole pixel has its value: from the whole
         // pixels beside them on their surface, else they gather.
         let mut now = Vec::new();
         for k in edges {
-            match self.light_beside(receivers, k, |j| value[j]) {
+            match self.light_beside(receivers, k, |j| known[j].then(|| value[j])) {
                 Some(e) => {
                     value[k] = e;
-                    count(k);
+                    count(k, &mut known);
                 }
                 None => now.push(k),
             }
         }
-        gather(&now, value);
+        gather(&now, value, &mut known);
         // Then the quarters that share their pixel's two farthest apart on one surface.
         let mut disagree = Vec::new();
         for k in lent {
@@ -422,12 +450,12 @@ impl SparsePlan {
                     b
                 };
                 value[k] = value[nearer];
-                count(k);
+                count(k, &mut known);
             } else {
                 disagree.push(k);
             }
         }
-        gather(&disagree, value);
+        gather(&disagree, value, &mut known);
         (interpolated, by_radiance)
     }
 
@@ -441,7 +469,7 @@ impl SparsePlan {
         &self,
         receivers: &[Receiver],
         k: usize,
-        value: impl Fn(usize) -> Rgb,
+        value: impl Fn(usize) -> Option<Rgb>,
     ) -> Option<Rgb> {
         let r = &receivers[k];
         let (x, y) = local(r.pixel, self.origin, self.width);
@@ -464,7 +492,9 @@ impl SparsePlan {
             if !lends_to(c, r) || distance > REACH * self.clearance[k] {
                 continue;
             }
-            let e = value(j as usize);
+            let Some(e) = value(j as usize) else {
+                continue;
+            };
             let w = 1.0 / (distance * distance).max(f32::MIN_POSITIVE);
             (lo, hi) = (lo.min(luminance(e)), hi.max(luminance(e)));
             sum += e * w;
@@ -915,6 +945,33 @@ mod tests {
         // Anchors every 4 pixels (frames under 512): the two gather as before.
         let out = edge_passes(&receivers, ANCHOR_SPACING, &clear, flat);
         assert!(out[q0].1 && out[q3].1 && !out[q1].1 && !out[q2].1);
+    }
+
+    /// In the same frames, a primary hit whose finest cell (2 pixels) fails, here for a corner
+    /// on another mesh, takes the light of the pixels beside it rather than gathering, where
+    /// its clearance allows: under constant light every value is that light, and the
+    /// receivers that no longer gather are all off the grid of 2 (they feed no other cell).
+    #[test]
+    fn the_finest_cells_failures_borrow_too() {
+        let mut receivers = plane_of(16);
+        receivers[8 * 16 + 8].mesh = 1;
+        let flat = |_: Vec3| Rgb::splat(0.7);
+        let clear = open(&receivers);
+        let closed = vec![0.0; receivers.len()];
+        let borrowed = edge_passes(&receivers, WIDEST_CELL, &clear, flat);
+        let gathering = edge_passes(&receivers, WIDEST_CELL, &closed, flat);
+        for (e, _) in &borrowed {
+            assert!((*e - Rgb::splat(0.7)).abs().max_element() < 1e-6);
+        }
+        let saved: Vec<usize> = (0..receivers.len())
+            .filter(|&k| gathering[k].1 && !borrowed[k].1)
+            .collect();
+        assert!(!saved.is_empty());
+        assert!((0..receivers.len()).all(|k| !borrowed[k].1 || gathering[k].1));
+        for k in saved {
+            let (x, y) = (k % 16, k / 16);
+            assert!(x % 2 == 1 && x != 15 || y % 2 == 1 && y != 15, "({x}, {y})");
+        }
     }
 
     /// A receiver's clearance counts the other surfaces in front of its tangent plane that
