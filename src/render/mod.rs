@@ -177,7 +177,7 @@ impl Default for FinalSettings {
             specular_below: 0.03,
             chain_depth: 8,
             max_depth: -1,
-            clusters: 100,
+            clusters: 200,
             far_eps: 0.1,
             spp: 16,
             paths_through_glossy: false,
