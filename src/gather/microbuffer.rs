@@ -489,29 +489,11 @@ impl Microbuffer {
     /// lobe narrower than a pixel is never missed. `wo` is the outgoing direction (local).
     pub fn refine_for_bsdf(&mut self, bsdf: &Bsdf, wo: Vec3, share: f32, max_level: u32) {
         let centres: Vec<Vec3> = bsdf.lobe_centres(wo).into_iter().flatten().collect();
-        let weight = |mb: &Microbuffer, k: usize| -> f32 {
-            let cell = &mb.cells[mb.pixels[k].cell as usize];
-            let mut best = 0.0f32;
-            for j in 0..3 {
-                for i in 0..3 {
-                    let p =
-                        cell.corner + Vec2::new(i as f32 + 0.5, j as f32 + 0.5) * (cell.side / 3.0);
-                    let mut d = square_to_hemisphere_equal_area(p);
-                    if cell.lower {
-                        d.z = -d.z;
-                    }
-                    best = best.max(luminance(bsdf.eval(wo, d, TransportMode::Radiance)));
-                }
-            }
-            for c in &centres {
-                if mb.local_pixel_of(*c) == Some(k) {
-                    best = best.max(luminance(bsdf.eval(wo, *c, TransportMode::Radiance)));
-                }
-            }
-            best * mb.pixels[k].solid_angle
-        };
+        let mut lanes = BsdfLanes::default();
         let base = self.pixels.len();
-        let weights: Vec<f32> = (0..base).map(|k| weight(self, k)).collect();
+        let weights: Vec<f32> = (0..base)
+            .map(|k| lanes.weight(self, k, bsdf, wo, &centres))
+            .collect();
         let total: f32 = weights.iter().sum();
         if !(total > 0.0) || !total.is_finite() {
             return;
@@ -524,7 +506,7 @@ impl Microbuffer {
             let first_new = self.pixels.len();
             self.split(k);
             for child in std::iter::once(k).chain(first_new..first_new + 3) {
-                let wc = weight(self, child);
+                let wc = lanes.weight(self, child, bsdf, wo, &centres);
                 queue.push((child, wc));
             }
         }
@@ -898,5 +880,58 @@ pub(crate) fn group_by_pixel(
         let at = &mut ends[pixel(i) as usize];
         order[*at as usize] = i as u32;
         *at += 1;
+    }
+}
+
+/// The directions at which [`Microbuffer::refine_for_bsdf`] weighs a pixel, as lanes of x, y
+/// and z for [`Bsdf::eval_lanes`] (the same values as one [`Bsdf::eval`] at a time), and their
+/// values; kept from pixel to pixel.
+#[derive(Default)]
+struct BsdfLanes {
+    xyz: [Vec<f32>; 3],
+    values: Vec<Rgb>,
+}
+
+impl BsdfLanes {
+    /// Pixel `k`'s weight: the largest luminance of `bsdf` seen from `wo` over a 3 × 3 grid
+    /// of directions in the pixel and the lobe `centres` that fall in it, times its solid
+    /// angle.
+    fn weight(
+        &mut self,
+        mb: &Microbuffer,
+        k: usize,
+        bsdf: &Bsdf,
+        wo: Vec3,
+        centres: &[Vec3],
+    ) -> f32 {
+        let cell = &mb.cells[mb.pixels[k].cell as usize];
+        self.xyz.iter_mut().for_each(Vec::clear);
+        let mut push = |d: Vec3| {
+            for (lane, v) in self.xyz.iter_mut().zip(d.to_array()) {
+                lane.push(v);
+            }
+        };
+        for j in 0..3 {
+            for i in 0..3 {
+                let p = cell.corner + Vec2::new(i as f32 + 0.5, j as f32 + 0.5) * (cell.side / 3.0);
+                let mut d = square_to_hemisphere_equal_area(p);
+                if cell.lower {
+                    d.z = -d.z;
+                }
+                push(d);
+            }
+        }
+        for &c in centres {
+            if mb.local_pixel_of(c) == Some(k) {
+                push(c);
+            }
+        }
+        let [x, y, z] = &self.xyz;
+        bsdf.eval_lanes(wo, [x, y, z], TransportMode::Radiance, &mut self.values);
+        let best = self
+            .values
+            .iter()
+            .fold(0.0f32, |best, &f| best.max(luminance(f)));
+        best * mb.pixels[k].solid_angle
     }
 }
