@@ -370,8 +370,9 @@ pub fn render_final_cancellable(
         smooth_quarters: settings.gather == GatherMode::Paths,
         seed: settings.seed,
     };
-    // The centre hits of the tiles the crop touches and of the pixels around them (the edge
-    // test reads a pixel's four neighbours).
+    // The centre hits of the tiles the crop touches and of the pixels around them: the edge
+    // test reads a pixel's four neighbours, a primary hit's clearance the centre hits within
+    // `sparse::CLEARANCE_PIXELS`, so that a crop decides as its frame does.
     let (tx0, ty0) = (x0 / TILE * TILE, y0 / TILE * TILE);
     let (tx1, ty1) = (
         (x1.div_ceil(TILE) * TILE).min(w),
@@ -542,7 +543,7 @@ struct TilePrimary {
     pixels: Vec<(u32, PrimarySample)>,
     receivers: Vec<Receiver>,
     /// Per receiver, its [`sparse::clearance`] if it is a primary hit in a frame whose edges
-    /// borrow their neighbours' light ([`sparse::edge_quarters_borrow`]), else infinite.
+    /// borrow their neighbours' light ([`sparse::borrows_light_beside`]), else infinite.
     clearance: Vec<f32>,
     samples: u64,
 }
@@ -593,7 +594,7 @@ fn primary_tile(
             out.pixels.push((y * w + x, sample));
         }
     }
-    let needed = sparse::edge_quarters_borrow(sparse::coarsest_cell(w, h));
+    let needed = sparse::borrows_light_beside(sparse::coarsest_cell(w, h));
     out.clearance = out
         .receivers
         .iter()

@@ -18,7 +18,7 @@
 //!   from whole pixels, else from the first quarter there on its surface.
 //! - **Quarters of a geometric edge** (of primary hits) are not interpolated across a cell:
 //!   from whole pixels across the edge that cost 4–9 % relMSE at 128² (cbox-rough,
-//!   cbox-glossy). In frames of 512 pixels and more (`edge_quarters_borrow`) they take,
+//!   cbox-glossy). In frames of 512 pixels and more (`borrows_light_beside`) they take,
 //!   once every whole pixel has its value, the light of the whole pixels within
 //!   [`NEIGHBOURS`] of their own on their surface (`SparsePlan::light_beside`): a
 //!   quarter lies within a pixel or two of them, where its cell's corners lie up to 8 away.
@@ -101,16 +101,17 @@ pub fn coarsest_cell(width: u32, height: u32) -> u32 {
     cell
 }
 
-/// How far (in pixels, along rows and columns) the centre hits lie whose surfaces bound an
-/// edge's quarter's clearance (`clearance`).
+/// How far (in pixels, along rows and columns) the centre hits lie whose surfaces bound a
+/// primary hit's clearance (`clearance`).
 pub const CLEARANCE_PIXELS: u32 = 4;
 
-/// How far (in pixels, along rows and columns) a geometric edge's quarter looks for whole
-/// pixels on its surface to take its value from (`SparsePlan::light_beside`).
+/// How far (in pixels, along rows and columns) a receiver that borrows its light (an edge's
+/// quarter, a finest cell's failure) looks for whole pixels on its surface to take it from
+/// (`SparsePlan::light_beside`).
 pub const NEIGHBOURS: u32 = 2;
 
-/// The farthest a pixel that lends an edge's quarter its light may lie, as a fraction of the
-/// quarter's clearance: irradiance caching's records are trusted to about a tenth to a half
+/// The farthest a pixel that lends a receiver its light may lie, as a fraction of the
+/// receiver's clearance: irradiance caching's records are trusted to about a tenth to a half
 /// of the distance to the geometry around.
 pub const REACH: f32 = 0.25;
 
@@ -118,8 +119,8 @@ pub const REACH: f32 = 0.25;
 /// plane by more than this fraction of its distance.
 pub const FRONT: f32 = 0.05;
 
-/// The fewest pixels an edge's quarter takes its light from: one alone is an extrapolation
-/// that no other checks.
+/// The fewest pixels a receiver borrows its light from: one alone is an extrapolation that
+/// no other checks.
 pub const DONORS: usize = 2;
 
 /// The finest cells: 2 pixels, whose receivers are the next pixel over from their corners.
@@ -150,7 +151,7 @@ pub(crate) struct SparsePlan {
     /// it lies behind ([`clearance`]); infinite for the others.
     clearance: Vec<f32>,
     /// Whether edges' quarters and the finest cells' primary hits that fail take the light of
-    /// the pixels beside them ([`edge_quarters_borrow`]).
+    /// the pixels beside them ([`borrows_light_beside`]).
     borrow: bool,
     /// The cells' sizes, coarsest first, halving down to [`FINEST_CELL`].
     cell_sizes: Vec<u32>,
@@ -195,7 +196,7 @@ fn on_surface_of(mesh: u32, p: Vec3, n: Vec3, r: &Receiver) -> bool {
 /// `r`'s (as [`lends_to`] tells surfaces apart) and in front of its tangent plane (above it
 /// by [`FRONT`] of the distance): infinite where none is. Irradiance changes over distances
 /// of the order of the distance to the geometry around (the split-sphere bound of irradiance
-/// caching), so an edge's quarter takes its value only from pixels much nearer than that.
+/// caching), so a receiver borrows its light only from pixels much nearer than that.
 pub(crate) fn clearance(r: &Receiver, around: impl Iterator<Item = (u32, Vec3, Vec3)>) -> f32 {
     around
         .filter(|&(mesh, p, n)| {
@@ -213,13 +214,14 @@ fn agree(lo: f32, hi: f32) -> bool {
     hi <= (1.0 + CONTRAST) * lo
 }
 
-/// Whether a geometric edge's quarters take their value from the pixels beside them
-/// ([`SparsePlan::light_beside`]) in a frame whose anchors lie every `coarsest` pixels
+/// Whether a geometric edge's quarters, and the primary hits whose finest cell fails, borrow
+/// the light of the pixels beside them ([`SparsePlan::light_beside`]) before they gather, in
+/// a frame whose anchors lie every `coarsest` pixels
 /// ([`coarsest_cell`]): only in frames of [`WIDEST_CELL`] (512 pixels and more on the
 /// shorter side). At 256² two pixels span what four span at 512², and it cost cbox-rough
 /// and cbox-glossy 2–3 % of relMSE against Mitsuba where at 512² it cost none
 /// (docs/render.md).
-pub(crate) fn edge_quarters_borrow(coarsest: u32) -> bool {
+pub(crate) fn borrows_light_beside(coarsest: u32) -> bool {
     coarsest >= WIDEST_CELL
 }
 
@@ -316,7 +318,7 @@ impl SparsePlan {
                 lender[k] = Some((pair.0 as u32, pair.1 as u32));
             }
         }
-        let borrow = sparse && edge_quarters_borrow(coarsest);
+        let borrow = sparse && borrows_light_beside(coarsest);
         let mut at = HashMap::new();
         let first = cells
             .iter()
@@ -459,12 +461,13 @@ impl SparsePlan {
         (interpolated, by_radiance)
     }
 
-    /// The value of receiver `k`, a quarter of a geometric edge's pixel, from the whole
-    /// pixels within [`NEIGHBOURS`] pixels of its own (in the tile) that can lend to it, as a
-    /// cell's corners must ([`lends_to`]), and lie within [`REACH`] of its clearance
-    /// ([`clearance`]), weighted by the inverse square of their distance to it, given their
-    /// values (`value(j)` for receiver j); `None` where fewer than [`DONORS`] do or their
-    /// luminances disagree by more than [`CONTRAST`].
+    /// The value of receiver `k` (a primary hit: an edge's quarter, or a whole pixel whose
+    /// finest cell failed) from the whole pixels within [`NEIGHBOURS`] pixels of its own (in
+    /// the tile) that can lend to it, as a cell's corners must ([`lends_to`]), lie within
+    /// [`REACH`] of its clearance ([`clearance`]) and have their value (`value(j)` for
+    /// receiver j, `None` for one that has none yet), weighted by the inverse square of their
+    /// distance to it; `None` where fewer than [`DONORS`] do or their luminances disagree by
+    /// more than [`CONTRAST`].
     fn light_beside(
         &self,
         receivers: &[Receiver],

@@ -114,7 +114,8 @@ pub struct RenderArgs {
     /// Every receiver gathers (by default receivers gather on a grid of every 4th pixel, every
     /// 8th in frames of 512 pixels a side or more, halved where a cell fails down to every
     /// 2nd, and interpolate between where the light is smooth on one surface, seen directly or
-    /// through the same mirrors and glass: docs/render.md).
+    /// through the same mirrors and glass; in frames of 512 and more, edge pixels and what
+    /// fails the finest cells first take the light of the pixels beside them: docs/render.md).
     #[arg(long)]
     pub dense: bool,
     /// Emitter samples per pixel for direct light (at each rough hit; a pixel of many camera
