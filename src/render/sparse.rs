@@ -504,7 +504,11 @@ impl SparsePlan {
             weights += w;
             donors += 1;
         }
-        (donors >= DONORS && weights.is_finite() && agree(lo, hi)).then(|| sum * (1.0 / weights))
+        // Donors at the very point weigh up to 1/f32::MIN_POSITIVE: sums past f32's range
+        // gather rather than lend an infinite or a zero value.
+        let mean = sum * (1.0 / weights);
+        let finite = weights.is_finite() && mean.is_finite();
+        (donors >= DONORS && agree(lo, hi) && finite).then_some(mean)
     }
 
     /// Whether receiver `k`'s value is its irradiance E, which its albedo multiplies
@@ -975,6 +979,22 @@ mod tests {
             let (x, y) = (k % 16, k / 16);
             assert!(x % 2 == 1 && x != 15 || y % 2 == 1 && y != 15, "({x}, {y})");
         }
+    }
+
+    /// Donors at the very point of the quarter weigh 1/f32::MIN_POSITIVE each: where their
+    /// light then takes the sums past f32's range, the quarters gather rather than lend an
+    /// infinite value, and no value anywhere is NaN or infinite.
+    #[test]
+    fn borrowing_never_lends_an_infinite_value() {
+        let (mut receivers, quarters) = edge_quarters();
+        // Two of them: their weights still sum within f32's range, their light does not.
+        for k in [6 * 16 + 7, 8 * 16 + 7] {
+            receivers[k].p = receivers[quarters[0]].p;
+        }
+        let bright = |_: Vec3| Rgb::splat(1e30);
+        let out = edge_passes(&receivers, WIDEST_CELL, &open(&receivers), bright);
+        assert!(out[quarters[0]].1, "the quarter gathers");
+        assert!(out.iter().all(|(e, _)| e.is_finite()));
     }
 
     /// A receiver's clearance counts the other surfaces in front of its tangent plane that
