@@ -37,21 +37,27 @@ fn bake(out: &Path, threads: &str, points: &str) -> Output {
     ])
 }
 
+/// The arguments of `wpbgi render` of `scene` from `cache` into `out` at `size` (`WxH`).
+fn render_args<'a>(scene: &'a Path, cache: &'a Path, out: &'a Path, size: &'a str) -> [&'a str; 8] {
+    let path = |p: &'a Path| p.to_str().expect("utf-8 path");
+    [
+        "render",
+        path(scene),
+        "--cache",
+        path(cache),
+        "-o",
+        path(out),
+        "--size",
+        size,
+    ]
+}
+
 /// `wpbgi render` of `scene` from `cache` into `out` at `size` (`WxH`), with `extra` arguments
 /// (global options among them too), with a fixed capture date and no render time in the
 /// header: the same render is then the same file byte for byte.
 fn render_scene(scene: &Path, cache: &Path, out: &Path, size: &str, extra: &[&str]) -> Output {
     Command::new(WPBGI)
-        .args([
-            "render",
-            scene.to_str().expect("utf-8 path"),
-            "--cache",
-            cache.to_str().expect("utf-8 path"),
-            "-o",
-            out.to_str().expect("utf-8 path"),
-            "--size",
-            size,
-        ])
+        .args(render_args(scene, cache, out, size))
         .args(extra)
         .env("SOURCE_DATE_EPOCH", "1764000000")
         .output()
@@ -382,17 +388,8 @@ fn ctrl_c_stops_bake_and_render_with_130_and_keeps_the_previous_outputs() {
         "--points",
         "400000",
     ];
-    let render_args = [
-        "render",
-        s.to_str().expect("utf-8"),
-        "--cache",
-        cache.to_str().expect("utf-8"),
-        "-o",
-        image.to_str().expect("utf-8"),
-        "--size",
-        "2048x2048",
-    ];
-    for (what, args) in [("bake", &bake_args[..]), ("render", &render_args[..])] {
+    let render = render_args(&s, &cache, &image, "2048x2048");
+    for (what, args) in [("bake", &bake_args[..]), ("render", &render[..])] {
         for delay_ms in [300u64, 1500] {
             let child = Command::new(WPBGI)
                 .args(args)

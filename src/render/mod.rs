@@ -454,7 +454,7 @@ pub fn render_final_cancellable(
                 let (tx, ty) = (tile.origin.0 / TILE, tile.origin.1 / TILE);
                 let size = (TILE.min(w - tx * TILE), TILE.min(h - ty * TILE));
                 let rect = (tile.origin, size, w);
-                let r = gather_tile(&ctx, &senders, tile, rect, frame, settings);
+                let r = gather_tile(&ctx, &senders, &sampling, tile, rect, frame, settings);
                 let n = done.fetch_add(1, Ordering::Relaxed) + 1;
                 progress("render", n as f32 / tiles.len() as f32);
                 Ok(r)
@@ -542,9 +542,6 @@ struct TilePrimary {
     origin: (u32, u32),
     pixels: Vec<(u32, PrimarySample)>,
     receivers: Vec<Receiver>,
-    /// Per receiver, its [`sparse::clearance`] if it is a primary hit in a frame whose edges
-    /// borrow their neighbours' light ([`sparse::borrows_light_beside`]), else infinite.
-    clearance: Vec<f32>,
     samples: u64,
 }
 
@@ -583,7 +580,6 @@ fn primary_tile(
         origin: (tx * TILE, ty * TILE),
         pixels: Vec::new(),
         receivers: Vec::new(),
-        clearance: Vec::new(),
         samples: 0,
     };
     for y in ty * TILE..((ty + 1) * TILE).min(h) {
@@ -594,19 +590,6 @@ fn primary_tile(
             out.pixels.push((y * w + x, sample));
         }
     }
-    let needed = sparse::borrows_light_beside(sparse::coarsest_cell(w, h));
-    out.clearance = out
-        .receivers
-        .iter()
-        .map(|r| match needed && r.chain == 0 {
-            true => {
-                let around =
-                    sampling.surfaces_around((r.pixel % w, r.pixel / w), sparse::CLEARANCE_PIXELS);
-                sparse::clearance(r, around)
-            }
-            false => f32::INFINITY,
-        })
-        .collect();
     out
 }
 
@@ -639,10 +622,13 @@ struct FramePlan {
 }
 
 /// Gather every receiver of a tile (at `origin`, `size` pixels, in an image `width` wide);
-/// returns (pixel, weighted indirect radiance, whether it came by a glossy first hit).
+/// `sampling`, the frame's centre hits, gives the clearance of those that borrow their light
+/// ([`sparse::clearance`]); returns (pixel, weighted indirect radiance, whether it came by a
+/// glossy first hit).
 fn gather_tile(
     ctx: &Tracer,
     senders: &Senders,
+    sampling: &PixelSampling,
     tile: &TilePrimary,
     (origin, size, width): ((u32, u32), (u32, u32), u32),
     frame: FramePlan,
@@ -670,17 +656,15 @@ fn gather_tile(
     }
     // The grid's anchors and the receivers that cannot interpolate gather first; then the
     // others interpolate where their cell allows, finer grids gathering where it does not.
-    let plan = SparsePlan::new(
-        receivers,
-        origin,
-        size,
-        width,
-        frame.cell,
-        settings.sparse,
-        &tile.clearance,
-    );
+    let plan = SparsePlan::new(receivers, origin, size, width, frame.cell, settings.sparse);
     let mut value = vec![Rgb::ZERO; receivers.len()];
-    let (interpolated, glossy) = plan.run(receivers, &mut value, |which, value| {
+    // How far the surfaces around a primary hit that shade it lie, from the centre hits.
+    let clearance = |k: usize| {
+        let r = &receivers[k];
+        let pixel = (r.pixel % width, r.pixel / width);
+        sparse::clearance(r, sampling.surfaces_around(pixel, sparse::CLEARANCE_PIXELS))
+    };
+    let (interpolated, glossy) = plan.run(receivers, &mut value, clearance, |which, value| {
         gather_set(
             senders, receivers, which, &plan, settings, value, &mut stats,
         )
