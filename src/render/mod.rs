@@ -35,7 +35,7 @@ use crate::geometry::frame::Frame;
 use crate::image::Image;
 use crate::progress::Progress;
 use crate::scene::{Camera, Scene};
-use crate::spectrum::Rgb;
+use crate::spectrum::{luminance, Rgb};
 use crate::trace::Tracer;
 use crate::validate::{in_range, require, require_max_depth, require_positive};
 use glam::Vec3;
@@ -664,22 +664,30 @@ fn gather_tile(
         let pixel = (r.pixel % width, r.pixel / width);
         sparse::clearance(r, sampling.surfaces_around(pixel, sparse::CLEARANCE_PIXELS))
     };
-    let (interpolated, glossy) = plan.run(receivers, &mut value, clearance, |which, value| {
-        gather_set(
-            senders, receivers, which, &plan, settings, value, &mut stats,
-        )
-    });
+    // The luminance of a receiver's pixel before the gather: its emission and direct light
+    // (the tile's pixels are in row-major order).
+    let floor = |k: usize| {
+        let (x, y) = (receivers[k].pixel % width, receivers[k].pixel / width);
+        let i = (y - origin.1) * size.0 + (x - origin.0);
+        luminance(tile.pixels[i as usize].1.direct)
+    };
+    let (interpolated, glossy) =
+        plan.run(receivers, &mut value, clearance, floor, |which, value| {
+            gather_set(
+                senders, receivers, which, &plan, settings, value, &mut stats,
+            )
+        });
     stats.interpolated = interpolated as u64;
     stats.interpolated_glossy = glossy as u64;
     let out = receivers
         .iter()
         .enumerate()
         .map(|(k, r)| {
-            let l = match &r.bsdf {
-                Bsdf::Diffuse(d) if plan.by_irradiance(k) => d.reflectance * value[k],
-                _ => value[k],
-            };
-            (r.pixel, r.weight * l, by_glossy_hit(r))
+            (
+                r.pixel,
+                r.weight * (plan.albedo_of(k, r) * value[k]),
+                by_glossy_hit(r),
+            )
         })
         .collect();
     (out, stats)

@@ -31,6 +31,14 @@
 //!   hit whose finest cell fails (a corner on another surface or across a contrast) does the
 //!   same before it gathers: it feeds no other cell, and the pixels beside it that have their
 //!   value by then are its donors.
+//! - **Faint receivers** ([`FAINT`]: a weight under 5 % of their pixel, a weak reflection
+//!   or refraction off glass, a deep branch of a chain) whose finest cell fails take, before
+//!   they gather, the inverse-square mean of their layer's receivers (whole pixels and
+//!   quarters) within [`NEIGHBOURS`] of their pixel on their surface, when at least
+//!   [`DONORS`] have their value and the spread of what those would put into the pixel is
+//!   within [`CONTRAST`] of a lower bound on the pixel (its emission and direct light plus the
+//!   darkest donor's share): Lightcuts' rule, an error bound relative to the pixel's light
+//!   rather than to the receiver's own (`SparsePlan::light_of_layer`).
 //! - **Quarters on one surface.** Where three or four quarters of a geometric edge's pixel lie
 //!   on one surface (on each other's mesh and plane, with BSDFs that interpolate: the same
 //!   rules as corners, below), the two farthest apart gather, and the others take the nearer
@@ -72,7 +80,7 @@
 
 use super::primary::Receiver;
 use crate::bsdf::Bsdf;
-use crate::spectrum::{luminance, Rgb};
+use crate::spectrum::{luminance, max_component, Rgb};
 use glam::Vec3;
 use std::collections::HashMap;
 
@@ -122,6 +130,14 @@ pub const FRONT: f32 = 0.05;
 /// The fewest pixels a receiver borrows its light from: one alone is an extrapolation that
 /// no other checks.
 pub const DONORS: usize = 2;
+
+/// A receiver whose weight (its path's throughput times its share of the pixel, largest
+/// channel) is below this fraction of its pixel is a faint one: a weak reflection or
+/// refraction off glass, a deep branch of a specular chain. Where its finest cell fails it
+/// borrows from its layer's receivers around it (`SparsePlan::light_of_layer`) under a bound
+/// on the error it can put into its pixel, instead of gathering: at 512² such receivers were
+/// nearly half of cbox-glossy's, cbox-mirror's and caustic's gathers.
+pub const FAINT: f32 = 0.05;
 
 /// The finest cells: 2 pixels, whose receivers are the next pixel over from their corners.
 const FINEST_CELL: u32 = 2;
@@ -250,6 +266,57 @@ fn cell_of(c: u32, n: u32, cell: u32) -> (u32, u32, f32) {
     (low, high, f)
 }
 
+/// Whether receiver `r` is faint: its weight below [`FAINT`] of its pixel.
+fn is_faint(r: &Receiver) -> bool {
+    max_component(r.weight) < FAINT
+}
+
+/// The receivers a receiver borrows its light from, summed up.
+struct Donors {
+    /// Their values weighted by the inverse square of their distance to it.
+    mean: Rgb,
+    /// The least and the most luminance among their values, each times a scale.
+    lo: f32,
+    hi: f32,
+}
+
+impl Donors {
+    /// The donors among `candidates` for receiver `r`: those that lend to it ([`lends_to`])
+    /// and have their value (`value(j)`); their luminances are taken of each value times
+    /// `scale`. `None` with fewer than [`DONORS`], or where the mean passes f32's range (donors
+    /// at the very point weigh up to 1/f32::MIN_POSITIVE): the receiver gathers instead of
+    /// taking an infinite or a zero value.
+    fn of(
+        receivers: &[Receiver],
+        r: &Receiver,
+        candidates: impl Iterator<Item = usize>,
+        scale: Rgb,
+        value: impl Fn(usize) -> Option<Rgb>,
+    ) -> Option<Donors> {
+        let (mut sum, mut weights, mut count) = (Rgb::ZERO, 0.0f32, 0);
+        let (mut lo, mut hi) = (f32::INFINITY, 0.0f32);
+        for j in candidates {
+            let c = &receivers[j];
+            if !lends_to(c, r) {
+                continue;
+            }
+            let Some(e) = value(j) else {
+                continue;
+            };
+            let distance = (c.p - r.p).length();
+            let w = 1.0 / (distance * distance).max(f32::MIN_POSITIVE);
+            let l = luminance(e * scale);
+            (lo, hi) = (lo.min(l), hi.max(l));
+            sum += e * w;
+            weights += w;
+            count += 1;
+        }
+        let mean = sum * (1.0 / weights);
+        let finite = weights.is_finite() && mean.is_finite();
+        (count >= DONORS && finite).then_some(Donors { mean, lo, hi })
+    }
+}
+
 impl SparsePlan {
     /// The plan for the receivers of the tile at `origin` of `size` pixels, in an image
     /// `width` wide, with anchors every `coarsest` pixels (a power of two, at least
@@ -355,13 +422,16 @@ impl SparsePlan {
     /// Every receiver's value in `value`: the first pass's and each finer grid's receivers
     /// gathered by `gather` (given which receivers, and the values so far, it fills theirs),
     /// the others interpolated between (see the module docs). `clearance(k)` is receiver k's
-    /// [`clearance`], asked only of the primary hits that borrow their light. Returns how many
-    /// interpolated, and how many of those by their outgoing radiance (not diffuse).
+    /// [`clearance`], asked only of the primary hits that borrow their light; `floor(k)` the
+    /// luminance its pixel has without the gather (emission and direct light), asked only of
+    /// the faint receivers that borrow theirs. Returns how many interpolated, and how many of
+    /// those by their outgoing radiance (not diffuse).
     pub fn run(
         &self,
         receivers: &[Receiver],
         value: &mut [Rgb],
         clearance: impl Fn(usize) -> f32,
+        floor: impl Fn(usize) -> f32,
         mut gather: impl FnMut(&[usize], &mut [Rgb]),
     ) -> (usize, usize) {
         // Which receivers have their value yet.
@@ -401,22 +471,24 @@ impl SparsePlan {
                     },
                 }
             }
-            // The finest cells' failures feed no other cell: a primary hit among them may
-            // take the light of the pixels beside it, as an edge's quarter does.
-            if finer.is_none() && self.borrow {
+            // The finest cells' failures feed no other cell: a faint receiver among them may
+            // take the light of its layer around it, and a primary hit the light of the
+            // pixels beside it, as an edge's quarter does.
+            if finer.is_none() {
                 now.retain(|&k| {
-                    let beside = (receivers[k].chain == 0)
-                        .then(|| {
-                            self.light_beside(receivers, k, &clearance, |j| {
-                                known[j].then(|| value[j])
-                            })
-                        })
-                        .flatten();
-                    if let Some(e) = beside {
+                    let known_value = |j: usize| known[j].then(|| value[j]);
+                    let borrowed = if is_faint(&receivers[k]) {
+                        self.light_of_layer(receivers, k, floor(k), known_value)
+                    } else if self.borrow && receivers[k].chain == 0 {
+                        self.light_beside(receivers, k, &clearance, known_value)
+                    } else {
+                        None
+                    };
+                    if let Some(e) = borrowed {
                         value[k] = e;
                         count(k, &mut known);
                     }
-                    beside.is_none()
+                    borrowed.is_none()
                 });
             }
             gather(&now, value, &mut known);
@@ -478,40 +550,68 @@ impl SparsePlan {
     ) -> Option<Rgb> {
         let r = &receivers[k];
         let farthest = REACH * clearance(k);
+        let donors = self
+            .layer_around(r, &[None])
+            .filter(|&j| j != k && (receivers[j].p - r.p).length() <= farthest);
+        let d = Donors::of(receivers, r, donors, Rgb::ONE, value)?;
+        agree(d.lo, d.hi).then_some(d.mean)
+    }
+
+    /// The value of faint receiver `k` ([`is_faint`]) whose finest cell failed, from the
+    /// receivers of its layer, whole pixels or quarters, within [`NEIGHBOURS`] pixels of its
+    /// own that can lend to it ([`lends_to`]) and have their value (`value(j)`), weighted by
+    /// the inverse square of their distance; `None` where fewer than [`DONORS`] do or where
+    /// the spread of what they would put into its pixel (their values times its weight and
+    /// albedo) exceeds [`CONTRAST`] of the least its pixel then holds: `floor` (the
+    /// luminance of its emission and direct light) plus the darkest donor's share. A cell's
+    /// corners must agree relative to their own light; a faint receiver's error shows only
+    /// relative to its pixel's, so its donors may disagree more where that is bright. This
+    /// is Lightcuts' rule (an error bound below a fraction of a lower bound on the pixel).
+    fn light_of_layer(
+        &self,
+        receivers: &[Receiver],
+        k: usize,
+        floor: f32,
+        value: impl Fn(usize) -> Option<Rgb>,
+    ) -> Option<Rgb> {
+        let r = &receivers[k];
+        let quarters = [None, Some(0), Some(1), Some(2), Some(3)];
+        let donors = self.layer_around(r, &quarters).filter(|&j| j != k);
+        let scale = r.weight * self.albedo_of(k, r);
+        let d = Donors::of(receivers, r, donors, scale, value)?;
+        (d.hi - d.lo <= CONTRAST * (floor + d.lo)).then_some(d.mean)
+    }
+
+    /// The receivers of receiver `r`'s layer (its chain) in the pixels within [`NEIGHBOURS`]
+    /// pixels of its own, its own included, in the tile, of the given quarters (`None`: a
+    /// whole pixel's).
+    fn layer_around<'a>(
+        &'a self,
+        r: &'a Receiver,
+        quarters: &'a [Option<u8>],
+    ) -> impl Iterator<Item = usize> + 'a {
         let (x, y) = local(r.pixel, self.origin, self.width);
-        let (mut sum, mut weights, mut donors) = (Rgb::ZERO, 0.0f32, 0);
-        let (mut lo, mut hi) = (f32::INFINITY, 0.0f32);
         let reach = i64::from(NEIGHBOURS);
-        for (dx, dy) in (-reach..=reach).flat_map(|dy| (-reach..=reach).map(move |dx| (dx, dy))) {
-            let (nx, ny) = (i64::from(x) + dx, i64::from(y) + dy);
-            let inside = (0..i64::from(self.size.0)).contains(&nx)
-                && (0..i64::from(self.size.1)).contains(&ny);
-            if (dx, dy) == (0, 0) || !inside {
-                continue;
-            }
-            let pixel = ny as u32 * self.size.0 + nx as u32;
-            let Some(&j) = self.at.get(&(pixel, r.chain, None)) else {
-                continue;
-            };
-            let c = &receivers[j as usize];
-            let distance = (c.p - r.p).length();
-            if !lends_to(c, r) || distance > farthest {
-                continue;
-            }
-            let Some(e) = value(j as usize) else {
-                continue;
-            };
-            let w = 1.0 / (distance * distance).max(f32::MIN_POSITIVE);
-            (lo, hi) = (lo.min(luminance(e)), hi.max(luminance(e)));
-            sum += e * w;
-            weights += w;
-            donors += 1;
+        let (w, h) = (i64::from(self.size.0), i64::from(self.size.1));
+        (-reach..=reach)
+            .flat_map(move |dy| (-reach..=reach).map(move |dx| (dx, dy)))
+            .map(move |(dx, dy)| (i64::from(x) + dx, i64::from(y) + dy))
+            .filter(move |&(nx, ny)| (0..w).contains(&nx) && (0..h).contains(&ny))
+            .flat_map(move |(nx, ny)| {
+                let pixel = ny as u32 * self.size.0 + nx as u32;
+                quarters
+                    .iter()
+                    .filter_map(move |&q| self.at.get(&(pixel, r.chain, q)).map(|&j| j as usize))
+            })
+    }
+
+    /// What multiplies receiver `k`'s value into its outgoing radiance: its diffuse albedo
+    /// where the value is its irradiance ([`SparsePlan::by_irradiance`]), else one.
+    pub fn albedo_of(&self, k: usize, r: &Receiver) -> Rgb {
+        match &r.bsdf {
+            Bsdf::Diffuse(d) if self.irradiance[k] => d.reflectance,
+            _ => Rgb::ONE,
         }
-        // Donors at the very point weigh up to 1/f32::MIN_POSITIVE: sums past f32's range
-        // gather rather than lend an infinite or a zero value.
-        let mean = sum * (1.0 / weights);
-        let finite = weights.is_finite() && mean.is_finite();
-        (donors >= DONORS && agree(lo, hi) && finite).then_some(mean)
     }
 
     /// Whether receiver `k`'s value is its irradiance E, which its albedo multiplies
@@ -717,28 +817,35 @@ mod tests {
     /// returning `bilinear` at the receiver; returns each receiver's value and whether it
     /// gathered.
     fn passes(receivers: &[Receiver], size: (u32, u32)) -> Vec<(Rgb, bool)> {
-        passes_with(receivers, size, ANCHOR_SPACING, bilinear)
+        passes_with(receivers, size, ANCHOR_SPACING, 0.0, bilinear)
     }
 
-    /// [`passes`] with anchors every `coarsest` pixels and every gather returning `light` at
-    /// the receiver.
+    /// [`passes`] with anchors every `coarsest` pixels, every pixel's direct light of
+    /// luminance `floor`, and every gather returning `light` at the receiver.
     fn passes_with(
         receivers: &[Receiver],
         size: (u32, u32),
         coarsest: u32,
+        floor: f32,
         light: impl Fn(Vec3) -> Rgb,
     ) -> Vec<(Rgb, bool)> {
         let plan = SparsePlan::new(receivers, (0, 0), size, size.0, coarsest, true);
         let mut value = vec![Rgb::splat(f32::NAN); receivers.len()];
         let mut gathered = vec![false; receivers.len()];
         let open = |_| f32::INFINITY;
-        let (interpolated, _) = plan.run(receivers, &mut value, open, |which, value| {
-            for &k in which {
-                assert!(!gathered[k], "{k} gathers twice");
-                gathered[k] = true;
-                value[k] = light(receivers[k].p);
-            }
-        });
+        let (interpolated, _) = plan.run(
+            receivers,
+            &mut value,
+            open,
+            |_| floor,
+            |which, value| {
+                for &k in which {
+                    assert!(!gathered[k], "{k} gathers twice");
+                    gathered[k] = true;
+                    value[k] = light(receivers[k].p);
+                }
+            },
+        );
         assert_eq!(interpolated, gathered.iter().filter(|g| !**g).count());
         value.into_iter().zip(gathered).collect()
     }
@@ -855,7 +962,7 @@ mod tests {
         assert_eq!(out[q1].0, out[q0].0);
         assert_eq!(out[q2].0, out[q0].0);
         let step = |p: Vec3| Rgb::splat(if p.x > 5.0 { 2.0 } else { 1.0 });
-        let out = passes_with(&receivers, (8, 8), ANCHOR_SPACING, step);
+        let out = passes_with(&receivers, (8, 8), ANCHOR_SPACING, 0.0, step);
         assert!([q0, q1, q2, q3].iter().all(|&q| out[q].1));
         assert_eq!(out[q1].0, step(receivers[q1].p));
     }
@@ -894,6 +1001,7 @@ mod tests {
             receivers,
             &mut value,
             |k| clearance[k],
+            |_| 0.0,
             |which, value| {
                 for &k in which {
                     gathered[k] = true;
@@ -1039,7 +1147,7 @@ mod tests {
         let n = 16;
         let light = |p: Vec3| bilinear(0.5 * p);
         let run = |receivers: &[Receiver]| -> Vec<u32> {
-            let out = passes_with(receivers, (n, n), 8, light);
+            let out = passes_with(receivers, (n, n), 8, 0.0, light);
             for (k, &(e, _)) in out.iter().enumerate() {
                 let want = light(receivers[k].p);
                 assert!((e - want).abs().max_element() < 1e-5, "{k}: {e} vs {want}");
@@ -1085,5 +1193,51 @@ mod tests {
             let want = bilinear(receivers[k].p);
             assert!((e - want).abs().max_element() < 1e-6, "{k}: {e} vs {want}");
         }
+    }
+
+    /// A faint receiver (a chain's end at 1 % of its pixel) whose finest cell fails (a corner
+    /// missing) takes the inverse-square mean of its layer's receivers around it where what
+    /// their spread would put into its pixel is within [`CONTRAST`] of the pixel's floor plus
+    /// the darkest donor's share; else it gathers. A receiver of full weight in the same place
+    /// gathers whatever its pixel's floor.
+    #[test]
+    fn faint_receivers_borrow_within_a_bound_on_their_pixel() {
+        // E = 1 + 0.12 x: cells of 4 span 48 % and fail, cells of 2 span 24 % and interpolate;
+        // the donors within two pixels of x = 1 span x = 0..3, 36 %.
+        let light = |p: Vec3| Rgb::splat(1.0 + 0.12 * p.x);
+        let layer = |weight: f32| -> Vec<Receiver> {
+            plane()
+                .into_iter()
+                .filter(|r| r.pixel != 2 * 8 + 2)
+                .map(|r| Receiver {
+                    weight: Rgb::splat(weight),
+                    chain: 7,
+                    ..r
+                })
+                .collect()
+        };
+        let at = |receivers: &[Receiver], x: u32, y: u32| {
+            receivers.iter().position(|r| r.pixel == y * 8 + x).unwrap()
+        };
+        let faint = layer(0.01);
+        let k = at(&faint, 1, 1);
+        // Dark pixel: the spread, 0.36 × 0.01 × 0.5 = 0.0018, exceeds 0.3 × 0.005.
+        let dark = passes_with(&faint, (8, 8), ANCHOR_SPACING, 0.0, light);
+        assert!(
+            dark[k].1,
+            "borrowed where its donors disagree in a dark pixel"
+        );
+        assert_eq!(dark[k].0, light(faint[k].p));
+        // Lit pixel: 0.0018 ≤ 0.3 × (0.01 + 0.005).
+        let lit = passes_with(&faint, (8, 8), ANCHOR_SPACING, 0.01, light);
+        assert!(!lit[k].1, "gathered where its donors may lend");
+        let (e, truth) = (lit[k].0.x, light(faint[k].p).x);
+        // The donors' inverse-square mean around x = 1: within their range, near the truth.
+        assert!((1.0..=1.36).contains(&e), "borrowed {e}");
+        assert!((e - truth).abs() < 0.05, "borrowed {e}, truth {truth}");
+        // Full weight: no bound on its pixel lets it borrow.
+        let full = layer(1.0);
+        let out = passes_with(&full, (8, 8), ANCHOR_SPACING, 1e6, light);
+        assert!(out[at(&full, 1, 1)].1);
     }
 }
