@@ -84,9 +84,68 @@ pub fn sobol02(k: u32, scramble: [u32; 2]) -> Vec2 {
     Vec2::new(unit(x ^ scramble[0]), unit(y ^ scramble[1]))
 }
 
+/// Index `i` of `0..n` under a pseudo-random permutation chosen by `seed` (Kensler,
+/// "Correlated Multi-Jittered Sampling", 2013: a hash that is a bijection on the next power of
+/// two, walked until it falls below `n`). Handing a pixel's blocks of a sequence to its
+/// camera samples in this order decorrelates the blocks from the samples' own points.
+pub(crate) fn permute(mut i: u32, n: u32, seed: u32) -> u32 {
+    if n <= 1 {
+        return 0;
+    }
+    let mut w = n - 1;
+    w |= w >> 1;
+    w |= w >> 2;
+    w |= w >> 4;
+    w |= w >> 8;
+    w |= w >> 16;
+    let p = seed;
+    loop {
+        i ^= p;
+        i = i.wrapping_mul(0xe170_893d);
+        i ^= p >> 16;
+        i ^= (i & w) >> 4;
+        i ^= p >> 8;
+        i = i.wrapping_mul(0x0929_eb3f);
+        i ^= p >> 23;
+        i ^= (i & w) >> 1;
+        i = i.wrapping_mul(1 | p >> 27);
+        i = i.wrapping_mul(0x6935_fa69);
+        i ^= (i & w) >> 11;
+        i = i.wrapping_mul(0x74dc_b303);
+        i ^= (i & w) >> 2;
+        i = i.wrapping_mul(0x9e50_1cc3);
+        i ^= (i & w) >> 2;
+        i = i.wrapping_mul(0xc860_a3df);
+        i &= w;
+        i ^= i >> 5;
+        if i < n {
+            break;
+        }
+    }
+    (i + p % n) % n
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Every n and seed gives a bijection of 0..n, and seeds give different orders.
+    #[test]
+    fn permute_is_a_bijection() {
+        for n in 1..=70u32 {
+            for seed in [0u32, 1, 0xdead_beef, 0x8000_0000, u32::MAX] {
+                let mut seen = vec![false; n as usize];
+                for i in 0..n {
+                    let j = permute(i, n, seed) as usize;
+                    assert!(!seen[j], "n {n} seed {seed}: {j} twice");
+                    seen[j] = true;
+                }
+            }
+        }
+        let order = |seed| (0..64).map(|i| permute(i, 64, seed)).collect::<Vec<_>>();
+        assert_ne!(order(1), order(2));
+        assert_ne!(order(1), (0..64).collect::<Vec<_>>());
+    }
 
     #[test]
     fn sobol_points_are_stratified() {

@@ -275,7 +275,13 @@ impl PixelSampling {
     ) -> Samples {
         let pixel = y * self.width + x;
         let weight = Rgb::splat(1.0 / count as f32);
-        let scramble = Sampler::new(settings.seed, u64::from(pixel), u64::MAX).next_scramble();
+        let mut per_pixel = Sampler::new(settings.seed, u64::from(pixel), u64::MAX);
+        let scramble = per_pixel.next_scramble();
+        // The pixel's light points, shared out among its samples (`LightShare`).
+        let light = (
+            per_pixel.next_scramble(),
+            (per_pixel.next_1d() * 16_777_216.0) as u32,
+        );
         let mut out = Samples {
             mean: PrimarySample::default(),
             spread: Spread::EMPTY,
@@ -311,7 +317,7 @@ impl PixelSampling {
                 weight,
                 gather_weight: gather_weight.filter(|_| gathers),
                 quarter: by_quarter.then_some(quarter as u8),
-                light: LightShare::of_sample(settings.light_samples, s, count),
+                light: LightShare::of_sample(settings.light_samples, s, count, light),
             };
             let r = trace_primary(ctx, settings, cs, &mut sampler, receivers);
             out.spread = out.spread.add(luminance(r.direct) * count as f32);
