@@ -239,7 +239,7 @@ pub(crate) fn borrows_light_beside(coarsest: u32) -> bool {
 }
 
 /// Whether receiver `r` is a quarter of a geometric edge's pixel (a primary hit's).
-pub(crate) fn on_geometric_edge(r: &Receiver) -> bool {
+fn on_geometric_edge(r: &Receiver) -> bool {
     r.chain == 0 && r.quarter.is_some()
 }
 
@@ -281,15 +281,16 @@ struct Donors {
 }
 
 impl Donors {
-    /// The donors among `candidates` for receiver `r`: those that lend to it ([`lends_to`])
-    /// and have their value (`value(j)`); their luminances are taken of each value times
-    /// `scale`. `None` with fewer than [`DONORS`], or where the mean passes f32's range (donors
+    /// The donors among `candidates` for receiver `r`: those within `farthest` of it that lend
+    /// to it ([`lends_to`]) and have their value (`value(j)`); their luminances are taken of
+    /// each value times `scale`. `None` with fewer than [`DONORS`], or where the mean passes f32's range (donors
     /// at the very point weigh up to 1/f32::MIN_POSITIVE): the receiver gathers instead of
     /// taking an infinite or a zero value.
     fn of(
         receivers: &[Receiver],
         r: &Receiver,
         candidates: impl Iterator<Item = usize>,
+        farthest: f32,
         scale: Rgb,
         value: impl Fn(usize) -> Option<Rgb>,
     ) -> Option<Donors> {
@@ -297,13 +298,13 @@ impl Donors {
         let (mut lo, mut hi) = (f32::INFINITY, 0.0f32);
         for j in candidates {
             let c = &receivers[j];
-            if !lends_to(c, r) {
+            let distance = (c.p - r.p).length();
+            if distance > farthest || !lends_to(c, r) {
                 continue;
             }
             let Some(e) = value(j) else {
                 continue;
             };
-            let distance = (c.p - r.p).length();
             let w = 1.0 / (distance * distance).max(f32::MIN_POSITIVE);
             let l = luminance(e * scale);
             (lo, hi) = (lo.min(l), hi.max(l));
@@ -549,11 +550,9 @@ impl SparsePlan {
         value: impl Fn(usize) -> Option<Rgb>,
     ) -> Option<Rgb> {
         let r = &receivers[k];
+        let donors = self.layer_around(r, &[None]).filter(|&j| j != k);
         let farthest = REACH * clearance(k);
-        let donors = self
-            .layer_around(r, &[None])
-            .filter(|&j| j != k && (receivers[j].p - r.p).length() <= farthest);
-        let d = Donors::of(receivers, r, donors, Rgb::ONE, value)?;
+        let d = Donors::of(receivers, r, donors, farthest, Rgb::ONE, value)?;
         agree(d.lo, d.hi).then_some(d.mean)
     }
 
@@ -578,7 +577,7 @@ impl SparsePlan {
         let quarters = [None, Some(0), Some(1), Some(2), Some(3)];
         let donors = self.layer_around(r, &quarters).filter(|&j| j != k);
         let scale = r.weight * self.albedo_of(k, r);
-        let d = Donors::of(receivers, r, donors, scale, value)?;
+        let d = Donors::of(receivers, r, donors, f32::INFINITY, scale, value)?;
         (d.hi - d.lo <= CONTRAST * (floor + d.lo)).then_some(d.mean)
     }
 
