@@ -6,7 +6,7 @@
 //! does. A node stores its four children's boxes as structure-of-arrays (`lo[axis]` holds
 //! the four minima), so one ray meets all four boxes in six subtractions and multiplies. The
 //! leaves hold at most four triangles, laid out as one [`Packet`] (vertex, axis, lane), so
-//! the triangle test's first stage runs on all four at once too.
+//! the triangle test runs on all four at once too.
 //!
 //! The box test is pbrt-v4's conservative slab test (§6.1.2 and §6.8.2 of the 4th edition):
 //! the far distance is scaled up by 1 + 2γ₃ so rounding never culls a box the ray touches. A

@@ -1,7 +1,8 @@
 //! Ray tracing against all scene triangles: a four-wide BVH (`bvh4`, built by collapsing
 //! obvhs's binary PLOC tree) traversed with a conservative slab test, and the watertight
-//! triangle test of [`crate::geometry::triangle`] (obvhs's own test is not watertight), whose
-//! first stage runs on a leaf's four triangles at once.
+//! triangle test of [`crate::geometry::triangle`] (obvhs's own test is not watertight), run
+//! on a leaf's four triangles at once; the rare triangle whose edge functions or distance
+//! need double precision is finished one at a time.
 //!
 //! Watertight triangles are not enough: the node culling must never reject a box the ray
 //! touches. The slab test rounds outwards as pbrt-v4's does and treats a ray lying in a slab's
@@ -171,7 +172,8 @@ impl Accel {
         })
     }
 
-    /// The lanes of `packet` that `q` hits in `(q.tmin, tmax)`, in lane order, with their hits.
+    /// The lanes of `packet` that `q` hits in `(q.tmin, tmax)`, in lane order, with their hits:
+    /// the four lanes tested at once, the few the SIMD test leaves undecided one by one.
     #[inline]
     fn packet_hits<'a>(
         &'a self,
@@ -179,18 +181,26 @@ impl Accel {
         packet: &'a Packet,
         tmax: f32,
     ) -> impl Iterator<Item = (u32, TriangleHit)> + 'a {
-        let mut lanes = q.wt.candidates(&packet.v, tmax) & packet.used();
-        let (wt, tmin) = (&q.wt, q.tmin);
+        let found = q.wt.intersect4(&packet.v, q.tmin, tmax);
+        let used = packet.used();
+        let (hit, undecided) = (found.hit & used, found.undecided & used);
+        let mut lanes = hit | undecided;
         std::iter::from_fn(move || {
             while lanes != 0 {
                 let lane = lanes.trailing_zeros() as usize;
                 lanes &= lanes - 1;
-                let [p0, p1, p2] = packet.triangle(lane);
-                let id = packet.id[lane];
-                if let Some(h) = wt.intersect(p0, p1, p2, tmin, tmax) {
-                    if self.solid(id as usize, &h) {
-                        return Some((id, h));
+                let h = if hit & (1 << lane) != 0 {
+                    found.lane(lane)
+                } else {
+                    let [p0, p1, p2] = packet.triangle(lane);
+                    match q.wt.intersect(p0, p1, p2, q.tmin, tmax) {
+                        Some(h) => h,
+                        None => continue,
                     }
+                };
+                let id = packet.id[lane];
+                if self.solid(id as usize, &h) {
+                    return Some((id, h));
                 }
             }
             None

@@ -33,6 +33,37 @@ pub(crate) struct TriangleHit {
     pub b: [f32; 3],
 }
 
+/// What [`WatertightRay::intersect4`] found in a packet of four triangles.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Hits4 {
+    /// Bit `i` set where lane `i` is hit, at distance `t[i]` with barycentrics `b[·][i]`.
+    pub hit: u32,
+    /// Bit `i` set where lane `i` must be decided by [`WatertightRay::intersect`].
+    pub undecided: u32,
+    /// Per lane, the hit distance (meaningful where `hit` is set).
+    pub t: Vec4,
+    /// Per vertex and lane, the barycentric weight.
+    pub b: [Vec4; 3],
+}
+
+impl Hits4 {
+    const NONE: Hits4 = Hits4 {
+        hit: 0,
+        undecided: 0,
+        t: Vec4::ZERO,
+        b: [Vec4::ZERO; 3],
+    };
+
+    /// Lane `lane`'s hit.
+    #[inline]
+    pub fn lane(&self, lane: usize) -> TriangleHit {
+        TriangleHit {
+            t: self.t[lane],
+            b: [self.b[0][lane], self.b[1][lane], self.b[2][lane]],
+        }
+    }
+}
+
 impl WatertightRay {
     /// The constants of the ray from `origin` along `dir`.
     pub fn new(origin: Vec3A, dir: Vec3A) -> Self {
@@ -151,13 +182,15 @@ impl WatertightRay {
         })
     }
 
-    /// The first stage of [`intersect`](Self::intersect) on four triangles at once
-    /// (`v[vertex][axis]`, one triangle per lane): bit `i` is set unless lane `i` is certainly
-    /// missed before `tmax`. Every lane it clears, `intersect` rejects too: the same
-    /// operations in the same order give the same bits lane by lane, and a lane whose edge
-    /// functions need the double-precision retry is kept for `intersect` to decide.
-    #[inline]
-    pub fn candidates(&self, v: &[[Vec4; 3]; 3], tmax: f32) -> u32 {
+    /// [`intersect`](Self::intersect) on four triangles at once (`v[vertex][axis]`, one
+    /// triangle per lane), within `(tmin, tmax)`. Lane by lane, the same operations in the same
+    /// order as `intersect`, so a lane in [`Hits4::hit`] carries the distance and barycentrics
+    /// `intersect` returns, bit for bit, and every lane in neither mask is one `intersect`
+    /// rejects. The rare lanes whose edge functions need the double-precision retry, or whose
+    /// distance is too close to the origin for the single-precision bound to decide, are left
+    /// to `intersect` ([`Hits4::undecided`]).
+    #[inline(always)]
+    pub fn intersect4(&self, v: &[[Vec4; 3]; 3], tmin: f32, tmax: f32) -> Hits4 {
         let (kx, ky, kz) = (self.kx, self.ky, self.kz);
         let (ox, oy, oz) = (
             Vec4::splat(self.origin[kx]),
@@ -171,7 +204,7 @@ impl WatertightRay {
         );
         let shear = |p: &[Vec4; 3]| {
             let (x, y, z) = (p[kx] - ox, p[ky] - oy, p[kz] - oz);
-            (x - sx * z, y - sy * z, z)
+            (x - sx * z, y - sy * z, sz * z)
         };
         let (ax, ay, az) = shear(&v[0]);
         let (bx, by, bz) = shear(&v[1]);
@@ -184,12 +217,40 @@ impl WatertightRay {
         let outside = (u.cmplt(zero) | v.cmplt(zero) | w.cmplt(zero))
             & (u.cmpgt(zero) | v.cmpgt(zero) | w.cmpgt(zero));
         let det = u + v + w;
-        let t_scaled = u * (sz * az) + v * (sz * bz) + w * (sz * cz);
+        let t_scaled = u * az + v * bz + w * cz;
         let negative = det.cmplt(zero);
         let ts = Vec4::select(negative, -t_scaled, t_scaled);
         let d = Vec4::select(negative, -det, det);
         let near = ts.cmplt(Vec4::splat(tmax) * d);
-        (retry | (!outside & det.cmpne(zero) & near)).bitmask()
+        let plausible = !outside & det.cmpne(zero) & near;
+        if (retry | plausible).bitmask() == 0 {
+            // The common case: all four missed.
+            return Hits4::NONE;
+        }
+        let inv = Vec4::ONE / det;
+        let t = t_scaled * inv;
+        let max3 = |a: Vec4, b: Vec4, c: Vec4| a.abs().max(b.abs()).max(c.abs());
+        let max_zt = max3(az, bz, cz);
+        let max_xt = max3(ax, bx, cx);
+        let max_yt = max3(ay, by, cy);
+        let delta_z = Vec4::splat(gamma(3)) * max_zt;
+        let delta_x = Vec4::splat(gamma(5)) * (max_xt + max_zt);
+        let delta_y = Vec4::splat(gamma(5)) * (max_yt + max_zt);
+        let delta_e = Vec4::splat(2.0)
+            * (Vec4::splat(gamma(2)) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
+        let max_e = max3(u, v, w);
+        let delta_t = Vec4::splat(3.0)
+            * (Vec4::splat(gamma(3)) * max_e * max_zt + delta_e * max_zt + delta_z * max_e)
+            * inv.abs();
+        let certain = t.cmpgt(delta_t);
+        let behind = t.cmple(-delta_t);
+        let within = t.cmpgt(Vec4::splat(tmin)) & t.cmplt(Vec4::splat(tmax));
+        Hits4 {
+            hit: (plausible & !retry & certain & within).bitmask(),
+            undecided: (retry | (plausible & !certain & !behind)).bitmask(),
+            t,
+            b: [u * inv, v * inv, w * inv],
+        }
     }
 
     /// The hit distance to the plane of `(p0, p1, p2)` computed in double precision, or `None`
@@ -255,5 +316,73 @@ mod tests {
         let r = WatertightRay::new(vec3a(0.25, 0.25, -1.0), vec3a(0., 0., 1.));
         assert!(r.intersect(p0, p1, p2, 0.0, 2.0).is_some());
         assert!(r.intersect(p0, p1, p2, 0.0, 0.5).is_none());
+    }
+
+    /// `intersect4` agrees with `intersect` lane by lane, bit for bit: every lane it reports
+    /// hit carries `intersect`'s distance and barycentrics, every lane it leaves out
+    /// `intersect` misses. The triangles share vertices with their neighbours and lie on
+    /// the rays' origins or along their axes often enough to reach the undecided lanes
+    /// (zero edge functions, distances within the rounding bound).
+    #[test]
+    fn four_at_once_agree_with_one_at_a_time() {
+        let mut s = crate::sampler::Sampler::new(3, 0, 0);
+        let mut point = |grid: bool| {
+            let (a, b) = (s.next_2d(), s.next_1d());
+            let p = vec3a(a.x, a.y, b) * 4.0 - 2.0;
+            if grid {
+                p.round()
+            } else {
+                p
+            }
+        };
+        let (mut hits, mut undecided, mut lanes) = (0, 0, 0);
+        for round in 0..20_000 {
+            let grid = round % 3 == 0;
+            let origin = point(grid);
+            let mut dir = point(grid);
+            if dir == Vec3A::ZERO {
+                dir = Vec3A::X;
+            }
+            let ray = WatertightRay::new(origin, dir);
+            let shared = point(grid);
+            // Lane 0 sometimes starts at the origin (a ray leaving its own surface).
+            let tris: [[Vec3A; 3]; 4] = std::array::from_fn(|lane| {
+                let first = if lane == 0 && round % 5 == 0 {
+                    origin
+                } else {
+                    shared
+                };
+                [first, point(grid), point(grid)]
+            });
+            let mut v = [[Vec4::ZERO; 3]; 3];
+            for (lane, t) in tris.iter().enumerate() {
+                for vertex in 0..3 {
+                    for axis in 0..3 {
+                        v[vertex][axis][lane] = t[vertex][axis];
+                    }
+                }
+            }
+            let tmax = if round % 2 == 0 { f32::INFINITY } else { 2.5 };
+            let four = ray.intersect4(&v, 0.0, tmax);
+            assert_eq!(four.hit & four.undecided, 0);
+            for (lane, [p0, p1, p2]) in tris.into_iter().enumerate() {
+                let one = ray.intersect(p0, p1, p2, 0.0, tmax);
+                let bit = 1 << lane;
+                lanes += 1;
+                if four.hit & bit != 0 {
+                    let h = four.lane(lane);
+                    assert_eq!(Some(h), one, "round {round} lane {lane}");
+                    assert_eq!(h.t.to_bits(), one.map_or(0, |o| o.t.to_bits()));
+                    hits += 1;
+                } else if four.undecided & bit != 0 {
+                    undecided += 1;
+                } else {
+                    assert_eq!(one, None, "round {round} lane {lane}");
+                }
+            }
+        }
+        // The test must reach all three outcomes.
+        assert!(hits > 1000, "{hits} hits of {lanes}");
+        assert!(undecided > 100, "{undecided} undecided of {lanes}");
     }
 }
