@@ -1,4 +1,4 @@
-//! Ray tracing against all scene triangles: a four-wide BVH (`bvh4`, built by collapsing
+//! Ray tracing against all scene triangles: an eight-wide BVH (`bvh8`, built by collapsing
 //! obvhs's binary PLOC tree) traversed with a conservative slab test, and the watertight
 //! triangle test of [`crate::geometry::triangle`] (obvhs's own test is not watertight), run
 //! on a leaf's four triangles at once; the rare triangle whose edge functions or distance
@@ -6,17 +6,17 @@
 //!
 //! Watertight triangles are not enough: the node culling must never reject a box the ray
 //! touches. The slab test rounds outwards as pbrt-v4's does and treats a ray lying in a slab's
-//! plane as inside it (see `bvh4`), so the boxes are the triangles' own, undilated.
+//! plane as inside it (see `bvh8`), so the boxes are the triangles' own, undilated.
 //!
 //! Alpha cut-outs (glTF `MASK`) are tested at each candidate hit: a hit where the material's
 //! alpha is below its cutoff is no hit, so every ray (camera, shadow, bounce) passes through
 //! the holes.
 
-mod bvh4;
+mod bvh8;
 
 use crate::geometry::triangle::{TriangleHit, WatertightRay};
 use crate::scene::{interpolate_uv, Cutout, Scene, Texture};
-use bvh4::{BoxRay, Bvh4, Packet, Visit};
+use bvh8::{BoxRay, Bvh8, Packet, Visit};
 use glam::{Vec2, Vec3, Vec3A};
 use obvhs::bvh2::builder::build_bvh2;
 use obvhs::triangle::Triangle;
@@ -47,7 +47,7 @@ fn unit(dir: Vec3) -> Option<(Vec3A, f32)> {
 
 /// The acceleration structure over every triangle of a scene.
 pub struct Accel {
-    bvh: Bvh4,
+    bvh: Bvh8,
     /// `(mesh, triangle within mesh)` of each triangle, by the packets' `id`.
     ids: Vec<(u32, u32)>,
     /// Per mesh, its alpha cut-out where its material has one that varies (empty where no
@@ -133,11 +133,11 @@ impl Accel {
 
     fn from_triangles(tris: Vec<Triangle>, ids: Vec<(u32, u32)>) -> Accel {
         let bvh = if tris.is_empty() {
-            Bvh4::from_bvh2(&Default::default(), &[])
+            Bvh8::from_bvh2(&Default::default(), &[])
         } else {
             let bvh2 = build_bvh2(&tris, BUILD, &mut Duration::default());
             let vertices: Vec<[Vec3A; 3]> = tris.iter().map(|t| [t.v0, t.v1, t.v2]).collect();
-            Bvh4::from_bvh2(&bvh2, &vertices)
+            Bvh8::from_bvh2(&bvh2, &vertices)
         };
         Accel {
             bvh,
