@@ -9,8 +9,9 @@
 //! subtractions and multiplies. Eight-wide nodes make the tree about two thirds as deep as
 //! four-wide ones: a ray visits fewer nodes, and each visit's branches (which children it
 //! entered, in which order) are what a traversal spends its time on. Against four-wide nodes
-//! (`bench_rays`, 1.05M triangles, one thread): closest hits 1.18× (coherent) and 1.20×
-//! (incoherent) as fast, occlusion 1.11× and 1.12×; the path tracer 1.08–1.11×. The leaves
+//! (`bench_rays`, 1.05M triangles, one thread, three runs alternating): closest hits
+//! 1.10–1.15× as fast, occlusion 1.05–1.18×; the path tracer 1.09–1.13×. Sixteen-wide nodes
+//! (four halves) and leaves of eight triangles were no faster. The leaves
 //! hold at most four triangles, laid out as one [`Packet`] (vertex, axis, lane), so the
 //! triangle test runs on all four at once too.
 //!
