@@ -313,9 +313,13 @@ mod tests {
         best.map(|(i, t)| (i, t / len))
     }
 
-    fn accel_over(tris: &[Triangle]) -> Accel {
+    /// The accel over `tris`, its node test with AVX where `avx` and the CPU has it, else
+    /// with SSE (so both paths are tested on a machine with AVX).
+    fn accel_over(tris: &[Triangle], avx: bool) -> Accel {
         let ids = (0..tris.len() as u32).map(|i| (0, i)).collect();
-        Accel::from_triangles(tris.to_vec(), ids)
+        let mut accel = Accel::from_triangles(tris.to_vec(), ids);
+        accel.bvh.use_avx(avx);
+        accel
     }
 
     /// Random triangles in a cube and random rays: the tree finds exactly the brute-force
@@ -338,24 +342,26 @@ mod tests {
                 }
             })
             .collect();
-        let accel = accel_over(&tris);
-        let mut hits = 0;
-        for _ in 0..4000 {
-            let o = Vec3::from(point(12.0));
-            let d = Vec3::from(point(2.0));
-            for tmax in [f32::INFINITY, 3.0] {
-                let expected = brute_force(&tris, o, d, tmax);
-                let got = accel.closest_hit(o, d, 0.0, tmax);
-                assert_eq!(
-                    got.map(|h| (h.triangle as usize, h.t)),
-                    expected,
-                    "ray {o} {d} tmax {tmax}"
-                );
-                assert_eq!(accel.occluded(o, d, 0.0, tmax), expected.is_some());
-                hits += usize::from(expected.is_some());
+        for avx in [false, true] {
+            let accel = accel_over(&tris, avx);
+            let mut hits = 0;
+            for _ in 0..4000 {
+                let o = Vec3::from(point(12.0));
+                let d = Vec3::from(point(2.0));
+                for tmax in [f32::INFINITY, 3.0] {
+                    let expected = brute_force(&tris, o, d, tmax);
+                    let got = accel.closest_hit(o, d, 0.0, tmax);
+                    assert_eq!(
+                        got.map(|h| (h.triangle as usize, h.t)),
+                        expected,
+                        "ray {o} {d} tmax {tmax}"
+                    );
+                    assert_eq!(accel.occluded(o, d, 0.0, tmax), expected.is_some());
+                    hits += usize::from(expected.is_some());
+                }
             }
+            assert!(hits > 1000, "{hits} hits: the test must exercise hits");
         }
-        assert!(hits > 1000, "{hits} hits: the test must exercise hits");
     }
 
     /// Axis-aligned rays lying exactly in the plane of a box face (a zero direction component
@@ -395,32 +401,34 @@ mod tests {
             v2: w(0.0, 1.0),
         });
         let wall = tris.len() - 2..tris.len();
-        let accel = accel_over(&tris);
-        let mut hits = 0;
-        for j in 0..=8 {
-            for z in [0.0, 1.0, 0.5] {
-                for dir in [
-                    Vec3::X,
-                    Vec3::new(1.0, -0.0, 0.0),
-                    Vec3::new(1.0, 0.0, -0.0),
-                ] {
-                    let o = Vec3::new(-5.0, j as f32, z);
-                    let hit = accel.closest_hit(o, dir, 0.0, f32::INFINITY);
-                    let expected = brute_force(&tris, o, dir, f32::INFINITY);
-                    assert_eq!(hit.map(|h| h.t), expected.map(|e| e.1), "ray from {o}");
-                    assert_eq!(
-                        accel.occluded(o, dir, 0.0, f32::INFINITY),
-                        expected.is_some()
-                    );
-                    if let Some(h) = hit {
-                        assert!(wall.contains(&(h.triangle as usize)), "ray from {o}: {h:?}");
-                        hits += 1;
+        for avx in [false, true] {
+            let accel = accel_over(&tris, avx);
+            let mut hits = 0;
+            for j in 0..=8 {
+                for z in [0.0, 1.0, 0.5] {
+                    for dir in [
+                        Vec3::X,
+                        Vec3::new(1.0, -0.0, 0.0),
+                        Vec3::new(1.0, 0.0, -0.0),
+                    ] {
+                        let o = Vec3::new(-5.0, j as f32, z);
+                        let hit = accel.closest_hit(o, dir, 0.0, f32::INFINITY);
+                        let expected = brute_force(&tris, o, dir, f32::INFINITY);
+                        assert_eq!(hit.map(|h| h.t), expected.map(|e| e.1), "ray from {o}");
+                        assert_eq!(
+                            accel.occluded(o, dir, 0.0, f32::INFINITY),
+                            expected.is_some()
+                        );
+                        if let Some(h) = hit {
+                            assert!(wall.contains(&(h.triangle as usize)), "ray from {o}: {h:?}");
+                            hits += 1;
+                        }
                     }
                 }
             }
+            // Every ray meets the wall, those along its edges too: the watertight test counts a
+            // point on an edge (edge function exactly 0) as inside.
+            assert_eq!(hits, 81, "{hits} of 81 rays hit the wall");
         }
-        // Every ray meets the wall, those along its edges too: the watertight test counts a
-        // point on an edge (edge function exactly 0) as inside.
-        assert_eq!(hits, 81, "{hits} of 81 rays hit the wall");
     }
 }
