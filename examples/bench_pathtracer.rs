@@ -4,17 +4,20 @@
 //! threads). Mitsuba's: `llvm_ad_rgb`'s `path` integrator through
 //! `scripts/anchor/mitsuba_oidn.py` (wall seconds after an untimed JIT warm-up of the same
 //! count) when `WPBGI_ANCHOR_PYTHON` names a Python with mitsuba, numpy and pyoidn (see
-//! `bench_bounces`); then the ratio of our samples per second to Mitsuba's.
+//! `bench_bounces`); then the ratio of our samples per second to Mitsuba's. With
+//! `WPBGI_PREVIOUS=/path/to/an/older/wpbgi`, that version's `wpbgi reference` at the same
+//! settings (its own seconds, from its `--json`), and our time over its.
 //!
 //! `cargo run --release --example bench_pathtracer [-- SPP]` (default 256). Mitsuba renders
 //! only that count (the anchor script's AOVs and denoiser run too, outside the timing).
 
 use std::path::Path;
+use std::process::Command;
 use std::time::Instant;
 use wpbgi::reference::{render, RenderSettings};
 use wpbgi::scene::Scene;
 
-#[allow(dead_code)] // the benchmarks' shared helpers, of which this one uses two
+#[allow(dead_code)] // the benchmarks' shared helpers, of which this one uses three
 mod common;
 
 const SIZE: u32 = 256;
@@ -25,15 +28,17 @@ fn main() -> common::Result<()> {
         None => 256,
     };
     let python = std::env::var_os("WPBGI_ANCHOR_PYTHON");
+    let previous = std::env::var_os("WPBGI_PREVIOUS");
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mitsuba");
     println!(
         "{SIZE}², max_depth 8, {spp} spp, {} threads",
         rayon::current_num_threads()
     );
     println!(
-        "| scene | ours s | ours Msamples/s | Mitsuba s | Mitsuba Msamples/s | ours / Mitsuba |"
+        "| scene | ours s | ours Msamples/s | previous s | ours / previous: time | Mitsuba s | \
+         Mitsuba Msamples/s | ours / Mitsuba: samples/s |"
     );
-    println!("|---|---:|---:|---:|---:|---:|");
+    println!("|---|---:|---:|---:|---:|---:|---:|---:|");
     let samples = f64::from(SIZE * SIZE) * f64::from(spp);
     for name in ["cbox-diffuse", "cbox-rough", "cbox-glossy", "cbox-mirror"] {
         let scene_path = dir.join(format!("{name}.gltf"));
@@ -47,6 +52,29 @@ fn main() -> common::Result<()> {
         let t = Instant::now();
         render(&scene, &camera, &settings, &|_| {})?;
         let ours = t.elapsed().as_secs_f64();
+        let before = match &previous {
+            Some(bin) => {
+                let out = std::env::temp_dir().join(format!("wpbgi-bench-pt-{name}.exr"));
+                let run = common::run_ok(
+                    "the previous version's reference",
+                    Command::new(bin)
+                        .arg("-q")
+                        .arg("reference")
+                        .arg(&scene_path)
+                        .arg("-o")
+                        .arg(&out)
+                        .args(["--size", &format!("{SIZE}x{SIZE}")])
+                        .args(["--spp", &spp.to_string(), "--max-depth", "8", "--json"]),
+                )?;
+                let json: serde_json::Value = serde_json::from_slice(&run.stdout)?;
+                json["frames"][0]["seconds"].as_f64()
+            }
+            None => None,
+        };
+        let before = match before {
+            Some(b) => format!("{b:.2} | {:.2}", ours / b),
+            None => "not run (`WPBGI_PREVIOUS`) |".to_string(),
+        };
         let mitsuba = match &python {
             Some(py) => common::mitsuba_anchor(
                 Path::new(py),
@@ -62,13 +90,13 @@ fn main() -> common::Result<()> {
         let rate = |s: f64| samples / s / 1e6;
         match mitsuba {
             Some(m) => println!(
-                "| {name} | {ours:.2} | {:.2} | {m:.2} | {:.2} | {:.2} |",
+                "| {name} | {ours:.2} | {:.2} | {before} | {m:.2} | {:.2} | {:.2} |",
                 rate(ours),
                 rate(m),
                 m / ours
             ),
             None => println!(
-                "| {name} | {ours:.2} | {:.2} | not run (`WPBGI_ANCHOR_PYTHON`) | | |",
+                "| {name} | {ours:.2} | {:.2} | {before} | not run (`WPBGI_ANCHOR_PYTHON`) | | |",
                 rate(ours)
             ),
         }

@@ -4,19 +4,16 @@
 //!
 //! The tree is obvhs's binary PLOC build, collapsed: each node takes its binary children and
 //! keeps opening the largest (by surface area) inner one until it has eight, as Embree's BVH8
-//! does. A node stores its children's boxes as structure-of-arrays (`lo[axis]` holds the
-//! eight minima, as two `Vec4`), so one ray meets all eight boxes in six AVX subtractions and
-//! multiplies, or twelve SSE ones; both give the same distances bit for bit (the same
-//! operations lane by lane, tested). The AVX test took coherent closest hits 1.10–1.12× and
-//! the path tracer 1.02–1.04× faster than two SSE halves (`bench_rays`, `bench_pathtracer`,
-//! two runs each); LLVM does not merge the halves by itself. Eight-wide nodes make the tree about two thirds as deep as
-//! four-wide ones: a ray visits fewer nodes, and each visit's branches (which children it
-//! entered, in which order) are what a traversal spends its time on. Against four-wide nodes
-//! (`bench_rays`, 1.05M triangles, one thread, three runs alternating): closest hits
-//! 1.10–1.15× as fast, occlusion 1.05–1.18×; the path tracer 1.09–1.13×. Sixteen-wide nodes
-//! (four halves) and leaves of eight triangles were no faster. The leaves
-//! hold at most four triangles, laid out as one [`Packet`] (vertex, axis, lane), so the
-//! triangle test runs on all four at once too.
+//! does. Eight-wide nodes make the tree about two thirds as deep as four-wide ones: a ray
+//! visits fewer nodes, and each visit's branches (which children it entered, in which order)
+//! are what a traversal spends its time on. A node stores its children's boxes as
+//! structure-of-arrays (`lo[axis]` holds the eight minima, as two `Vec4`), so one ray meets
+//! all eight boxes in six AVX subtractions and multiplies, or twelve SSE ones; both give the
+//! same distances bit for bit (the same operations lane by lane, tested). LLVM does not merge
+//! the two SSE halves into AVX by itself, hence the AVX test written out. The leaves hold at
+//! most four triangles, laid out as one [`Packet`] (vertex, axis, lane), so the triangle test
+//! runs on all four at once too. What each step gained, and what was tried and not kept
+//! (sixteen-wide nodes, leaves of eight triangles), is in docs/benchmarks.md.
 //!
 //! The box test is pbrt-v4's conservative slab test (§6.1.2 and §6.8.2 of the 4th edition):
 //! the far distance is scaled up by 1 + 2γ₃ so rounding never culls a box the ray touches. A
@@ -507,6 +504,7 @@ mod tests {
     /// (0 × ∞ = NaN in the slab test).
     #[test]
     fn avx_node_test_matches_sse() {
+        // Without AVX there is nothing to compare: the traversal never takes that path.
         if !avx_available() {
             return;
         }
