@@ -39,13 +39,20 @@ impl Sampler {
     /// Next uniform number in [0, 1).
     #[inline]
     pub fn next_1d(&mut self) -> f32 {
+        // 24 high bits: every value is exactly representable and strictly below 1.
+        (self.next_u32() >> 8) as f32 * (1.0 / (1u64 << 24) as f32)
+    }
+
+    /// The next dimension as 32 random bits (a permutation's seed, which [`permute`] reads
+    /// whole: its top five bits choose one of its multipliers).
+    #[inline]
+    pub(crate) fn next_u32(&mut self) -> u32 {
         let bits = mix64(
             self.key
                 .wrapping_add((self.dim as u64).wrapping_mul(GOLDEN_GAMMA)),
         );
         self.dim += 1;
-        // 24 high bits: every value is exactly representable and strictly below 1.
-        (bits >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
+        (bits >> 32) as u32
     }
 
     #[inline]
@@ -145,6 +152,24 @@ mod tests {
         let order = |seed| (0..64).map(|i| permute(i, 64, seed)).collect::<Vec<_>>();
         assert_ne!(order(1), order(2));
         assert_ne!(order(1), (0..64).collect::<Vec<_>>());
+    }
+
+    #[test]
+    fn words_reach_every_bit() {
+        // A permutation's seed is read whole: its top five bits pick a multiplier, which a
+        // seed of 24 bits (a uniform number scaled by 2^24) never reached.
+        let mut sampler = Sampler::new(7, 3, 1);
+        let mut tops = [false; 32];
+        for _ in 0..2000 {
+            tops[(sampler.next_u32() >> 27) as usize] = true;
+        }
+        assert!(tops.iter().all(|&t| t));
+        // A uniform number is the same draw's 24 high bits.
+        let (mut a, mut b) = (Sampler::new(1, 2, 3), Sampler::new(1, 2, 3));
+        for _ in 0..100 {
+            let word = a.next_u32();
+            assert_eq!(b.next_1d(), (word >> 8) as f32 / 16_777_216.0);
+        }
     }
 
     #[test]

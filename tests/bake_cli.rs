@@ -720,7 +720,7 @@ fn a_constant_environment_gives_the_furnace_answer() {
     // The render's direct light takes 32 environment samples per plain pixel, and an edge
     // pixel's camera samples share 128 (render/primary.rs, `LightShare`): the mean came out
     // within 0.2 % of ρL (held to the 1 % of tests/render.rs's image means), single pixels up
-    // to 11.9 % off (held to 20 %).
+    // to 14.0 % off (held to 20 %; over seeds 1 to 6 the worst pixel ranged 11.5-17.6 %).
     check(&image, "bake + render", 0.01, 0.2);
     let stale = render(None);
     assert!(!stale.status.success());

@@ -278,10 +278,7 @@ impl PixelSampling {
         let mut per_pixel = Sampler::new(settings.seed, u64::from(pixel), u64::MAX);
         let scramble = per_pixel.next_scramble();
         // The pixel's light points, shared out among its samples (`LightShare`).
-        let light = (
-            per_pixel.next_scramble(),
-            (per_pixel.next_1d() * 16_777_216.0) as u32,
-        );
+        let light = (per_pixel.next_scramble(), per_pixel.next_u32());
         let mut out = Samples {
             mean: PrimarySample::default(),
             spread: Spread::EMPTY,
