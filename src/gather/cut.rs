@@ -99,13 +99,15 @@ pub fn splat_cut(
             let s = &senders.surfels[sender.surfel as usize];
             let omega = s.area * Vec3::from(s.n).dot(dir).abs() / d2;
             let disc = (s.area / std::f32::consts::PI).sqrt();
-            let pixel = mb
-                .solid_angle_towards(dir)
-                .unwrap_or(mb.pixel_solid_angle());
+            let at = mb.locate(dir);
+            let pixel = at
+                .as_ref()
+                .map_or(mb.pixel_solid_angle(), |at| mb.solid_angle_at(at));
             if omega <= pixel && d > NEAR_RADII * disc {
-                if omega > 0.0 {
+                if let Some(at) = at.filter(|_| omega > 0.0) {
                     let seen = senders.seen(j, -dir, mesh, back_hidden);
-                    stats.splats += u64::from(mb.splat(&senders.sender(j, v, seen), omega));
+                    let sender = senders.sender(j, v, seen);
+                    stats.splats += u64::from(mb.splat_at(&sender, d, at, omega));
                 }
             } else {
                 stats.split_leaves += 1;
@@ -128,14 +130,18 @@ pub fn splat_cut(
         // pixel lookup.
         let dir = v / d;
         let base = mb.pixel_solid_angle();
-        let accept = !senders.needs_leaves(j, mesh)
-            && fits_pixel(senders, j, d2, dir, base)
-            && mb
-                .solid_angle_towards(dir)
-                .is_some_and(|pixel| pixel == base || fits_pixel(senders, j, d2, dir, pixel));
-        if accept {
+        let accepted = if !senders.needs_leaves(j, mesh) && fits_pixel(senders, j, d2, dir, base) {
+            mb.locate(dir).filter(|at| {
+                let pixel = mb.solid_angle_at(at);
+                pixel == base || fits_pixel(senders, j, d2, dir, pixel)
+            })
+        } else {
+            None
+        };
+        if let Some(at) = accepted {
             let seen = senders.seen(j, -dir, mesh, back_hidden);
-            stats.splats += u64::from(mb.splat(&senders.sender(j, v, seen), seen.projected / d2));
+            let sender = senders.sender(j, v, seen);
+            stats.splats += u64::from(mb.splat_at(&sender, d, at, seen.projected / d2));
         } else {
             for c in sender.node.children {
                 if c != NO_NODE {

@@ -106,15 +106,26 @@ impl Shape {
     /// within their radii and the pixel's depth footprint `spread` (the pixel's angular size
     /// times the distance), which holds a curved surface together, or, with both
     /// orientations known and within 30°, when `b`'s centre is within their radii of
-    /// `self`'s plane, which holds a plane seen at a grazing angle together.
-    fn same_surface(&self, b: &Shape, spread: f32) -> bool {
+    /// `self`'s plane, which holds a plane seen at a grazing angle together. `da` and `db`
+    /// are the lengths of their offsets (what [`Splat::dist`] keeps).
+    fn same_surface(&self, da: f32, b: &Shape, db: f32, spread: f32) -> bool {
         let coplanar = self.normal != Vec3::ZERO
             && b.normal != Vec3::ZERO
             && self.normal.dot(b.normal) > 0.866
             && (b.offset - self.offset).dot(self.normal).abs() <= self.radius + b.radius;
-        let (da, db) = (self.offset.length(), b.offset.length());
         coplanar || db - 2.0 * b.radius <= da + 2.0 * self.radius + 2.0 * da * spread
     }
+}
+
+/// Where a direction falls in a buffer ([`Microbuffer::locate`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Located {
+    /// |cos θ| of the direction in the buffer's frame.
+    cos: f32,
+    /// Its point of the hemisphere's unit square.
+    square: Vec2,
+    /// Whether it lies in the lower hemisphere.
+    lower: bool,
 }
 
 /// A sender recorded in a pixel, waiting for [`Microbuffer::resolve`].
@@ -290,6 +301,26 @@ fn cosine_weight(corner: Vec2, side: f32) -> f32 {
     ((1.0 - mean_r2) / centre) as f32
 }
 
+/// Sort `keys` (distinct) ascending: by insertion for the few splats a pixel usually holds,
+/// where the standard sort's set-up cost more than the sorting (a third of
+/// [`Microbuffer::resolve`]).
+fn sort_small(keys: &mut [u64]) {
+    const INSERTION: usize = 24;
+    if keys.len() > INSERTION {
+        keys.sort_unstable();
+        return;
+    }
+    for i in 1..keys.len() {
+        let key = keys[i];
+        let mut j = i;
+        while j > 0 && keys[j - 1] > key {
+            keys[j] = keys[j - 1];
+            j -= 1;
+        }
+        keys[j] = key;
+    }
+}
+
 /// Overlap of the intervals [a0, a1] and [b0, b1].
 #[inline]
 fn overlap(a0: f32, a1: f32, b0: f32, b1: f32) -> f32 {
@@ -390,14 +421,28 @@ impl Microbuffer {
         TAU / (self.n * self.n) as f32
     }
 
-    /// The solid angle of the pixel that sees world direction `w` (unit), or `None` below the
-    /// horizon of a hemispherical buffer. A uniform buffer needs no pixel lookup.
-    pub(crate) fn solid_angle_towards(&self, w: Vec3) -> Option<f32> {
+    /// Where world direction `w` (unit) falls in the buffer, or `None` below the horizon of a
+    /// hemispherical buffer: found once for the cut's pixel test ([`Microbuffer::solid_angle_at`])
+    /// and the splat ([`Microbuffer::splat_at`]), which both need it.
+    #[inline]
+    pub(crate) fn locate(&self, w: Vec3) -> Option<Located> {
+        let local = self.frame.to_local(w);
+        let (square, lower) = self.square_of(local)?;
+        Some(Located {
+            cos: local.z.abs(),
+            square,
+            lower,
+        })
+    }
+
+    /// The solid angle of the pixel at `at`. A uniform buffer needs no pixel lookup.
+    #[inline]
+    pub(crate) fn solid_angle_at(&self, at: &Located) -> f32 {
         if !self.is_refined() {
-            let below = !self.spherical && self.frame.n.dot(w) < 0.0;
-            return (!below).then(|| self.pixel_solid_angle());
+            return self.pixel_solid_angle();
         }
-        self.pixel_of(w).map(|k| self.pixels[k].solid_angle)
+        let cell = self.cell_at(at.square, at.lower);
+        self.pixels[self.cells[cell as usize].pixel as usize].solid_angle
     }
 
     /// The point of the unit square and the hemisphere of local direction `l`, or `None` below
@@ -522,11 +567,26 @@ impl Microbuffer {
         if !(dist > 0.0) {
             return false;
         }
-        let local = self.frame.to_local(sender.offset / dist);
-        let Some((p, lower)) = self.square_of(local) else {
-            return false;
-        };
-        let cos = local.z.abs();
+        match self.locate(sender.offset / dist) {
+            Some(at) => self.splat_at(sender, dist, at, solid_angle),
+            None => false,
+        }
+    }
+
+    /// [`Microbuffer::splat`] of a sender at distance `dist` (the length of its offset) whose
+    /// direction, its offset over `dist`, falls at `at`.
+    pub(crate) fn splat_at(
+        &mut self,
+        sender: &Sender,
+        dist: f32,
+        at: Located,
+        solid_angle: f32,
+    ) -> bool {
+        let Located {
+            cos,
+            square: p,
+            lower,
+        } = at;
         if !(solid_angle > 0.0) || !dist.is_finite() {
             return false;
         }
@@ -644,13 +704,16 @@ impl Microbuffer {
             self.depth[k] = splats[first as usize].dist;
             let mut i = 0;
             while i < run.len() && open > 0.0 {
-                let front = splats[run[i] as usize].shape;
+                let (front, front_dist) = {
+                    let s = &splats[run[i] as usize];
+                    (s.shape, s.dist)
+                };
                 let layer_start = i;
                 let mut layer_cover = 0.0;
                 let mut layer_sum = Rgb::ZERO;
                 let mut layer_cos = Rgb::ZERO;
                 while let Some(s) = run.get(i).map(|&j| &splats[j as usize]) {
-                    if !front.same_surface(&s.shape, footprint) {
+                    if !front.same_surface(front_dist, &s.shape, s.dist, footprint) {
                         break;
                     }
                     layer_cover += s.coverage;
@@ -729,7 +792,7 @@ impl Microbuffer {
                         (u64::from(splats[i as usize].dist.to_bits()) << 32) | u64::from(i)
                     }),
                 );
-                keys.sort_unstable();
+                sort_small(keys);
                 for (slot, key) in run.iter_mut().zip(keys.iter()) {
                     *slot = *key as u32;
                 }
