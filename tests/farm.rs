@@ -13,7 +13,8 @@ const WPBGI: &str = env!("CARGO_BIN_EXE_wpbgi");
 /// A fixed capture date and no timings in the EXR headers, so that two renders of one frame
 /// are the same bytes.
 const EPOCH: &str = "1764000000";
-/// Small enough for the suite, and neither side a multiple of the render's 32-pixel tiles (a
+/// Small enough for the suite, and neither side a multiple of the render's 32-pixel tiles (its
+/// tiles at this size, `render::tile_side`; a
 /// 2 × 2 grid then has one column boundary on a tile boundary and its row boundary off one).
 const SIZE: &str = "64x40";
 
@@ -199,12 +200,12 @@ fn tiles_assemble_into_the_whole_frame() {
 }
 
 /// `render::grid_crop`'s tiles cover the image exactly once for every grid up to 7 × 7 on
-/// sizes around multiples of the render's 32-pixel tiles; inner bounds fall on multiples of
-/// 32 where every tile stays non-empty so; grids larger than the image and tiles outside
-/// the grid are refused.
+/// sizes around multiples of the render's tiles (32 pixels under 512 on the shorter side,
+/// 64 from 512); inner bounds fall on multiples of the tile where every tile stays non-empty
+/// so; grids larger than the image and tiles outside the grid are refused.
 #[test]
 fn grid_tiles_partition_the_image() {
-    use wpbgi::render::{grid_crop, TILE};
+    use wpbgi::render::{grid_crop, tile_side};
     for (w, h) in [(256, 256), (64, 40), (100, 37), (1920, 1080), (7, 5)] {
         for columns in 1..=7u32 {
             for rows in 1..=7u32 {
@@ -229,13 +230,19 @@ fn grid_tiles_partition_the_image() {
             }
         }
     }
-    // 1920 = 60 tiles of 32: three columns split at 640 and 1280, on tile boundaries;
+    // 1920 = 30 tiles of 64: three columns split at 640 and 1280, on tile boundaries;
     // 1080 rows in two: 540 rounds down to 512.
     assert_eq!(
         grid_crop((1920, 1080), [3, 2], [2, 2]).ok(),
         Some([640, 512, 1280, 1080])
     );
-    assert_eq!(TILE, 32);
+    assert_eq!((tile_side(1920, 1080), tile_side(64, 40)), (64, 32));
+    // 1000 × 600 (tiles of 64) in two columns: 500 rounds down to 448, where tiles of 32
+    // would have kept 480.
+    assert_eq!(
+        grid_crop((1000, 600), [2, 1], [1, 1]).ok(),
+        Some([0, 0, 448, 600])
+    );
     // 64 × 40 in a 2 × 2 grid: the column bound lands on 32, the row bound cannot (0 would
     // empty the first row) and stays at 20.
     assert_eq!(

@@ -8,7 +8,7 @@
 //!    others one sample (`pixels.rs`, adaptive anti-aliasing).
 //! 2. Each camera sample is traced to its rough hits ([`primary`]): emission, direct light by
 //!    ray tracing, specular chains; every rough hit becomes a receiver.
-//! 3. The gather, per 32 × 32 tile: receivers get their indirect light from the cache through
+//! 3. The gather, per tile ([`tile_side`]): receivers get their indirect light from the cache through
 //!    a microbuffer ([`crate::gather`]), one by one (`pbgi`) or by clusters (`fpbgi`, the
 //!    default). Glossy receivers (roughness below `glossy_below`) always gather alone, through
 //!    a buffer refined by their BSDF (docs/method.md §7), since a shared uniform cluster buffer would
@@ -83,7 +83,8 @@ pub struct FinalSettings {
     pub chain_depth: u32,
     /// Mitsuba's `max_depth` (−1: everything the cache holds).
     pub max_depth: i32,
-    /// FPBGI: clusters per tile (docs/method.md §3.7).
+    /// FPBGI: clusters per [`CLUSTER_PIXELS`] gathering receivers of a tile (docs/method.md
+    /// §3.7): a 32 × 32 tile's, four times as many in a tile of 64 ([`tile_side`]).
     pub clusters: usize,
     /// FPBGI: the far threshold r/d (docs/method.md §3.3).
     pub far_eps: f32,
@@ -188,23 +189,42 @@ impl Default for FinalSettings {
     }
 }
 
-/// The image side of a tile.
-pub const TILE: u32 = 32;
+/// The anchor cells ([`sparse::coarsest_cell`]) along a tile's side ([`tile_side`]).
+pub const TILE_CELLS: u32 = 8;
 
-/// Tiles rendered together: the render holds the receivers of one band of tiles at a time.
-const BAND_TILES: usize = 64;
+/// The side of a tile in a frame of `width` × `height` pixels: the unit of work, of FPBGI's
+/// clusters and of the sparse receivers' plan, which puts anchors on the tile's last row and
+/// column as on its first so that every tile is computed alone. [`TILE_CELLS`] of the
+/// frame's anchor spacing: 32 pixels under 512 on the shorter side, 64 from 512. A tile of
+/// four cells (32 pixels at 512²) gathered 25 anchors where a frame-wide grid has 16; at
+/// eight cells, 81 for 64. At 512² the 64-pixel tiles rendered cbox-glossy, cbox-mirror
+/// and caustic 4–13 % faster than 32-pixel ones, at the same or a lower relMSE
+/// (docs/render.md, "Tiles of eight cells"). It depends on the whole frame only, so a crop
+/// works in the tiles its frame does.
+pub fn tile_side(width: u32, height: u32) -> u32 {
+    TILE_CELLS * sparse::coarsest_cell(width, height)
+}
 
-/// The tiles of a band: [`BAND_TILES`], and at least four per thread.
-fn band_tiles() -> usize {
-    BAND_TILES.max(4 * rayon::current_num_threads())
+/// The pixels (of a 32 × 32 tile) that [`FinalSettings::clusters`] counts clusters per.
+pub const CLUSTER_PIXELS: usize = 1024;
+
+/// The pixels of a band of tiles: the render holds the pixel samples and gathered values of
+/// one band at a time (48 bytes a pixel and 20 a receiver; a tile's receivers, about 230 bytes a pixel,
+/// only while it is gathered), and waits for its slowest tile before the next.
+const BAND_PIXELS: usize = 262_144;
+
+/// The tiles of a band of tiles of side `tile`: [`BAND_PIXELS`] worth, and at least four per
+/// thread.
+fn band_tiles(tile: u32) -> usize {
+    (BAND_PIXELS / (tile * tile) as usize).max(4 * rayon::current_num_threads())
 }
 
 /// The crop (`[x0, y0, x1, y1]`, as [`FinalSettings::crop`]) of tile `[column, row]`
 /// (counted from 1, row 1 at the top) of a grid of `[columns, rows]` tiles over a
 /// `width × height` image: a farm's split of a frame. Column i spans ⌊(i − 1)·W/C⌋ to
-/// ⌊i·W/C⌋, each inner bound rounded down to a multiple of [`TILE`] where no tile comes
-/// out empty so (the render works in whole tiles of [`TILE`] pixels: a crop that cuts one
-/// renders all of it), and likewise for rows.
+/// ⌊i·W/C⌋, each inner bound rounded down to a multiple of the frame's [`tile_side`] where
+/// no tile comes out empty so (the render works in whole tiles: a crop that cuts one renders
+/// all of it), and likewise for rows.
 pub fn grid_crop(
     (width, height): (u32, u32),
     [columns, rows]: [u32; 2],
@@ -222,13 +242,14 @@ pub fn grid_crop(
              rows 1 to {rows})"
         )));
     }
+    let tile = tile_side(width, height);
     let bound = |size: u32, parts: u32, i: u32| {
         let plain = |i: u32| (u64::from(i) * u64::from(size) / u64::from(parts)) as u32;
         let aligned = |i: u32| {
             if i == parts {
                 size
             } else {
-                plain(i) / TILE * TILE
+                plain(i) / tile * tile
             }
         };
         if (0..parts).all(|k| aligned(k) < aligned(k + 1)) {
@@ -334,7 +355,7 @@ pub fn render_final(
 }
 
 /// [`render_final`], stopping with [`Error::Cancelled`] soon after `cancel` is set (by another
-/// thread or a signal handler): the flag is looked at per tile of [`TILE`]² pixels.
+/// thread or a signal handler): the flag is looked at per tile ([`tile_side`]).
 pub fn render_final_cancellable(
     scene: &Scene,
     cache: &BakedCache,
@@ -373,10 +394,11 @@ pub fn render_final_cancellable(
     // The centre hits of the tiles the crop touches and of the pixels around them: the edge
     // test reads a pixel's four neighbours, a primary hit's clearance the centre hits within
     // `sparse::CLEARANCE_PIXELS`, so that a crop decides as its frame does.
-    let (tx0, ty0) = (x0 / TILE * TILE, y0 / TILE * TILE);
+    let tile = tile_side(w, h);
+    let (tx0, ty0) = (x0 / tile * tile, y0 / tile * tile);
     let (tx1, ty1) = (
-        (x1.div_ceil(TILE) * TILE).min(w),
-        (y1.div_ceil(TILE) * TILE).min(h),
+        (x1.div_ceil(tile) * tile).min(w),
+        (y1.div_ceil(tile) * tile).min(h),
     );
     let border = sparse::CLEARANCE_PIXELS.max(1);
     let rect = [
@@ -385,13 +407,13 @@ pub fn render_final_cancellable(
         (tx1 + border).min(w),
         (ty1 + border).min(h),
     ];
-    check_fits((x1 - x0, y1 - y0), rect)?;
+    check_fits((x1 - x0, y1 - y0), rect, tile)?;
     let sampling = PixelSampling::new(&ctx, camera, &primary_settings, rect);
     let mut primary_seconds = t.elapsed().as_secs_f64();
     let mut gather_seconds = 0.0;
     // The tiles of the whole image that the crop touches.
-    let tiles: Vec<(u32, u32)> = (y0 / TILE..y1.div_ceil(TILE))
-        .flat_map(|ty| (x0 / TILE..x1.div_ceil(TILE)).map(move |tx| (tx, ty)))
+    let tiles: Vec<(u32, u32)> = (y0 / tile..y1.div_ceil(tile))
+        .flat_map(|ty| (x0 / tile..x1.div_ceil(tile)).map(move |tx| (tx, ty)))
         .collect();
     let (cw, ch) = (x1 - x0, y1 - y0);
     let mut out = FinalOutput {
@@ -421,6 +443,7 @@ pub fn render_final_cancellable(
     let done = AtomicUsize::new(0);
     let frame = FramePlan {
         cell: sparse::coarsest_cell(w, h),
+        tile_clusters: settings.clusters * (tile * tile) as usize / CLUSTER_PIXELS,
         paths: paths::Continuation {
             through_glossy: settings.paths_through_glossy
                 && settings.max_depth < 0
@@ -429,41 +452,47 @@ pub fn render_final_cancellable(
             most: settings.chain_depth,
         },
     };
-    for band in tiles.chunks(band_tiles()) {
+    for band in tiles.chunks(band_tiles(tile)) {
         let t = Instant::now();
-        let primary: Vec<TilePrimary> = band
+        // Each tile traced and gathered in one task, its receivers dropped at its end: one
+        // wait for the slowest tile per band, not two, and no band's receivers held at once.
+        let done_tiles: Vec<(TilePrimary, Vec<Gathered>, GatherStats, [f64; 2])> = band
             .par_iter()
             .map(|&(tx, ty)| {
                 stop()?;
-                Ok(primary_tile(
-                    &ctx,
-                    camera,
-                    &sampling,
-                    &primary_settings,
-                    tx,
-                    ty,
-                ))
-            })
-            .collect::<Result<_>>()?;
-        primary_seconds += t.elapsed().as_secs_f64();
-        let t = Instant::now();
-        let gathered: Vec<(Vec<Gathered>, GatherStats)> = primary
-            .par_iter()
-            .map(|tile| {
+                let t = Instant::now();
+                let origin = (tx * tile, ty * tile);
+                let mut traced =
+                    primary_tile(&ctx, camera, &sampling, &primary_settings, origin, tile);
+                let traced_seconds = t.elapsed().as_secs_f64();
                 stop()?;
-                let (tx, ty) = (tile.origin.0 / TILE, tile.origin.1 / TILE);
-                let size = (TILE.min(w - tx * TILE), TILE.min(h - ty * TILE));
-                let rect = (tile.origin, size, w);
-                let r = gather_tile(&ctx, &senders, &sampling, tile, rect, frame, settings);
+                let t = Instant::now();
+                let size = (tile.min(w - origin.0), tile.min(h - origin.1));
+                let rect = (origin, size, w);
+                let (values, stats) =
+                    gather_tile(&ctx, &senders, &sampling, &traced, rect, frame, settings);
+                traced.receivers = Vec::new();
                 let n = done.fetch_add(1, Ordering::Relaxed) + 1;
                 progress("render", n as f32 / tiles.len() as f32);
-                Ok(r)
+                let seconds = [traced_seconds, t.elapsed().as_secs_f64()];
+                Ok((traced, values, stats, seconds))
             })
             .collect::<Result<_>>()?;
-        gather_seconds += t.elapsed().as_secs_f64();
-        for tile in &primary {
-            out.samples += tile.samples;
-            for (pixel, s) in &tile.pixels {
+        // The band's wall time, shared between the two stages as their summed task times are.
+        let [traced, gathered] = done_tiles
+            .iter()
+            .fold([0.0; 2], |[a, b], (.., s)| [a + s[0], b + s[1]]);
+        let wall = t.elapsed().as_secs_f64();
+        let traced_share = if traced + gathered > 0.0 {
+            traced / (traced + gathered)
+        } else {
+            0.5
+        };
+        primary_seconds += wall * traced_share;
+        gather_seconds += wall * (1.0 - traced_share);
+        for (traced, values, stats, _) in &done_tiles {
+            out.samples += traced.samples;
+            for (pixel, s) in &traced.pixels {
                 let Some(i) = in_crop(*pixel) else {
                     continue;
                 };
@@ -473,8 +502,6 @@ pub fn render_final_cancellable(
                 out.depth.pixels[i] = Vec3::splat(if s.depth.is_finite() { s.depth } else { 0.0 });
                 out.alpha[i] = s.alpha.min(1.0);
             }
-        }
-        for (values, stats) in &gathered {
             out.stats.add(stats);
             for (pixel, l, glossy) in values {
                 if let Some(i) = in_crop(*pixel) {
@@ -536,26 +563,29 @@ impl FinalOutput {
     }
 }
 
-/// A tile after the primary pass.
+/// A tile after the primary pass: its pixels (image index, sample), its receivers (dropped
+/// once gathered) and its camera samples.
 struct TilePrimary {
-    /// The tile's first pixel (x, y).
-    origin: (u32, u32),
     pixels: Vec<(u32, PrimarySample)>,
     receivers: Vec<Receiver>,
     samples: u64,
 }
 
 /// Refuse, before any work, a render that cannot fit: the floor of what it holds (the
-/// crop's nine images, the centre hits of `rect` and one band's receivers, at least one per
-/// pixel) above the memory this machine has available. The centre hits of mirrors and glass
+/// crop's nine images, the centre hits of `rect`, one band's pixel samples and gathered
+/// values, and the receivers of the tiles in flight, at least one per pixel) above the
+/// memory this machine has available. The centre hits of mirrors and glass
 /// keep their chains' ends besides, so a render it lets through may still need more.
-fn check_fits((cw, ch): (u32, u32), rect: [u32; 4]) -> Result<()> {
+fn check_fits((cw, ch): (u32, u32), rect: [u32; 4], tile: u32) -> Result<()> {
     let crop = u64::from(cw) * u64::from(ch);
     let centres = u64::from(rect[2] - rect[0]) * u64::from(rect[3] - rect[1]);
-    let band = (band_tiles() * (TILE * TILE) as usize) as u64;
+    let tile_pixels = u64::from(tile * tile);
+    let band = band_tiles(tile) as u64 * tile_pixels;
+    let in_flight = rayon::current_num_threads() as u64 * tile_pixels;
     let floor = crop * (8 * size_of::<Rgb>() + size_of::<f32>()) as u64
         + centres * PixelSampling::BYTES_PER_PIXEL as u64
-        + band.min(centres) * (size_of::<Receiver>() + size_of::<(u32, PrimarySample)>()) as u64;
+        + band.min(centres) * (size_of::<(u32, PrimarySample)>() + size_of::<Gathered>()) as u64
+        + in_flight.min(centres) * size_of::<Receiver>() as u64;
     match crate::machine::available_memory() {
         Some(available) if floor > available => Err(Error::InvalidSetting(format!(
             "a render of {cw}x{ch} pixels needs at least {} MB, and this machine has {} MB \
@@ -567,23 +597,23 @@ fn check_fits((cw, ch): (u32, u32), rect: [u32; 4]) -> Result<()> {
     }
 }
 
+/// Trace the pixels of the tile at `origin` of side `tile`.
 fn primary_tile(
     ctx: &Tracer,
     camera: &Camera,
     sampling: &PixelSampling,
     settings: &PrimarySettings,
-    tx: u32,
-    ty: u32,
+    origin: (u32, u32),
+    tile: u32,
 ) -> TilePrimary {
     let (w, h) = (camera.width, camera.height);
     let mut out = TilePrimary {
-        origin: (tx * TILE, ty * TILE),
         pixels: Vec::new(),
         receivers: Vec::new(),
         samples: 0,
     };
-    for y in ty * TILE..((ty + 1) * TILE).min(h) {
-        for x in tx * TILE..((tx + 1) * TILE).min(w) {
+    for y in origin.1..(origin.1 + tile).min(h) {
+        for x in origin.0..(origin.0 + tile).min(w) {
             let (sample, samples) =
                 sampling.trace_pixel(ctx, camera, settings, (x, y), &mut out.receivers);
             out.samples += u64::from(samples);
@@ -616,6 +646,9 @@ fn is_glossy(r: &Receiver, settings: &FinalSettings) -> bool {
 struct FramePlan {
     /// The sparse plan's anchor spacing ([`sparse::coarsest_cell`]).
     cell: u32,
+    /// FPBGI's clusters in a tile of gathering receivers ([`FinalSettings::clusters`] per
+    /// [`CLUSTER_PIXELS`] of the tile's [`tile_side`]²).
+    tile_clusters: usize,
     /// Where the paths gather reads the cache: through glossy hits where asked for, the
     /// cache holds every bounce beyond them and no `max_depth` limits the paths.
     paths: paths::Continuation,
@@ -673,9 +706,8 @@ fn gather_tile(
     };
     let (interpolated, glossy) =
         plan.run(receivers, &mut value, clearance, floor, |which, value| {
-            gather_set(
-                senders, receivers, which, &plan, settings, value, &mut stats,
-            )
+            let sets = (&plan, frame.tile_clusters);
+            gather_set(senders, receivers, which, sets, settings, value, &mut stats)
         });
     stats.interpolated = interpolated as u64;
     stats.interpolated_glossy = glossy as u64;
@@ -709,7 +741,7 @@ fn gather_set(
     senders: &Senders,
     receivers: &[Receiver],
     which: &[usize],
-    plan: &SparsePlan,
+    (plan, tile_clusters): (&SparsePlan, usize),
     settings: &FinalSettings,
     value: &mut [Rgb],
     stats: &mut GatherStats,
@@ -746,12 +778,10 @@ fn gather_set(
         .iter()
         .map(|&k| (receivers[k].p, receivers[k].frame.n))
         .collect();
-    // `clusters` per tile of receivers: as many fewer as the set has fewer receivers than a
-    // tile has pixels, so that a cluster's shared cut still serves about as many members.
-    let per_tile = (TILE * TILE) as usize;
-    let count = settings
-        .clusters
-        .min((settings.clusters * points.len()).div_ceil(per_tile));
+    // `clusters` per [`CLUSTER_PIXELS`] of receivers, up to the tile's: as many fewer as the
+    // set has fewer receivers than the tile has pixels, so that a cluster's shared cut still
+    // serves about as many members.
+    let count = tile_clusters.min((settings.clusters * points.len()).div_ceil(CLUSTER_PIXELS));
     let clusters = cluster(&points, count);
     stats.clustered += clustered.len() as u64;
     stats.clusters += clusters.len() as u64;

@@ -17,7 +17,7 @@ use wpbgi::scene::{Camera, Scene};
 pub enum GatherArg {
     /// One tree cut and microbuffer per receiver.
     Pbgi,
-    /// Receivers clustered per 32×32 tile share the far field (faster, the same image).
+    /// Receivers clustered per tile (32×32 pixels, 64×64 from 512) share the far field (faster, the same image).
     Fpbgi,
     /// Rays drawn from each receiver's BSDF (--spp of them), taking the cache's light where
     /// they hit: the first bounce traced, the rest from the cache (which a draft bake
@@ -125,7 +125,7 @@ pub struct RenderArgs {
     /// Longest path in segments, as Mitsuba's max_depth (-1: everything the cache holds).
     #[arg(long, default_value_t = FinalSettings::default().max_depth, allow_hyphen_values = true)]
     pub max_depth: i32,
-    /// FPBGI: clusters per 32×32 tile of gathering receivers (fewer where a tile has fewer
+    /// FPBGI: clusters per 32×32 pixels of a tile's gathering receivers (fewer where a tile has fewer
     /// receivers that gather than pixels).
     #[arg(long, default_value_t = FinalSettings::default().clusters)]
     pub clusters: usize,
