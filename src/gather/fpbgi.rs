@@ -20,7 +20,7 @@
 //!   depth per pixel, the cluster buffer looked up along each member pixel's direction
 //!   (docs/method.md §3.4 step 3).
 
-use super::cut::{fits_pixel, splat_cut, CutStats};
+use super::cut::{fits_pixel, splat_cut_beyond, CutStats};
 use super::microbuffer::Microbuffer;
 use super::senders::Senders;
 use crate::cache::store::NO_NODE;
@@ -195,7 +195,8 @@ pub struct ClusterReceivers {
     /// For members on one surface with hemispherical buffers: how far their planes may turn
     /// from the active's (the sine of the angle; 0 for members in the active's plane). Far
     /// nodes whose bounding sphere comes that near the active's plane are opened (see
-    /// [`splat_cut`]'s nodes straddling a receiver's plane). `None`: no plane.
+    /// [`splat_cut`](super::cut::splat_cut)'s nodes straddling a receiver's plane). `None`:
+    /// no plane.
     pub plane_slope: Option<f32>,
     /// Whether the shared buffer records links (see [`Microbuffer::record_links`]), for
     /// members that do.
@@ -230,6 +231,8 @@ impl ClusterReceivers {
 pub struct ClusterGather<'a> {
     senders: &'a Senders,
     shared: Option<ClusterCut>,
+    /// See [`ClusterGather::whole_straddling_beyond`].
+    straddle_radii: f32,
 }
 
 impl<'a> ClusterGather<'a> {
@@ -238,6 +241,17 @@ impl<'a> ClusterGather<'a> {
         ClusterGather {
             senders,
             shared: None,
+            straddle_radii: f32::INFINITY,
+        }
+    }
+
+    /// Receivers' cuts take nodes that straddle their plane whole from `radii` of their radii
+    /// ([`splat_cut_beyond`]); without this they open every such node
+    /// ([`splat_cut`](super::cut::splat_cut)).
+    pub fn whole_straddling_beyond(self, radii: f32) -> Self {
+        ClusterGather {
+            straddle_radii: radii,
+            ..self
         }
     }
 
@@ -252,6 +266,7 @@ impl<'a> ClusterGather<'a> {
         ClusterGather {
             senders,
             shared: Some(cluster_cut(senders, receivers, far_eps, n)),
+            straddle_radii: f32::INFINITY,
         }
     }
 
@@ -272,14 +287,18 @@ impl<'a> ClusterGather<'a> {
         stack: &mut Vec<u32>,
     ) -> CutStats {
         match &mut self.shared {
-            Some(cut) => member_buffer(self.senders, cut, p, mesh, mb, stack),
+            Some(cut) => {
+                let receiver = (p, mesh, self.straddle_radii);
+                member_buffer(self.senders, cut, receiver, mb, stack)
+            }
             None => {
                 let root: &[u32] = if self.senders.nodes.is_empty() {
                     &[]
                 } else {
                     &[0]
                 };
-                let stats = splat_cut(self.senders, p, mesh, mb, root, stack);
+                let (senders, straddle) = (self.senders, self.straddle_radii);
+                let stats = splat_cut_beyond(senders, (p, mesh), mb, root, stack, straddle);
                 mb.resolve();
                 stats
             }
@@ -378,17 +397,17 @@ pub fn cluster_cut(
     }
 }
 
-/// Fill a member's buffer: its refinement of the near nodes, composited by depth with the
-/// cluster buffer looked up along each of its pixels' directions.
+/// Fill the buffer of a member (at `p` on `mesh`, taking nodes that straddle its plane whole
+/// from `straddle_radii`, see [`splat_cut_beyond`]): its refinement of the near nodes,
+/// composited by depth with the cluster buffer looked up along each of its pixels' directions.
 pub fn member_buffer(
     senders: &Senders,
     cut: &mut ClusterCut,
-    p: Vec3,
-    mesh: u32,
+    (p, mesh, straddle_radii): (Vec3, u32, f32),
     mb: &mut Microbuffer,
     stack: &mut Vec<u32>,
 ) -> CutStats {
-    let stats = splat_cut(senders, p, mesh, mb, &cut.near, stack);
+    let stats = splat_cut_beyond(senders, (p, mesh), mb, &cut.near, stack, straddle_radii);
     mb.resolve();
     let index = cut.lookup(mb);
     let (lookup, shared) = (&cut.lookups[index].2, &cut.buffer);

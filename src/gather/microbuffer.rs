@@ -412,7 +412,7 @@ impl Microbuffer {
     }
 
     /// Whether any pixel was split.
-    fn is_refined(&self) -> bool {
+    pub(crate) fn is_refined(&self) -> bool {
         self.cells.len() as u32 > self.n * self.n * if self.spherical { 2 } else { 1 }
     }
 

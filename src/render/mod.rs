@@ -29,6 +29,7 @@ pub mod sparse;
 use crate::bsdf::{Bsdf, Diffuse};
 use crate::cache::store::BakedCache;
 use crate::error::{Error, Result};
+use crate::gather::cut::STRADDLE_RADII;
 use crate::gather::fpbgi::{cluster, ClusterGather, ClusterReceivers};
 use crate::gather::{CutStats, Microbuffer, Senders};
 use crate::geometry::frame::Frame;
@@ -767,7 +768,7 @@ fn gather_set(
         };
         value[k] = mb.convolve(bsdf, r.view);
     };
-    let mut gather = ClusterGather::alone(senders);
+    let mut gather = ClusterGather::alone(senders).whole_straddling_beyond(STRADDLE_RADII);
     for k in alone {
         gather_one(&mut gather, k, stats);
     }
@@ -798,7 +799,8 @@ fn gather_set(
             &cluster_receivers,
             settings.far_eps,
             settings.mb_size,
-        );
+        )
+        .whole_straddling_beyond(STRADDLE_RADII);
         stats.cluster_cut += gather.shared_stats();
         for &m in &c.members {
             gather_one(&mut gather, clustered[m as usize], stats);
