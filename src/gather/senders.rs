@@ -410,8 +410,9 @@ impl Senders {
         }
         let levels = self.projected[j as usize].levels();
         let p = direction_to_square(w);
-        let mapped = self.projected[j as usize].eval(p.x, p.y).max(0.0);
-        let projected = self.exact_projected(sender, w).unwrap_or(mapped);
+        let projected = self
+            .exact_projected(sender, w)
+            .unwrap_or_else(|| self.projected[j as usize].eval(p.x, p.y).max(0.0));
         let n_dot = sender.area_normal.dot(w);
         let (front, back) = (0.5 * (projected + n_dot), 0.5 * (projected - n_dot));
         // I's cosine and P are sampled at the centres of P's texels (see `intensity_map`);
