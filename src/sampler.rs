@@ -65,7 +65,7 @@ impl Sampler {
     /// A scramble for [`sobol02`]: two random words (their 24 bits that [`sobol02`] keeps).
     #[inline]
     pub(crate) fn next_scramble(&mut self) -> [u32; 2] {
-        let mut word = || (self.next_1d() * 16_777_216.0) as u32 * 256;
+        let mut word = || self.next_u32() & !0xff;
         [word(), word()]
     }
 }

@@ -302,8 +302,8 @@ fn cosine_weight(corner: Vec2, side: f32) -> f32 {
 }
 
 /// Sort `keys` (distinct) ascending: by insertion for the few splats a pixel usually holds,
-/// where the standard sort's set-up cost more than the sorting (a third of
-/// [`Microbuffer::resolve`]).
+/// where the standard sort's dispatch was the hottest part of [`Microbuffer::resolve`] in a
+/// profile.
 fn sort_small(keys: &mut [u64]) {
     const INSERTION: usize = 24;
     if keys.len() > INSERTION {
