@@ -3,7 +3,7 @@
 //! [`crate::scene::environment`]), chosen with probability proportional to their power. Kinds
 //! the scene does not have cost nothing.
 
-use crate::accel::Accel;
+use crate::accel::{Accel, Segment};
 use crate::geometry::offset::{interpolate_with_error, offset_origin, SHADOW_EPSILON};
 use crate::geometry::spherical_triangle::SphericalTriangle;
 use crate::geometry::warp::square_to_uniform_triangle;
@@ -40,8 +40,20 @@ impl EmitterSample {
     /// Whether nothing blocks the segment from `origin` (already offset off its surface) to
     /// the sampled point, whose own end is offset off the emitter the same way.
     pub(crate) fn visible_from(&self, accel: &Accel, origin: Vec3) -> bool {
+        let s = self.shadow_segment(origin);
+        !accel.occluded(s.origin, s.dir, s.tmin, s.tmax)
+    }
+
+    /// The segment [`EmitterSample::visible_from`] tests: to the sampled point, its end offset
+    /// off the emitter, or along the direction without end for an environment.
+    pub(crate) fn shadow_segment(&self, origin: Vec3) -> Segment {
         if !self.dist.is_finite() {
-            return !accel.occluded(origin, self.wi, 0.0, f32::INFINITY);
+            return Segment {
+                origin,
+                dir: self.wi,
+                tmin: 0.0,
+                tmax: f32::INFINITY,
+            };
         }
         let target = if self.delta {
             self.point
@@ -53,7 +65,12 @@ impl EmitterSample {
                 Vec3A::from(origin - self.point),
             ))
         };
-        !accel.occluded(origin, target - origin, 0.0, 1.0 - SHADOW_EPSILON)
+        Segment {
+            origin,
+            dir: target - origin,
+            tmin: 0.0,
+            tmax: 1.0 - SHADOW_EPSILON,
+        }
     }
 }
 

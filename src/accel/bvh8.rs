@@ -92,6 +92,7 @@ pub(crate) enum Visit {
 }
 
 /// One query's ray, prepared for the box test.
+#[derive(Clone, Copy)]
 pub(crate) struct BoxRay {
     origin: Vec3A,
     inv: Vec3A,
@@ -254,6 +255,25 @@ struct Pending {
 /// A traversal stack entry: a child reference and the distance at which the ray enters it.
 type Entry = (u64, f32);
 
+/// A set traversal's stack entry: a child reference and the rays that entered it.
+type SetEntry = (u64, u32);
+
+/// The most rays [`Bvh8::traverse_set`] takes at once (one byte of a 64-bit mask per ray).
+pub(crate) const SET: usize = 8;
+
+/// The transpose of the 8 × 8 bit matrix whose row `i` is byte `i` of `x` (bit `k` of the
+/// byte its column `k`): byte `k` of the result holds bit `k` of every row. Three swaps of
+/// ever larger blocks (Hacker's Delight, §7-3).
+#[inline(always)]
+fn transpose_bits(mut x: u64) -> u64 {
+    let t = (x ^ (x >> 7)) & 0x00aa_00aa_00aa_00aa;
+    x ^= t ^ (t << 7);
+    let t = (x ^ (x >> 14)) & 0x0000_cccc_0000_cccc;
+    x ^= t ^ (t << 14);
+    let t = (x ^ (x >> 28)) & 0x0000_0000_f0f0_f0f0;
+    x ^ t ^ (t << 28)
+}
+
 /// Traversals whose stack fits this many entries keep it on the call stack.
 const INLINE_STACK: usize = 192;
 
@@ -395,6 +415,123 @@ impl Bvh8 {
         self.traverse_with::<false>(stack, ray, tmax, ordered, visit)
     }
 
+    /// Visit the leaves that each ray `i` of `rays` in the mask `open` enters before `tmax[i]`, every leaf once for all the rays still open that entered it, in no particular
+    /// order: an any-hit query for rays that share most of their way through the tree
+    /// (shadow rays from one point towards one light). `visit` sees a leaf's packets and the
+    /// mask of the open rays that reached it, and returns the rays it finished (found
+    /// occluded); they take no further part. Returns the mask of finished rays.
+    ///
+    /// Each ray reaches exactly the leaves its own [`Bvh8::traverse`] would (with a far bound
+    /// that does not shrink): a child is entered for the rays whose own node test enters it,
+    /// so an any-hit answer per ray is the one-ray query's.
+    pub fn traverse_set(
+        &self,
+        rays: &[BoxRay; SET],
+        tmax: &[f32; SET],
+        open: u32,
+        visit: impl FnMut(&[Packet], u32) -> u32,
+    ) -> u32 {
+        if self.root == Child::EMPTY || open == 0 {
+            return 0;
+        }
+        let mut inline = [const { MaybeUninit::uninit() }; INLINE_STACK];
+        let mut heap;
+        let stack: &mut [MaybeUninit<SetEntry>] = if self.stack_size <= INLINE_STACK {
+            &mut inline
+        } else {
+            heap = vec![MaybeUninit::uninit(); self.stack_size];
+            &mut heap
+        };
+        #[cfg(target_arch = "x86_64")]
+        if self.avx {
+            // SAFETY: `avx` is set only where the CPU has AVX.
+            return unsafe { self.traverse_set_avx(stack, (rays, tmax, open), visit) };
+        }
+        self.traverse_set_with::<false>(stack, (rays, tmax, open), visit)
+    }
+
+    /// [`Bvh8::traverse_set_with`] compiled with AVX.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    fn traverse_set_avx(
+        &self,
+        stack: &mut [MaybeUninit<SetEntry>],
+        set: (&[BoxRay; SET], &[f32; SET], u32),
+        visit: impl FnMut(&[Packet], u32) -> u32,
+    ) -> u32 {
+        self.traverse_set_with::<true>(stack, set, visit)
+    }
+
+    #[inline(always)]
+    fn traverse_set_with<const AVX: bool>(
+        &self,
+        stack: &mut [MaybeUninit<SetEntry>],
+        (rays, tmax, all): (&[BoxRay; SET], &[f32; SET], u32),
+        mut visit: impl FnMut(&[Packet], u32) -> u32,
+    ) -> u32 {
+        let mut done = 0u32;
+        let mut top = 0;
+        let (mut current, mut open) = (self.root, all);
+        loop {
+            if current & Child::LEAF == 0 {
+                let node = &self.nodes[current as usize];
+                // Row i (byte i): the children ray i enters; transposed, byte k is the rays
+                // that enter child k.
+                let mut rows = 0u64;
+                let mut left = open;
+                while left != 0 {
+                    let i = left.trailing_zeros() as usize;
+                    left &= left - 1;
+                    #[cfg(target_arch = "x86_64")]
+                    // SAFETY: `AVX` is true only inside `traverse_set_avx`, compiled with AVX.
+                    let (_, mask) = if AVX {
+                        unsafe { node.enter_avx(&rays[i], tmax[i]) }
+                    } else {
+                        node.enter(&rays[i], tmax[i])
+                    };
+                    #[cfg(not(target_arch = "x86_64"))]
+                    let (_, mask) = node.enter(&rays[i], tmax[i]);
+                    rows |= u64::from(mask) << (8 * i);
+                }
+                let columns = transpose_bits(rows);
+                let mut next = None;
+                for (k, &child) in node.child.iter().enumerate() {
+                    let entered = ((columns >> (8 * k)) & 0xff) as u32;
+                    if entered == 0 || child == Child::EMPTY {
+                        continue;
+                    }
+                    if let Some(previous) = next.replace((child, entered)) {
+                        stack[top].write(previous);
+                        top += 1;
+                    }
+                }
+                if let Some((child, entered)) = next {
+                    (current, open) = (child, entered);
+                    continue;
+                }
+            } else {
+                done |= visit(&self.packets[Child::packets(current)], open) & open;
+                if done == all {
+                    return done;
+                }
+            }
+            // The next entry some of whose rays are still open.
+            loop {
+                if top == 0 {
+                    return done;
+                }
+                top -= 1;
+                // SAFETY: every entry below `top` was written before `top` passed it, and
+                // a node pushes at most seven, as in `traverse_with`.
+                let (child, entered) = unsafe { stack[top].assume_init() };
+                if entered & !done != 0 {
+                    (current, open) = (child, entered & !done);
+                    break;
+                }
+            }
+        }
+    }
+
     /// Test the nodes with AVX where `on` and the CPU has it, else with SSE.
     #[cfg(test)]
     pub(crate) fn use_avx(&mut self, on: bool) {
@@ -497,6 +634,29 @@ impl Bvh8 {
 mod tests {
     use super::*;
     use crate::sampler::Sampler;
+
+    /// The bit transpose moves bit k of byte i to bit i of byte k, for every one of the 64
+    /// positions alone and for random words (against the definition, bit by bit).
+    #[test]
+    fn transpose_bits_moves_each_bit_across_the_diagonal() {
+        let naive = |x: u64| {
+            let mut out = 0u64;
+            for i in 0..8 {
+                for k in 0..8 {
+                    out |= ((x >> (8 * i + k)) & 1) << (8 * k + i);
+                }
+            }
+            out
+        };
+        for b in 0..64 {
+            assert_eq!(transpose_bits(1 << b), naive(1 << b), "bit {b}");
+        }
+        let mut s = Sampler::new(5, 0, 0);
+        for _ in 0..1000 {
+            let x = (u64::from(s.next_u32()) << 32) | u64::from(s.next_u32());
+            assert_eq!(transpose_bits(x), naive(x));
+        }
+    }
 
     /// The AVX node test gives the SSE one's entry distances and mask bit for bit: random
     /// boxes (some empty, some flat) against random rays, rays along the axes (a zero

@@ -16,7 +16,7 @@ mod bvh8;
 
 use crate::geometry::triangle::{TriangleHit, WatertightRay};
 use crate::scene::{interpolate_uv, Cutout, Scene, Texture};
-use bvh8::{BoxRay, Bvh8, Packet, Visit};
+use bvh8::{BoxRay, Bvh8, Packet, Visit, SET};
 use glam::{Vec2, Vec3, Vec3A};
 use obvhs::bvh2::builder::build_bvh2;
 use obvhs::triangle::Triangle;
@@ -43,6 +43,23 @@ pub struct Hit {
 fn unit(dir: Vec3) -> Option<(Vec3A, f32)> {
     let len = dir.length();
     (len > 0.0 && len.is_finite()).then(|| (Vec3A::from(dir / len), len))
+}
+
+/// How many segments [`Accel::occluded_set`] takes at once.
+pub const OCCLUSION_SET: usize = SET;
+
+/// A stretch of a ray to test for occlusion: `origin + t·dir` for `t` in `(tmin, tmax)`
+/// (`dir` need not be unit).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Segment {
+    /// Where the ray starts.
+    pub origin: Vec3,
+    /// Its direction, of any length.
+    pub dir: Vec3,
+    /// The open range of `t` tested.
+    pub tmin: f32,
+    /// See `tmin`.
+    pub tmax: f32,
 }
 
 /// The acceleration structure over every triangle of a scene.
@@ -252,6 +269,45 @@ impl Accel {
         })
     }
 
+    /// Whether anything lies along each of `segments` (at most [`OCCLUSION_SET`]): bit `i` of
+    /// the answer is [`Accel::occluded`] of segment `i`, the same test bit for bit, with the
+    /// segments traversing the tree together ([`Bvh8::traverse_set`]): a pixel's shadow rays
+    /// towards one light pass the same nodes, whose visits they then share.
+    pub fn occluded_set(&self, segments: &[Segment]) -> u32 {
+        debug_assert!(segments.len() <= OCCLUSION_SET);
+        let queries: [Option<Query>; SET] = std::array::from_fn(|i| {
+            let s = segments.get(i)?;
+            self.query(s.origin, s.dir, s.tmin, s.tmax)
+        });
+        let unused = BoxRay::new(Vec3A::ZERO, Vec3A::X, 0.0);
+        let boxes = queries
+            .each_ref()
+            .map(|q| q.as_ref().map_or(unused, |q| q.boxes));
+        let tmax = queries
+            .each_ref()
+            .map(|q| q.as_ref().map_or(0.0, |q| q.tmax));
+        let open = (0..SET)
+            .filter(|&i| queries[i].is_some())
+            .fold(0, |m, i| m | 1 << i);
+        self.bvh.traverse_set(&boxes, &tmax, open, |packets, open| {
+            let mut found = 0;
+            let mut left = open;
+            while left != 0 {
+                let i = left.trailing_zeros() as usize;
+                left &= left - 1;
+                if let Some(q) = &queries[i] {
+                    if packets
+                        .iter()
+                        .any(|packet| self.packet_hits(q, packet, q.tmax).next().is_some())
+                    {
+                        found |= 1 << i;
+                    }
+                }
+            }
+            found
+        })
+    }
+
     /// Every intersection along the ray in `(tmin, tmax)`, unsorted (for tests and diagnostics).
     pub fn all_hits(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Vec<Hit> {
         let mut out = Vec::new();
@@ -361,6 +417,71 @@ mod tests {
                 }
             }
             assert!(hits > 1000, "{hits} hits: the test must exercise hits");
+        }
+    }
+
+    /// A set of segments traversing together finds each segment's own occlusion, bit for bit
+    /// as one segment at a time: sets of one to eight, from one origin (shadow rays towards
+    /// a patch) or from scattered ones, with far limits short and unbounded, and a few
+    /// zero-length segments (never occluded), through random triangles.
+    #[test]
+    fn occlusion_of_a_set_is_each_segments_own() {
+        let mut s = Sampler::new(9, 0, 0);
+        let mut point = |scale: f32| {
+            let (a, b) = (s.next_2d(), s.next_1d());
+            Vec3A::new(a.x - 0.5, a.y - 0.5, b - 0.5) * scale
+        };
+        let tris: Vec<Triangle> = (0..3000)
+            .map(|_| {
+                let c = point(10.0);
+                Triangle {
+                    v0: c + point(1.0),
+                    v1: c + point(1.0),
+                    v2: c + point(1.0),
+                }
+            })
+            .collect();
+        for avx in [false, true] {
+            let accel = accel_over(&tris, avx);
+            let (mut occluded, mut clear) = (0, 0);
+            for round in 0..3000 {
+                let shared = Vec3::from(point(12.0));
+                let target = Vec3::from(point(12.0));
+                let segments: Vec<Segment> = (0..1 + round % OCCLUSION_SET)
+                    .map(|i| {
+                        let origin = if round % 3 == 0 {
+                            Vec3::from(point(12.0))
+                        } else {
+                            shared
+                        };
+                        let end = target + Vec3::from(point(2.0));
+                        let dir = if (round + i) % 17 == 0 {
+                            Vec3::ZERO
+                        } else {
+                            end - origin
+                        };
+                        let tmax = [1.0 - 1e-4, f32::INFINITY, 0.5][(round + i) % 3];
+                        Segment {
+                            origin,
+                            dir,
+                            tmin: 0.0,
+                            tmax,
+                        }
+                    })
+                    .collect();
+                let set = accel.occluded_set(&segments);
+                for (i, g) in segments.iter().enumerate() {
+                    let alone = accel.occluded(g.origin, g.dir, g.tmin, g.tmax);
+                    assert_eq!(set >> i & 1 == 1, alone, "round {round} segment {i}");
+                    occluded += usize::from(alone);
+                    clear += usize::from(!alone);
+                }
+                assert_eq!(set >> segments.len(), 0, "round {round}: bits past the set");
+            }
+            assert!(
+                occluded > 2000 && clear > 2000,
+                "{occluded} occluded, {clear} clear: the test must see both"
+            );
         }
     }
 

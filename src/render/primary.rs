@@ -9,6 +9,7 @@
 //! vertices shows emission if `c + 1 ≤ max_depth`, direct light if `c + 2 ≤ max_depth`, and
 //! the cache's light (one bounce of a direct-only bake) if `c + 3 ≤ max_depth`.
 
+use crate::accel::{Accel, Segment, OCCLUSION_SET};
 use crate::bsdf::fresnel::fresnel_dielectric;
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::geometry::frame::Frame;
@@ -308,6 +309,55 @@ fn specular_branches(bsdf: &Bsdf, view: Vec3, sampler: &mut Sampler) -> Vec<(usi
     }
 }
 
+/// Emitter samples waiting for their shadow rays: up to [`OCCLUSION_SET`] segments, each
+/// with the light it brings if nothing blocks it.
+struct ShadowSet {
+    segments: [Segment; OCCLUSION_SET],
+    light: [Rgb; OCCLUSION_SET],
+    len: usize,
+}
+
+impl ShadowSet {
+    fn new() -> ShadowSet {
+        let none = Segment {
+            origin: Vec3::ZERO,
+            dir: Vec3::ZERO,
+            tmin: 0.0,
+            tmax: 0.0,
+        };
+        ShadowSet {
+            segments: [none; OCCLUSION_SET],
+            light: [Rgb::ZERO; OCCLUSION_SET],
+            len: 0,
+        }
+    }
+
+    /// Queue a sample; a full set is tested first, its light added to `sum`.
+    fn push(&mut self, segment: Segment, light: Rgb, accel: &Accel, sum: &mut Rgb) {
+        if self.len == OCCLUSION_SET {
+            self.add_visible(accel, sum);
+        }
+        self.segments[self.len] = segment;
+        self.light[self.len] = light;
+        self.len += 1;
+    }
+
+    /// Add the light of the unblocked samples to `sum`, one by one in the order they came
+    /// (the sums one sample at a time would make, bit for bit), and empty the set.
+    fn add_visible(&mut self, accel: &Accel, sum: &mut Rgb) {
+        if self.len == 0 {
+            return;
+        }
+        let blocked = accel.occluded_set(&self.segments[..self.len]);
+        for (i, &light) in self.light[..self.len].iter().enumerate() {
+            if blocked >> i & 1 == 0 {
+                *sum += light;
+            }
+        }
+        self.len = 0;
+    }
+}
+
 /// Direct light at a rough hit: the emitter samples of `share`, stratified over the emitters
 /// and over each emitter's surface; for glossy BSDFs as many BSDF samples, combined by the
 /// power heuristic. Returns the outgoing radiance towards `view`.
@@ -333,6 +383,9 @@ fn direct_light(
     let glossy = !matches!(bsdf, Bsdf::Diffuse(_));
     let shift = sampler.next_1d();
     let mut sum = Rgb::ZERO;
+    // The samples' shadow rays go in sets that traverse the tree together; their light is
+    // added in sample order once the set is tested, as one at a time would add it.
+    let mut set = ShadowSet::new();
     for i in 0..k {
         let Some(es) = ctx.emitters.sample(
             ctx.scene,
@@ -344,7 +397,7 @@ fn direct_light(
         };
         let wo = hit.frame.to_local(es.wi);
         let f = bsdf.eval(view, wo, TransportMode::Radiance);
-        if f == Rgb::ZERO || !es.visible_from(&ctx.accel, hit.spawn(es.wi)) {
+        if f == Rgb::ZERO {
             continue;
         }
         let w = if es.delta || !glossy {
@@ -352,8 +405,10 @@ fn direct_light(
         } else {
             mis(es.pdf, bsdf.pdf(view, wo))
         };
-        sum += f * es.value * w;
+        let segment = es.shadow_segment(hit.spawn(es.wi));
+        set.push(segment, f * es.value * w, &ctx.accel, &mut sum);
     }
+    set.add_visible(&ctx.accel, &mut sum);
     if glossy {
         let scramble = [scramble[1] ^ 0x5bd1_e995, scramble[0] ^ 0x1b87_3593];
         for i in 0..k {
