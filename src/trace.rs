@@ -23,16 +23,35 @@ pub struct Tracer<'a> {
     pub accel: Accel,
     /// Its emitters, for next-event estimation.
     pub emitters: EmitterSampler,
+    /// The triangles of its emitting meshes alone (see [`Tracer::may_reach_emitter`]).
+    emissive: Accel,
 }
 
 impl<'a> Tracer<'a> {
     /// Build the acceleration structure and the emitter sampler of `scene`.
     pub fn new(scene: &'a Scene) -> Self {
+        let emits = |m: &crate::scene::Mesh| {
+            scene
+                .materials
+                .get(m.material)
+                .is_some_and(|material| material.emission.is_some())
+        };
         Tracer {
             scene,
             accel: Accel::build(scene),
             emitters: EmitterSampler::new(scene),
+            emissive: Accel::build_over(scene, emits),
         }
+    }
+
+    /// Whether the ray from `origin` along `dir` may find light where it first meets the
+    /// scene: false only when it meets no emitting triangle at all and there is no
+    /// environment, so that its closest hit, whatever it is, emits nothing. A test against
+    /// the few emitting triangles, instead of the whole scene's closest hit and surface, for
+    /// the BSDF samples of direct light (most of which miss a small light). The closest hit
+    /// on an emitter is a hit of the same watertight test here, so no light is lost.
+    pub fn may_reach_emitter(&self, origin: Vec3, dir: Vec3) -> bool {
+        self.scene.environment.is_some() || self.emissive.occluded(origin, dir, 0.0, f32::INFINITY)
     }
 
     /// Next-event estimation at `hit`, shaded by `bsdf` and seen from local direction
@@ -176,5 +195,94 @@ pub fn mis(a: f32, b: f32) -> f32 {
         1.0
     } else {
         0.0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bsdf::Diffuse;
+    use crate::sampler::Sampler;
+    use crate::scene::{Emission, Material, Mesh, Scattering};
+
+    /// A quad of side 2 centred at `c`, in the plane ⊥ axis `axis` (0–2), as one mesh.
+    fn quad(c: Vec3, axis: usize, side: f32, material: usize) -> Mesh {
+        let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+        let corner = |a: f32, b: f32| {
+            let mut p = c;
+            p[u] += a * side;
+            p[v] += b * side;
+            p
+        };
+        Mesh {
+            name: format!("quad{axis}"),
+            positions: vec![
+                corner(-1.0, -1.0),
+                corner(1.0, -1.0),
+                corner(1.0, 1.0),
+                corner(-1.0, 1.0),
+            ],
+            normals: None,
+            uvs: None,
+            triangles: vec![[0, 1, 2], [0, 2, 3]],
+            material,
+        }
+    }
+
+    fn material(emission: Option<Emission>) -> Material {
+        Material {
+            name: "m".into(),
+            scattering: Scattering::Explicit(Bsdf::Diffuse(Diffuse {
+                reflectance: Rgb::splat(0.5),
+            })),
+            cutout: None,
+            normal_map: None,
+            emission,
+        }
+    }
+
+    /// A ray whose closest hit is on an emitter always may reach one, and most rays that
+    /// meet no emitter are told so: a small light over a floor, half hidden by a blocker
+    /// between, seen along random rays from random points above the floor.
+    #[test]
+    fn rays_that_hit_an_emitter_may_reach_one() {
+        let light = Emission {
+            radiance: Rgb::ONE,
+            texture: None,
+            two_sided: true,
+        };
+        let scene = Scene {
+            meshes: vec![
+                quad(Vec3::ZERO, 1, 4.0, 0),
+                quad(Vec3::new(0.0, 3.0, 0.0), 1, 0.5, 1),
+                quad(Vec3::new(0.5, 2.0, 0.0), 1, 0.5, 0),
+            ],
+            materials: vec![material(None), material(Some(light))],
+            ..Default::default()
+        };
+        let tracer = Tracer::new(&scene);
+        let mut s = Sampler::new(4, 0, 0);
+        let (mut lit, mut told_dark) = (0, 0);
+        for _ in 0..20_000 {
+            let (a, b) = (s.next_2d(), s.next_2d());
+            let o = Vec3::new(4.0 * a.x - 2.0, 0.1 + 2.5 * a.y, 4.0 * b.x - 2.0);
+            let d = crate::geometry::warp::square_to_uniform_sphere(s.next_2d());
+            let emitter = tracer
+                .accel
+                .closest_hit(o, d, 0.0, f32::INFINITY)
+                .is_some_and(|h| h.mesh == 1);
+            let may = tracer.may_reach_emitter(o, d);
+            assert!(may || !emitter, "ray {o} {d} hits the light");
+            lit += usize::from(emitter);
+            told_dark += usize::from(!may);
+        }
+        assert!(
+            lit > 200,
+            "{lit} rays hit the light: the test must see some"
+        );
+        assert!(
+            told_dark > 10_000,
+            "{told_dark} rays were told they find no light"
+        );
     }
 }

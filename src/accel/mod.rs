@@ -115,9 +115,18 @@ impl Mask {
 impl Accel {
     /// Build over all triangles of `scene` (PLOC, obvhs's "medium" preset).
     pub fn build(scene: &Scene) -> Accel {
+        Self::build_over(scene, |_| true)
+    }
+
+    /// Build over the triangles of the meshes of `scene` for which `keep` holds (their
+    /// indices stay the scene's).
+    pub fn build_over(scene: &Scene, keep: impl Fn(&crate::scene::Mesh) -> bool) -> Accel {
         let mut tris = Vec::with_capacity(scene.triangle_count());
         let mut ids = Vec::with_capacity(scene.triangle_count());
         for (mi, m) in scene.meshes.iter().enumerate() {
+            if !keep(m) {
+                continue;
+            }
             for (ti, t) in m.triangles.iter().enumerate() {
                 let p = |i: u32| Vec3A::from(m.positions[i as usize]);
                 tris.push(Triangle {

@@ -421,7 +421,11 @@ fn direct_light(
                 continue;
             };
             let dir = hit.frame.to_world(bs.wo).normalize();
-            let Some(h) = intersect(ctx, hit.spawn(dir), dir) else {
+            let origin = hit.spawn(dir);
+            if !ctx.may_reach_emitter(origin, dir) {
+                continue;
+            }
+            let Some(h) = intersect(ctx, origin, dir) else {
                 if let Some(env) = &ctx.scene.environment {
                     let w = mis(bs.pdf, ctx.emitters.pdf_environment(ctx.scene, dir));
                     sum += bs.weight * env.radiance(dir) * w;
