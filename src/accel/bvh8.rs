@@ -1,6 +1,8 @@
 //! An eight-wide bounding volume hierarchy traversed one ray at a time with SIMD (SSE2 on
 //! x86-64, NEON on AArch64, through glam's `Vec4`; the node test eight boxes wide with AVX
 //! where the CPU has it, checked at run time), with its triangles stored four to a packet.
+//! Any-hit queries of up to eight rays that share their way (a hit's shadow rays towards one
+//! light) may go together ([`Bvh8::traverse_set`]), each node visited once for all of them.
 //!
 //! The tree is obvhs's binary PLOC build, collapsed: each node takes its binary children and
 //! keeps opening the largest (by surface area) inner one until it has eight, as Embree's BVH8
