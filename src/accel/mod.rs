@@ -280,7 +280,7 @@ impl Accel {
 
     /// Whether anything lies along each of `segments` (at most [`OCCLUSION_SET`]): bit `i` of
     /// the answer is [`Accel::occluded`] of segment `i`, the same test bit for bit, with the
-    /// segments traversing the tree together ([`Bvh8::traverse_set`]): a pixel's shadow rays
+    /// segments traversing the tree together (`Bvh8::traverse_set`): a pixel's shadow rays
     /// towards one light pass the same nodes, whose visits they then share.
     pub fn occluded_set(&self, segments: &[Segment]) -> u32 {
         debug_assert!(segments.len() <= OCCLUSION_SET);
