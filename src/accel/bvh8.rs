@@ -399,25 +399,32 @@ impl Bvh8 {
         if self.root == Child::EMPTY {
             return true;
         }
-        // Uninitialised: zeroing 3 KiB per ray cost as much as a third of a traversal. One
-        // call of `traverse_with`, so that `visit` is inlined into it.
-        let mut inline = [const { MaybeUninit::uninit() }; INLINE_STACK];
-        let mut heap;
-        let stack: &mut [MaybeUninit<Entry>] = if self.stack_size <= INLINE_STACK {
-            &mut inline
-        } else {
-            heap = vec![MaybeUninit::uninit(); self.stack_size];
-            &mut heap
-        };
-        #[cfg(target_arch = "x86_64")]
-        if self.avx {
-            // SAFETY: `avx` is set only where the CPU has AVX.
-            return unsafe { self.traverse_avx(stack, ray, tmax, ordered, visit) };
-        }
-        self.traverse_with::<false>(stack, ray, tmax, ordered, visit)
+        // One call of `traverse_with`, so that `visit` is inlined into it.
+        self.with_stack(|stack: &mut [MaybeUninit<Entry>]| {
+            #[cfg(target_arch = "x86_64")]
+            if self.avx {
+                // SAFETY: `avx` is set only where the CPU has AVX.
+                return unsafe { self.traverse_avx(stack, ray, tmax, ordered, visit) };
+            }
+            self.traverse_with::<false>(stack, ray, tmax, ordered, visit)
+        })
     }
 
-    /// Visit the leaves that each ray `i` of `rays` in the mask `open` enters before `tmax[i]`, every leaf once for all the rays still open that entered it, in no particular
+    /// Run `f` with a traversal stack of `stack_size` entries: on the call stack where it
+    /// fits [`INLINE_STACK`], else on the heap. Uninitialised: zeroing 3 KiB per ray cost as
+    /// much as a third of a traversal.
+    #[inline(always)]
+    fn with_stack<E: Copy, R>(&self, f: impl FnOnce(&mut [MaybeUninit<E>]) -> R) -> R {
+        if self.stack_size <= INLINE_STACK {
+            let mut inline = [const { MaybeUninit::uninit() }; INLINE_STACK];
+            f(&mut inline)
+        } else {
+            f(&mut vec![MaybeUninit::uninit(); self.stack_size])
+        }
+    }
+
+    /// Visit the leaves that each ray `i` of `rays` in the mask `open` enters before
+    /// `tmax[i]`, every leaf once for all the rays still open that entered it, in no particular
     /// order: an any-hit query for rays that share most of their way through the tree
     /// (shadow rays from one point towards one light). `visit` sees a leaf's packets and the
     /// mask of the open rays that reached it, and returns the rays it finished (found
@@ -436,20 +443,14 @@ impl Bvh8 {
         if self.root == Child::EMPTY || open == 0 {
             return 0;
         }
-        let mut inline = [const { MaybeUninit::uninit() }; INLINE_STACK];
-        let mut heap;
-        let stack: &mut [MaybeUninit<SetEntry>] = if self.stack_size <= INLINE_STACK {
-            &mut inline
-        } else {
-            heap = vec![MaybeUninit::uninit(); self.stack_size];
-            &mut heap
-        };
-        #[cfg(target_arch = "x86_64")]
-        if self.avx {
-            // SAFETY: `avx` is set only where the CPU has AVX.
-            return unsafe { self.traverse_set_avx(stack, (rays, tmax, open), visit) };
-        }
-        self.traverse_set_with::<false>(stack, (rays, tmax, open), visit)
+        self.with_stack(|stack: &mut [MaybeUninit<SetEntry>]| {
+            #[cfg(target_arch = "x86_64")]
+            if self.avx {
+                // SAFETY: `avx` is set only where the CPU has AVX.
+                return unsafe { self.traverse_set_avx(stack, (rays, tmax, open), visit) };
+            }
+            self.traverse_set_with::<false>(stack, (rays, tmax, open), visit)
+        })
     }
 
     /// [`Bvh8::traverse_set_with`] compiled with AVX.

@@ -387,17 +387,15 @@ mod tests {
         accel
     }
 
-    /// Random triangles in a cube and random rays: the tree finds exactly the brute-force
-    /// closest hit (same triangle, same distance) and agrees on occlusion, with and without
-    /// a far limit.
-    #[test]
-    fn closest_hit_and_occlusion_match_brute_force() {
-        let mut s = Sampler::new(7, 0, 0);
-        let mut point = |scale: f32| {
-            let (a, b) = (s.next_2d(), s.next_1d());
-            Vec3A::new(a.x - 0.5, a.y - 0.5, b - 0.5) * scale
-        };
-        let tris: Vec<Triangle> = (0..3000)
+    /// A uniform point of the cube of side `scale` centred on the origin.
+    fn random_point(s: &mut Sampler, scale: f32) -> Vec3A {
+        let (a, b) = (s.next_2d(), s.next_1d());
+        Vec3A::new(a.x - 0.5, a.y - 0.5, b - 0.5) * scale
+    }
+
+    /// 3 000 triangles of about unit size scattered through a cube of side 10.
+    fn random_triangles(point: &mut impl FnMut(f32) -> Vec3A) -> Vec<Triangle> {
+        (0..3000)
             .map(|_| {
                 let c = point(10.0);
                 Triangle {
@@ -406,7 +404,17 @@ mod tests {
                     v2: c + point(1.0),
                 }
             })
-            .collect();
+            .collect()
+    }
+
+    /// Random triangles in a cube and random rays: the tree finds exactly the brute-force
+    /// closest hit (same triangle, same distance) and agrees on occlusion, with and without
+    /// a far limit.
+    #[test]
+    fn closest_hit_and_occlusion_match_brute_force() {
+        let mut s = Sampler::new(7, 0, 0);
+        let mut point = |scale: f32| random_point(&mut s, scale);
+        let tris = random_triangles(&mut point);
         for avx in [false, true] {
             let accel = accel_over(&tris, avx);
             let mut hits = 0;
@@ -436,20 +444,8 @@ mod tests {
     #[test]
     fn occlusion_of_a_set_is_each_segments_own() {
         let mut s = Sampler::new(9, 0, 0);
-        let mut point = |scale: f32| {
-            let (a, b) = (s.next_2d(), s.next_1d());
-            Vec3A::new(a.x - 0.5, a.y - 0.5, b - 0.5) * scale
-        };
-        let tris: Vec<Triangle> = (0..3000)
-            .map(|_| {
-                let c = point(10.0);
-                Triangle {
-                    v0: c + point(1.0),
-                    v1: c + point(1.0),
-                    v2: c + point(1.0),
-                }
-            })
-            .collect();
+        let mut point = |scale: f32| random_point(&mut s, scale);
+        let tris = random_triangles(&mut point);
         for avx in [false, true] {
             let accel = accel_over(&tris, avx);
             let (mut occluded, mut clear) = (0, 0);
