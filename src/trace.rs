@@ -30,17 +30,11 @@ pub struct Tracer<'a> {
 impl<'a> Tracer<'a> {
     /// Build the acceleration structure and the emitter sampler of `scene`.
     pub fn new(scene: &'a Scene) -> Self {
-        let emits = |m: &crate::scene::Mesh| {
-            scene
-                .materials
-                .get(m.material)
-                .is_some_and(|material| material.emission.is_some())
-        };
         Tracer {
             scene,
             accel: Accel::build(scene),
             emitters: EmitterSampler::new(scene),
-            emissive: Accel::build_over(scene, emits),
+            emissive: Accel::build_over(scene, |m| scene.emits(m)),
         }
     }
 
@@ -205,7 +199,8 @@ mod tests {
     use crate::sampler::Sampler;
     use crate::scene::{Emission, Material, Mesh, Scattering};
 
-    /// A quad of side 2 centred at `c`, in the plane ⊥ axis `axis` (0–2), as one mesh.
+    /// A square of half-side `side` centred at `c`, in the plane ⊥ axis `axis` (0–2), as one
+    /// mesh.
     fn quad(c: Vec3, axis: usize, side: f32, material: usize) -> Mesh {
         let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
         let corner = |a: f32, b: f32| {

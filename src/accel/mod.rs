@@ -15,7 +15,7 @@
 mod bvh8;
 
 use crate::geometry::triangle::{TriangleHit, WatertightRay};
-use crate::scene::{interpolate_uv, Cutout, Scene, Texture};
+use crate::scene::{interpolate_uv, Cutout, Mesh, Scene, Texture};
 use bvh8::{BoxRay, Bvh8, Packet, Visit, SET};
 use glam::{Vec2, Vec3, Vec3A};
 use obvhs::bvh2::builder::build_bvh2;
@@ -82,7 +82,7 @@ struct Mask {
 }
 
 impl Mask {
-    fn of(scene: &Scene, mesh: &crate::scene::Mesh) -> Option<Mask> {
+    fn of(scene: &Scene, mesh: &Mesh) -> Option<Mask> {
         let mut cutout = scene.materials.get(mesh.material)?.cutout?;
         if cutout.constant().is_some() {
             // Constant: kept whole (or left out of the scene whole).
@@ -120,7 +120,7 @@ impl Accel {
 
     /// Build over the triangles of the meshes of `scene` for which `keep` holds (their
     /// indices stay the scene's).
-    pub fn build_over(scene: &Scene, keep: impl Fn(&crate::scene::Mesh) -> bool) -> Accel {
+    pub fn build_over(scene: &Scene, keep: impl Fn(&Mesh) -> bool) -> Accel {
         let mut tris = Vec::with_capacity(scene.triangle_count());
         let mut ids = Vec::with_capacity(scene.triangle_count());
         for (mi, m) in scene.meshes.iter().enumerate() {

@@ -133,7 +133,7 @@ impl Plan {
         let emissive_triangles: usize = scene
             .meshes
             .iter()
-            .filter(|m| scene.materials[m.material].emission.is_some())
+            .filter(|m| scene.emits(m))
             .map(|m| m.triangles.len())
             .sum();
         let emitters = json!({

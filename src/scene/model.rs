@@ -70,6 +70,13 @@ impl Scene {
         }
     }
 
+    /// Whether mesh `m`'s material emits light (its triangles are emitters).
+    pub fn emits(&self, m: &Mesh) -> bool {
+        self.materials
+            .get(m.material)
+            .is_some_and(|material| material.emission.is_some())
+    }
+
     /// Number of triangles over all meshes.
     pub fn triangle_count(&self) -> usize {
         self.meshes.iter().map(|m| m.triangles.len()).sum()
