@@ -13,6 +13,7 @@ use crate::geometry::offset::{interpolate_with_error, offset_origin};
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
 use glam::{Vec2, Vec3, Vec3A};
+use std::sync::OnceLock;
 
 /// A scene ready to trace: its triangles' acceleration structure and its emitters' sampler,
 /// built once per render.
@@ -23,8 +24,9 @@ pub struct Tracer<'a> {
     pub accel: Accel,
     /// Its emitters, for next-event estimation.
     pub emitters: EmitterSampler,
-    /// The triangles of its emitting meshes alone (see [`Tracer::may_reach_emitter`]).
-    emissive: Accel,
+    /// The triangles of its emitting meshes alone (see [`Tracer::may_reach_emitter`]), built
+    /// on its first use: the path tracer and the bake never ask.
+    emissive: OnceLock<Accel>,
 }
 
 impl<'a> Tracer<'a> {
@@ -34,7 +36,7 @@ impl<'a> Tracer<'a> {
             scene,
             accel: Accel::build(scene),
             emitters: EmitterSampler::new(scene),
-            emissive: Accel::build_over(scene, |m| scene.emits(m)),
+            emissive: OnceLock::new(),
         }
     }
 
@@ -45,7 +47,11 @@ impl<'a> Tracer<'a> {
     /// the BSDF samples of direct light (most of which miss a small light). The closest hit
     /// on an emitter is a hit of the same watertight test here, so no light is lost.
     pub fn may_reach_emitter(&self, origin: Vec3, dir: Vec3) -> bool {
-        self.scene.environment.is_some() || self.emissive.occluded(origin, dir, 0.0, f32::INFINITY)
+        self.scene.environment.is_some()
+            || self
+                .emissive
+                .get_or_init(|| Accel::build_over(self.scene, |m| self.scene.emits(m)))
+                .occluded(origin, dir, 0.0, f32::INFINITY)
     }
 
     /// Next-event estimation at `hit`, shaded by `bsdf` and seen from local direction
