@@ -32,6 +32,7 @@ use crate::spectrum::{luminance, Rgb};
 use crate::trace::{intersect, Tracer};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
+use std::ops::Range;
 
 /// Edge pixels take up to EDGE_SIDE² samples of a (0, 2)-sequence for primary hits and
 /// direct light (an emitter's edge needs them); one in each quarter of the pixel gathers.
@@ -248,49 +249,69 @@ impl PixelSampling {
             PixelKind::Edge => (EDGE_SIDE, EDGE_ROUND),
             PixelKind::Outline => (EDGE_SIDE, EDGE_SIDE * EDGE_SIDE),
         };
-        let first = self.trace_samples(ctx, camera, settings, (x, y), side, count, Some(receivers));
-        if kind != PixelKind::Edge || !needs_more(&first.spread, first.hits, count) {
-            return (first.mean, count);
+        let pixel = (x, y);
+        let round = self.trace_samples(
+            ctx,
+            camera,
+            settings,
+            pixel,
+            (side, 0..count),
+            Some(receivers),
+        );
+        if kind != PixelKind::Edge || !needs_more(&round.spread, round.hits, count) {
+            return (round.mean(), count);
         }
-        // The whole sequence, its direct light shared out over all of it; the first round's
-        // receivers already gather for the quarters.
+        // The rest of the sequence, with direct light of its own (a second set of the pixel's
+        // light points, shared out over these samples alone); the first round's samples stay,
+        // and its receivers already gather for the quarters.
         let most = EDGE_SIDE * EDGE_SIDE;
-        let all = self.trace_samples(ctx, camera, settings, (x, y), side, most, None);
-        (all.mean, count + most)
+        let rest = self.trace_samples(ctx, camera, settings, pixel, (side, count..most), None);
+        (round.and(&rest).mean(), most)
     }
 
-    /// The first `count` camera samples of pixel `(x, y)` (of a grid of `side`²): their mean
-    /// and how their luminance spreads. Their receivers go to `receivers`; with `None` (the second
-    /// pass of an edge) none gathers.
-    #[allow(clippy::too_many_arguments)]
+    /// Camera samples `range` of pixel `(x, y)` (of a grid of `side`²), each weighing
+    /// 1/`range.len()`: their sums and how their luminance spreads. Their receivers go to
+    /// `receivers`; with `None` (an edge's samples past its first round) none gathers.
+    ///
+    /// The samples' direct light shares out one set of the pixel's light points
+    /// ([`LightShare`]): a range that starts at 0 takes the first set, any other the second,
+    /// so that an edge's first round and the rest of its samples each stratify their own.
     fn trace_samples(
         &self,
         ctx: &Tracer,
         camera: &Camera,
         settings: &PrimarySettings,
         (x, y): (u32, u32),
-        side: u32,
-        count: u32,
+        (side, range): (u32, Range<u32>),
         receivers: Option<&mut Vec<Receiver>>,
     ) -> Samples {
         let pixel = y * self.width + x;
+        let count = range.len() as u32;
         let weight = Rgb::splat(1.0 / count as f32);
         let mut per_pixel = Sampler::new(settings.seed, u64::from(pixel), u64::MAX);
         let scramble = per_pixel.next_scramble();
-        // The pixel's light points, shared out among its samples (`LightShare`).
-        let light = (per_pixel.next_scramble(), per_pixel.next_u32());
+        // The pixel's two sets of light points, each shared out among some of its samples.
+        let first_light = (per_pixel.next_scramble(), per_pixel.next_u32());
+        let light = if range.start == 0 {
+            first_light
+        } else {
+            (per_pixel.next_scramble(), per_pixel.next_u32())
+        };
         let mut out = Samples {
-            mean: PrimarySample::default(),
+            count,
+            sum: PrimarySample {
+                depth: f32::INFINITY,
+                ..PrimarySample::default()
+            },
             spread: Spread::EMPTY,
             hits: 0,
         };
-        let mut depth = f32::INFINITY;
         let mut quarters_gathered = [false; 4];
         let by_quarter = side == EDGE_SIDE || (side == SMOOTH_SIDE && settings.smooth_quarters);
         let gathers = receivers.is_some();
         let mut none = Vec::new();
         let receivers = receivers.unwrap_or(&mut none);
-        for s in 0..count {
+        for s in range.clone() {
             let mut sampler = Sampler::new(settings.seed, u64::from(pixel), u64::from(s));
             let jitter = if side == 1 {
                 Vec2::splat(0.5)
@@ -314,31 +335,63 @@ impl PixelSampling {
                 weight,
                 gather_weight: gather_weight.filter(|_| gathers),
                 quarter: by_quarter.then_some(quarter as u8),
-                light: LightShare::of_sample(settings.light_samples, s, count, light),
+                light: LightShare::of_sample(settings.light_samples, s - range.start, count, light),
             };
             let r = trace_primary(ctx, settings, cs, &mut sampler, receivers);
             out.spread = out.spread.add(luminance(r.direct) * count as f32);
-            out.mean.direct += r.direct;
-            out.mean.albedo += r.albedo * weight;
-            out.mean.normal += r.normal * weight;
-            depth = depth.min(r.depth);
+            out.sum.direct += r.direct;
+            out.sum.albedo += r.albedo * weight;
+            out.sum.normal += r.normal * weight;
+            out.sum.depth = out.sum.depth.min(r.depth);
             out.hits += u32::from(r.depth.is_finite());
         }
-        out.mean.normal = out.mean.normal.normalize_or_zero();
-        out.mean.depth = depth;
-        out.mean.alpha = out.hits as f32 / count as f32;
         out
     }
 }
 
 /// What [`PixelSampling::trace_samples`] found.
 struct Samples {
-    /// Emission and direct light, AOVs and coverage: the samples' mean.
-    mean: PrimarySample,
+    /// How many samples were taken.
+    count: u32,
+    /// Emission and direct light, albedo and normal: the samples' mean (each weighed
+    /// 1/`count`); depth: the nearest.
+    sum: PrimarySample,
     /// How the samples' luminance (emission and direct light) spreads.
     spread: Spread,
     /// How many samples hit the scene.
     hits: u32,
+}
+
+impl Samples {
+    /// These samples and `more` as one set, each weighing its share of the two counts.
+    fn and(&self, more: &Samples) -> Samples {
+        let count = self.count + more.count;
+        let (a, b) = (
+            self.count as f32 / count as f32,
+            more.count as f32 / count as f32,
+        );
+        Samples {
+            count,
+            sum: PrimarySample {
+                direct: self.sum.direct * a + more.sum.direct * b,
+                albedo: self.sum.albedo * a + more.sum.albedo * b,
+                normal: self.sum.normal * a + more.sum.normal * b,
+                depth: self.sum.depth.min(more.sum.depth),
+                alpha: 0.0,
+            },
+            spread: Spread::EMPTY,
+            hits: self.hits + more.hits,
+        }
+    }
+
+    /// The pixel's value from these samples: the normal made unit, the coverage.
+    fn mean(&self) -> PrimarySample {
+        PrimarySample {
+            normal: self.sum.normal.normalize_or_zero(),
+            alpha: self.hits as f32 / self.count as f32,
+            ..self.sum
+        }
+    }
 }
 
 /// The least, greatest and summed luminance of some samples, kept as they come (no list).
@@ -458,6 +511,45 @@ fn chain_ends(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `count` samples whose mean direct light, albedo and normal are `value`, `hits` of
+    /// them on the scene at `depth`.
+    fn samples(count: u32, value: f32, normal: Vec3, hits: u32, depth: f32) -> Samples {
+        Samples {
+            count,
+            sum: PrimarySample {
+                direct: Rgb::splat(value),
+                albedo: Rgb::splat(value),
+                normal,
+                depth,
+                alpha: 0.0,
+            },
+            spread: Spread::EMPTY,
+            hits,
+        }
+    }
+
+    /// An edge's round of 16 and the other 48 make the mean of all 64, each sample weighing
+    /// 1/64: direct light and albedo by count, the normal's sum made unit, the nearest depth,
+    /// the coverage over all 64.
+    #[test]
+    fn an_edges_round_and_its_rest_weigh_by_their_counts() {
+        let round = samples(16, 4.0, Vec3::X, 16, 2.0);
+        let rest = samples(48, 0.5, Vec3::Y, 40, 3.0);
+        let all = round.and(&rest);
+        assert_eq!(all.count, 64);
+        let mean = all.mean();
+        let expected = (16.0 * 4.0 + 48.0 * 0.5) / 64.0;
+        assert!((mean.direct - Rgb::splat(expected)).abs().max_element() < 1e-6);
+        assert!((mean.albedo - Rgb::splat(expected)).abs().max_element() < 1e-6);
+        let normal = (Vec3::X * 0.25 + Vec3::Y * 0.75).normalize();
+        assert!((mean.normal - normal).length() < 1e-6);
+        assert_eq!(mean.depth, 2.0);
+        assert_eq!(mean.alpha, 56.0 / 64.0);
+        // A round alone is its own mean.
+        let alone = round.mean();
+        assert_eq!((alone.direct, alone.alpha), (Rgb::splat(4.0), 1.0));
+    }
 
     fn end(chain: u64, mesh: u32, depth: f32) -> ChainEnd {
         ChainEnd {
