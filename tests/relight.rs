@@ -46,10 +46,10 @@ fn render_difference(scene: &Scene, a: &BakedCache, b: &BakedCache) -> f64 {
 /// compares the largest channel). Measured: relMSE 0 for ×2 (exact in binary), 5.1e-15 for
 /// ×1.7, 2.7e-6 for the colour (9.8e-7 before the render's light points took 32-bit seeds,
 /// its arctangent another rounding and its cuts far straddling nodes whole: which
-/// coefficients sit at the threshold moved). The grey bounds are the maths of rounding: ×2 changes no bit,
-/// and ×1.7 rounds each float product once either way (half an ulp, 6e-8 relative), which a
-/// render carries through a few operations: a relative error of a few 1e-7 per pixel, a
-/// relMSE below 1e-13. The colour's bound has no such argument: it is ten times the measured
+/// coefficients sit at the threshold moved). The grey bounds are the maths of rounding: ×2
+/// changes no bit, and ×1.7 rounds each float product once either way (half an ulp, 6e-8
+/// relative), which a render carries through a few operations: a relative error of a few
+/// 1e-7 per pixel, a relMSE below 1e-13. The colour's bound has no such argument: it is ten times the measured
 /// figure, well inside the 1e-3.
 #[test]
 fn scaling_every_emitter_rescales_the_cache_as_a_fresh_bake_would_be() {

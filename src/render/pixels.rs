@@ -259,14 +259,14 @@ impl PixelSampling {
             Some(receivers),
         );
         if kind != PixelKind::Edge || !needs_more(&round.spread, round.hits, count) {
-            return (round.mean(), count);
+            return (round.pixel(), count);
         }
         // The rest of the sequence, with direct light of its own (a second set of the pixel's
         // light points, shared out over these samples alone); the first round's samples stay,
         // and its receivers already gather for the quarters.
         let most = EDGE_SIDE * EDGE_SIDE;
         let rest = self.trace_samples(ctx, camera, settings, pixel, (side, count..most), None);
-        (round.and(&rest).mean(), most)
+        (round.and(&rest).pixel(), most)
     }
 
     /// Camera samples `range` of pixel `(x, y)` (of a grid of `side`²), each weighing
@@ -299,7 +299,7 @@ impl PixelSampling {
         };
         let mut out = Samples {
             count,
-            sum: PrimarySample {
+            mean: PrimarySample {
                 depth: f32::INFINITY,
                 ..PrimarySample::default()
             },
@@ -339,10 +339,10 @@ impl PixelSampling {
             };
             let r = trace_primary(ctx, settings, cs, &mut sampler, receivers);
             out.spread = out.spread.add(luminance(r.direct) * count as f32);
-            out.sum.direct += r.direct;
-            out.sum.albedo += r.albedo * weight;
-            out.sum.normal += r.normal * weight;
-            out.sum.depth = out.sum.depth.min(r.depth);
+            out.mean.direct += r.direct;
+            out.mean.albedo += r.albedo * weight;
+            out.mean.normal += r.normal * weight;
+            out.mean.depth = out.mean.depth.min(r.depth);
             out.hits += u32::from(r.depth.is_finite());
         }
         out
@@ -354,8 +354,8 @@ struct Samples {
     /// How many samples were taken.
     count: u32,
     /// Emission and direct light, albedo and normal: the samples' mean (each weighed
-    /// 1/`count`); depth: the nearest.
-    sum: PrimarySample,
+    /// 1/`count`; the normal not yet made unit); depth: the nearest.
+    mean: PrimarySample,
     /// How the samples' luminance (emission and direct light) spreads.
     spread: Spread,
     /// How many samples hit the scene.
@@ -372,11 +372,11 @@ impl Samples {
         );
         Samples {
             count,
-            sum: PrimarySample {
-                direct: self.sum.direct * a + more.sum.direct * b,
-                albedo: self.sum.albedo * a + more.sum.albedo * b,
-                normal: self.sum.normal * a + more.sum.normal * b,
-                depth: self.sum.depth.min(more.sum.depth),
+            mean: PrimarySample {
+                direct: self.mean.direct * a + more.mean.direct * b,
+                albedo: self.mean.albedo * a + more.mean.albedo * b,
+                normal: self.mean.normal * a + more.mean.normal * b,
+                depth: self.mean.depth.min(more.mean.depth),
                 alpha: 0.0,
             },
             spread: Spread::EMPTY,
@@ -385,11 +385,11 @@ impl Samples {
     }
 
     /// The pixel's value from these samples: the normal made unit, the coverage.
-    fn mean(&self) -> PrimarySample {
+    fn pixel(&self) -> PrimarySample {
         PrimarySample {
-            normal: self.sum.normal.normalize_or_zero(),
+            normal: self.mean.normal.normalize_or_zero(),
             alpha: self.hits as f32 / self.count as f32,
-            ..self.sum
+            ..self.mean
         }
     }
 }
@@ -517,7 +517,7 @@ mod tests {
     fn samples(count: u32, value: f32, normal: Vec3, hits: u32, depth: f32) -> Samples {
         Samples {
             count,
-            sum: PrimarySample {
+            mean: PrimarySample {
                 direct: Rgb::splat(value),
                 albedo: Rgb::splat(value),
                 normal,
@@ -538,7 +538,7 @@ mod tests {
         let rest = samples(48, 0.5, Vec3::Y, 40, 3.0);
         let all = round.and(&rest);
         assert_eq!(all.count, 64);
-        let mean = all.mean();
+        let mean = all.pixel();
         let expected = (16.0 * 4.0 + 48.0 * 0.5) / 64.0;
         assert!((mean.direct - Rgb::splat(expected)).abs().max_element() < 1e-6);
         assert!((mean.albedo - Rgb::splat(expected)).abs().max_element() < 1e-6);
@@ -547,7 +547,7 @@ mod tests {
         assert_eq!(mean.depth, 2.0);
         assert_eq!(mean.alpha, 56.0 / 64.0);
         // A round alone is its own mean.
-        let alone = round.mean();
+        let alone = round.pixel();
         assert_eq!((alone.direct, alone.alpha), (Rgb::splat(4.0), 1.0));
     }
 
