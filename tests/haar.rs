@@ -4,8 +4,8 @@ use glam::{DVec2, Vec2, Vec3};
 use wpbgi::geometry::warp::square_to_uniform_sphere;
 use wpbgi::haar::sphere_map::square_to_direction_f64;
 use wpbgi::haar::{
-    direction_to_square, square_to_direction, texel_directions, texel_of, Haar2d, SparseHaar,
-    SparseSum,
+    direction_to_square, square_to_direction, texel_directions, texel_of, Haar2d, PointMap,
+    SparseHaar, SparseSum,
 };
 use wpbgi::sampler::Sampler;
 
@@ -237,6 +237,59 @@ fn sparse_decodes_agree_bit_for_bit() {
             );
         }
     }
+}
+
+/// A map laid out for point lookups (the gather's) evaluates as its tree does, bit for bit,
+/// at every point: inside texels, on their edges, at the square's edges and beyond them,
+/// and at NaN. Full maps become texels, in less memory; a sharp lobe's deep, thin tree
+/// stays a tree.
+#[test]
+fn point_maps_evaluate_as_their_trees_bit_for_bit() {
+    let mut texels = 0;
+    let mut trees = 0;
+    for (n, tau) in [
+        (1usize, 0.0),
+        (2, 0.0),
+        (8, 0.0),
+        (16, 0.05),
+        (64, 0.01),
+        (64, 0.3),
+    ] {
+        for image in [random_image(n, 40), lobe_image(n)] {
+            let sparse = SparseHaar::compress(&Haar2d::forward(&image, n), tau);
+            let point = PointMap::from(sparse.clone());
+            assert_eq!(point.levels(), sparse.levels());
+            match &point {
+                PointMap::Texels { .. } => texels += 1,
+                PointMap::Tree(_) => trees += 1,
+            }
+            let mut s = Sampler::new(41, n as u64, 0);
+            let mut points: Vec<Vec2> = (0..2000).map(|_| s.next_2d()).collect();
+            // Texel edges at every level, the square's edges, outside it, and NaN.
+            for k in 0..=2 * n {
+                let e = k as f32 / (2 * n) as f32;
+                points.extend([Vec2::new(e, 0.5), Vec2::new(0.5, e), Vec2::splat(e)]);
+                points.push(Vec2::new(e, f32::from_bits(e.to_bits().saturating_sub(1))));
+            }
+            points.extend([
+                Vec2::new(-0.25, 0.5),
+                Vec2::new(1.5, -3.0),
+                Vec2::new(f32::NAN, 0.5),
+                Vec2::new(0.5, f32::INFINITY),
+            ]);
+            for p in points {
+                let (a, b) = (point.eval(p.x, p.y), sparse.eval(p.x, p.y));
+                assert_eq!(
+                    a.to_array().map(f32::to_bits),
+                    b.to_array().map(f32::to_bits),
+                    "n {n}, tau {tau}, at {p}"
+                );
+            }
+        }
+    }
+    // Both forms occur above: the full 8 × 8 map becomes texels, the 64 × 64 lobe at
+    // tau 0.3 stays a tree.
+    assert!(texels > 0 && trees > 0, "texels {texels}, trees {trees}");
 }
 
 /// Sums of sparse maps (the bounces' blends and totals, the tree's coding) are the dense

@@ -23,7 +23,7 @@ use crate::cache::CacheError;
 use crate::haar::sphere_map::MAX_TABLE_LEVELS;
 use crate::haar::{
     direction_to_square, square_to_direction, texel_at, texel_directions, Coefficient, Haar2d,
-    SparseHaar,
+    PointMap, SparseHaar,
 };
 use crate::spectrum::Rgb;
 use crate::surfels::radiance::{intensity_map, SurfelRadiance};
@@ -107,12 +107,12 @@ pub struct Senders {
     /// The surfels, as the cache records them.
     pub surfels: Vec<SurfelRecord>,
     /// Per inner node: G of the radiant intensity and of the projected area (leaves: empty).
-    intensity: Vec<SparseHaar<Rgb>>,
-    projected: Vec<SparseHaar<f32>>,
+    intensity: Vec<PointMap<Rgb>>,
+    projected: Vec<PointMap<f32>>,
     /// Per node with emitting surfels below: their emitted intensity.
-    emitted: Vec<Option<SparseHaar<Rgb>>>,
+    emitted: Vec<Option<PointMap<Rgb>>>,
     /// Per surfel with a directional map: the map (outgoing radiance over the sphere).
-    maps: Vec<Option<SparseHaar<Rgb>>>,
+    maps: Vec<Option<PointMap<Rgb>>>,
     /// Whether [`Senders::seen`] evaluates the radiance it looks up (see
     /// [`Senders::geometry_of`]).
     evaluates: bool,
@@ -353,10 +353,10 @@ impl Senders {
             closed_boxes,
             nodes,
             surfels,
-            intensity,
-            projected,
-            emitted,
-            maps,
+            intensity: point_maps(intensity),
+            projected: point_maps(projected),
+            emitted: optional_point_maps(emitted),
+            maps: optional_point_maps(maps),
             evaluates: true,
             nearest: OnceLock::new(),
         }
@@ -763,6 +763,20 @@ fn sender_nodes(
 }
 
 /// A node's stored map (G or H), decoded; `None` where the node stores none.
+/// `maps` laid out for the gather's point lookups ([`PointMap`]).
+fn point_maps<T: Coefficient + Send>(maps: Vec<SparseHaar<T>>) -> Vec<PointMap<T>> {
+    maps.into_par_iter().map(PointMap::from).collect()
+}
+
+/// [`point_maps`] where some are absent.
+fn optional_point_maps<T: Coefficient + Send>(
+    maps: Vec<Option<SparseHaar<T>>>,
+) -> Vec<Option<PointMap<T>>> {
+    maps.into_par_iter()
+        .map(|m| m.map(PointMap::from))
+        .collect()
+}
+
 type StoredMap<T> = Result<Option<SparseHaar<T>>, CacheError>;
 
 /// Map `index` of `cache`'s pool, or `None` for [`NO_MAP`].

@@ -2,10 +2,12 @@
 //! equal-area octahedral map from directions to the unit square, and the orthonormal
 //! non-standard 2D Haar transform over it.
 
+pub mod point_map;
 pub mod sparse;
 pub mod sphere_map;
 pub mod transform;
 
+pub use point_map::PointMap;
 pub use sparse::{SparseHaar, SparseSum};
 pub use sphere_map::{
     direction_to_square, square_to_direction, texel_at, texel_centre, texel_directions, texel_of,

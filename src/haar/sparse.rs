@@ -331,6 +331,16 @@ impl<T: Coefficient> SparseHaar<T> {
         }
     }
 
+    /// The levels the tree holds nodes on: how many [`SparseHaar::eval`] may walk.
+    pub(crate) fn stored_levels(&self) -> u32 {
+        self.stored_depth(0, 0)
+    }
+
+    /// The memory the tree's nodes take.
+    pub(crate) fn tree_bytes(&self) -> usize {
+        std::mem::size_of_val(self.nodes.as_slice())
+    }
+
     /// The levels below and including `node` (at level `l`) that hold stored details.
     fn stored_depth(&self, node: u32, l: u32) -> u32 {
         match self.nodes.get(node as usize) {
