@@ -40,7 +40,9 @@ pub(crate) const PIECES_PER_PIXEL: f32 = 1.0;
 /// node down to its leaves, however far: the walls' and boxes' rows along the floor under a
 /// floor receiver, 45 % of the nodes a cbox-diffuse or cbox-glossy render visited. At 512²,
 /// from 4 radii, every reference scene's relMSE came out 0.3–0.8 % lower and its render
-/// 1–13 % faster (docs/render.md); from a BSDF-refined buffer the glossy scenes' error rose.
+/// 1–13 % faster (docs/render.md); from a BSDF-refined buffer the glossy scenes' error rose,
+/// so a refined buffer takes them whole only in its faint directions
+/// ([`Microbuffer::is_faint_at`]).
 /// The bake keeps opening them all ([`splat_cut`]): its furnaces are where the rule came from
 /// (docs/bounces.md), and they were not measured again.
 pub const STRADDLE_RADII: f32 = 4.0;
@@ -152,8 +154,12 @@ pub fn splat_cut_beyond(
             if sender.holds_plane_of(p, n) {
                 continue;
             }
+            // A BSDF-refined buffer opens far ones too, except in the directions its lobe
+            // hardly weighs (faint pixels), which take them as a uniform buffer does.
             let far = d2 > (straddle_radii * sender.node.radius).powi(2);
-            if !far || mb.is_refined() {
+            let open = !far
+                || (mb.is_refined() && !mb.locate(v / d).is_some_and(|at| mb.is_faint_at(&at)));
+            if open {
                 stack.extend(sender.node.children.into_iter().filter(|&c| c != NO_NODE));
                 continue;
             }

@@ -30,6 +30,13 @@ const NO_CELL: u32 = u32::MAX;
 /// The most one layer may cover a pixel (see [`Microbuffer::resolve`]).
 pub const MAX_LAYER_COVER: f32 = 2.0;
 
+/// The share of a glossy receiver's reflected light that its faint base pixels hold together
+/// at most ([`Microbuffer::refine_for_bsdf`]): the directions far from its lobe, where the cut
+/// need not open the far nodes that straddle the receiver's plane (`gather::cut`). At 1 %, a
+/// cbox-glossy render at 512² visited 17 % fewer nodes in 0.96 of the time, at the same
+/// relMSE (docs/render.md).
+pub const FAINT_LIGHT: f32 = 0.01;
+
 /// A square of one hemisphere's unit square: a pixel, or a pixel that was split.
 #[derive(Clone, Copy, Debug)]
 struct Cell {
@@ -220,6 +227,10 @@ pub struct Microbuffer {
     keys: Vec<u64>,
     /// The light as links, when the buffer records them ([`Microbuffer::record_links`]).
     links: Option<Box<Links>>,
+    /// Per base pixel, after [`Microbuffer::refine_for_bsdf`]: whether its part of the
+    /// receiver's reflected light is faint ([`Microbuffer::is_faint_at`]); empty where none
+    /// is.
+    faint: Vec<bool>,
 }
 
 /// The base grid of one size, built once and copied into every buffer of that size.
@@ -358,6 +369,7 @@ impl Microbuffer {
             starts: Vec::new(),
             keys: Vec::new(),
             links: None,
+            faint: Vec::new(),
         }
     }
 
@@ -405,6 +417,7 @@ impl Microbuffer {
         }
         self.frame = frame;
         self.pending.clear();
+        self.faint.clear();
         if let Some(links) = &mut self.links {
             links.sources.clear();
             links.entries.clear();
@@ -419,6 +432,18 @@ impl Microbuffer {
     /// Solid angle of a base pixel.
     pub fn pixel_solid_angle(&self) -> f32 {
         TAU / (self.n * self.n) as f32
+    }
+
+    /// Whether `at` lies in a base pixel whose part of the receiver's reflected light is
+    /// faint (see [`Microbuffer::refine_for_bsdf`]): a cut may stay coarse there.
+    pub(crate) fn is_faint_at(&self, at: &Located) -> bool {
+        if self.faint.is_empty() {
+            return false;
+        }
+        let n = self.n;
+        let x = ((at.square.x * n as f32) as u32).min(n - 1);
+        let y = ((at.square.y * n as f32) as u32).min(n - 1);
+        self.faint[((u32::from(at.lower) * n + y) * n + x) as usize]
     }
 
     /// Where world direction `w` (unit) falls in the buffer, or `None` below the horizon of a
@@ -532,6 +557,7 @@ impl Microbuffer {
     /// the total over the base pixels, down to `max_level` splits. The maximum is taken over a
     /// 3 × 3 grid of directions in the pixel and the lobe centres that fall in it, so that a
     /// lobe narrower than a pixel is never missed. `wo` is the outgoing direction (local).
+    /// The base pixels far from the lobe are marked faint ([`Microbuffer::is_faint_at`]).
     pub fn refine_for_bsdf(&mut self, bsdf: &Bsdf, wo: Vec3, share: f32, max_level: u32) {
         let centres: Vec<Vec3> = bsdf.lobe_centres(wo).into_iter().flatten().collect();
         let mut lanes = BsdfLanes::default();
@@ -543,6 +569,7 @@ impl Microbuffer {
         if !(total > 0.0) || !total.is_finite() {
             return;
         }
+        self.mark_faint(&weights, total);
         let mut queue: Vec<(usize, f32)> = weights.into_iter().enumerate().collect();
         while let Some((k, w)) = queue.pop() {
             if w <= share * total || self.pixels[k].level >= max_level {
@@ -554,6 +581,40 @@ impl Microbuffer {
                 let wc = lanes.weight(self, child, bsdf, wo, &centres);
                 queue.push((child, wc));
             }
+        }
+    }
+
+    /// Mark the base pixels (of BSDF weights `weights`, summing to `total`) whose reflected
+    /// light is faint: the faintest, which together hold at most [`FAINT_LIGHT`] of the
+    /// total, and whose neighbours (the eight around them) are as faint.
+    fn mark_faint(&mut self, weights: &[f32], total: f32) {
+        let mut order: Vec<usize> = (0..weights.len()).collect();
+        order.sort_by(|&a, &b| weights[a].total_cmp(&weights[b]).then(a.cmp(&b)));
+        let mut low = vec![false; weights.len()];
+        let mut sum = 0.0;
+        for k in order {
+            sum += weights[k];
+            if sum > FAINT_LIGHT * total {
+                break;
+            }
+            low[k] = true;
+        }
+        let n = self.n as i32;
+        self.faint = (0..weights.len())
+            .map(|k| {
+                let (h, y, x) = (k as i32 / (n * n), (k as i32 / n) % n, k as i32 % n);
+                (-1..=1).all(|dy| {
+                    (-1..=1).all(|dx| {
+                        let (xx, yy) = (x + dx, y + dy);
+                        !(0..n).contains(&xx)
+                            || !(0..n).contains(&yy)
+                            || low[((h * n + yy) * n + xx) as usize]
+                    })
+                })
+            })
+            .collect();
+        if !self.faint.iter().any(|&f| f) {
+            self.faint.clear();
         }
     }
 
@@ -996,5 +1057,67 @@ impl BsdfLanes {
             .iter()
             .fold(0.0f32, |best, &f| best.max(luminance(f)));
         best * mb.pixels[k].solid_angle
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bsdf::{Diffuse, Distribution, Microfacet, RoughConductor};
+
+    /// The base pixels' BSDF weights for `bsdf` seen from `wo`, as the refinement weighs them.
+    fn base_weights(bsdf: &Bsdf, wo: Vec3) -> Vec<f32> {
+        let mb = Microbuffer::new(16, false, Frame::from_normal(Vec3::Z));
+        let centres: Vec<Vec3> = bsdf.lobe_centres(wo).into_iter().flatten().collect();
+        let mut lanes = BsdfLanes::default();
+        (0..mb.pixels.len())
+            .map(|k| lanes.weight(&mb, k, bsdf, wo, &centres))
+            .collect()
+    }
+
+    /// A narrow lobe leaves most of the hemisphere faint and its own direction not; the faint
+    /// pixels hold at most [`FAINT_LIGHT`] of the reflected light; a diffuse receiver has
+    /// none.
+    #[test]
+    fn faint_pixels_are_the_directions_a_lobe_hardly_weighs() {
+        let wo = Vec3::new(0.5, 0.0, 0.866);
+        let glossy = Bsdf::Conductor(RoughConductor {
+            distr: Microfacet::new(Distribution::Ggx, 0.05, 0.05),
+            eta: Rgb::splat(0.2),
+            k: Rgb::splat(3.0),
+            specular_reflectance: Rgb::ONE,
+        });
+        let diffuse = Bsdf::Diffuse(Diffuse {
+            reflectance: Rgb::ONE,
+        });
+        for (bsdf, narrow) in [(glossy, true), (diffuse, false)] {
+            let mut mb = Microbuffer::new(16, false, Frame::from_normal(Vec3::Z));
+            mb.refine_for_bsdf(&bsdf, wo, 1.0 / 64.0, 5);
+            let weights = base_weights(&bsdf, wo);
+            let total: f32 = weights.iter().sum();
+            let faint: Vec<usize> = (0..256)
+                .filter(|&k| mb.faint.get(k) == Some(&true))
+                .collect();
+            let faint_weight: f32 = faint.iter().map(|&k| weights[k]).sum();
+            assert!(
+                faint_weight <= FAINT_LIGHT * total,
+                "{faint_weight} of {total}"
+            );
+            let base = Microbuffer::new(16, false, Frame::from_normal(Vec3::Z));
+            if narrow {
+                assert!(faint.len() > 128, "{} faint pixels", faint.len());
+                let mirror = Vec3::new(-wo.x, -wo.y, wo.z);
+                let at = mb.locate(mirror).expect("upper hemisphere");
+                assert!(!mb.is_faint_at(&at));
+            } else {
+                // Its faintest 1 % lies in the horizon's ring, each pixel beside a brighter one.
+                assert!(faint.is_empty(), "{} faint pixels", faint.len());
+            }
+            // Every faint pixel is also reported where a direction in it is located.
+            for k in 0..256 {
+                let at = mb.locate(base.pixels[k].dir).expect("upper hemisphere");
+                assert_eq!(mb.is_faint_at(&at), faint.contains(&k), "pixel {k}");
+            }
+        }
     }
 }
