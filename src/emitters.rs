@@ -1,10 +1,12 @@
 //! Sampling of every emitter in a scene for next-event estimation: emissive triangles (uniform
 //! by area within a triangle), punctual lights and the environment (by its radiance, see
 //! [`crate::scene::environment`]), chosen with probability proportional to their power. Kinds
-//! the scene does not have cost nothing.
+//! the scene does not have cost nothing. Where the emitters are a few triangles of constant
+//! radiance, their unshadowed irradiance also in closed form ([`ClosedFormLight`]).
 
 use crate::accel::{Accel, Segment};
 use crate::geometry::offset::{interpolate_with_error, offset_origin, SHADOW_EPSILON};
+use crate::geometry::polygon_irradiance::projected_solid_angle;
 use crate::geometry::spherical_triangle::SphericalTriangle;
 use crate::geometry::warp::square_to_uniform_triangle;
 use crate::scene::environment::EnvironmentSampler;
@@ -341,5 +343,74 @@ impl EmitterSampler {
                 })
             }
         }
+    }
+}
+
+/// The most emissive triangles whose light [`ClosedFormLight`] sums in closed form: each costs
+/// a clipping and Lambert's formula at every shading point that asks.
+pub const CLOSED_FORM_TRIANGLES: usize = 16;
+
+/// The unshadowed irradiance of a scene's emitters in closed form (Lambert's formula), where
+/// they are at most [`CLOSED_FORM_TRIANGLES`] triangles of constant radiance and nothing else
+/// emits (no texture on the emission, no punctual light, no environment).
+pub struct ClosedFormLight {
+    tris: Vec<ClosedFormTriangle>,
+}
+
+struct ClosedFormTriangle {
+    corners: [Vec3; 3],
+    /// The front face's normal (counter-clockwise winding), not normalised.
+    normal: Vec3,
+    /// Radiance from the front and from the back face.
+    front: Rgb,
+    back: Rgb,
+}
+
+impl ClosedFormLight {
+    /// The closed form of `scene`'s emitters, or `None` where they do not allow it.
+    pub fn of(scene: &Scene) -> Option<ClosedFormLight> {
+        if !scene.lights.is_empty() || scene.environment.is_some() {
+            return None;
+        }
+        let mut tris = Vec::new();
+        for m in &scene.meshes {
+            let Some(e) = &scene.materials.get(m.material)?.emission else {
+                continue;
+            };
+            if e.texture.is_some() || tris.len() + m.triangles.len() > CLOSED_FORM_TRIANGLES {
+                return None;
+            }
+            for t in &m.triangles {
+                let corners = t.map(|i| m.positions[i as usize]);
+                tris.push(ClosedFormTriangle {
+                    corners,
+                    normal: (corners[1] - corners[0]).cross(corners[2] - corners[0]),
+                    front: e.radiance,
+                    back: if e.two_sided { e.radiance } else { Rgb::ZERO },
+                });
+            }
+        }
+        (!tris.is_empty()).then_some(ClosedFormLight { tris })
+    }
+
+    /// The irradiance at `p` through the hemisphere around the unit normal `n`, as if nothing
+    /// stood between it and the emitters: Σ L · (projected solid angle), each triangle's
+    /// radiance that of the face `p` sees.
+    pub fn irradiance(&self, p: Vec3, n: Vec3) -> Rgb {
+        self.tris
+            .iter()
+            .map(|t| {
+                let radiance = if (p - t.corners[0]).dot(t.normal) > 0.0 {
+                    t.front
+                } else {
+                    t.back
+                };
+                if radiance == Rgb::ZERO {
+                    Rgb::ZERO
+                } else {
+                    radiance * projected_solid_angle(p, n, t.corners)
+                }
+            })
+            .fold(Rgb::ZERO, |a, b| a + b)
     }
 }

@@ -6,7 +6,7 @@ use glam::{Vec2, Vec3};
 use wpbgi::accel::Accel;
 use wpbgi::bake::DirectLight;
 use wpbgi::bsdf::{Bsdf, Diffuse, Distribution, Microfacet, RoughConductor, TransportMode};
-use wpbgi::emitters::EmitterSampler;
+use wpbgi::emitters::{ClosedFormLight, EmitterSampler, CLOSED_FORM_TRIANGLES};
 use wpbgi::geometry::frame::Frame;
 use wpbgi::haar::{
     direction_to_square, square_to_direction, texel_centre, texel_of, Haar2d, SparseHaar,
@@ -166,6 +166,63 @@ fn diffuse_surfel_under_a_disk_light() {
         100.0 * (ours / exact - 1.0)
     );
     assert!((ours / exact - 1.0).abs() < 0.005);
+}
+
+/// The render's closed form of a few constant emitting triangles (its diffuse hits' unshadowed
+/// direct light) is Lambert's formula: the tilted rectangle and a 12-gon, against this file's
+/// own evaluation in double precision; seen from behind, a one-sided light gives nothing. A
+/// textured emission, an environment or more than [`CLOSED_FORM_TRIANGLES`] triangles have
+/// none.
+#[test]
+fn closed_form_light_is_lamberts_formula() {
+    let (c, s) = (25f32.to_radians().cos(), 25f32.to_radians().sin());
+    let corner = |x: f32, y: f32| Vec3::new(0.3 + x, -0.2 + y * c, 1.0 + y * s);
+    let rect = facing_origin(vec![
+        corner(-0.5, -0.3),
+        corner(0.5, -0.3),
+        corner(0.5, 0.3),
+        corner(-0.5, 0.3),
+    ]);
+    let gon = |n: usize| -> Vec<Vec3> {
+        let ring = (0..n).map(|i| {
+            let a = i as f32 / n as f32 * std::f32::consts::TAU;
+            Vec3::new(-0.2 + 0.5 * a.cos(), 0.1 + 0.5 * a.sin(), 0.8)
+        });
+        facing_origin(ring.collect())
+    };
+    let diffuse = || {
+        Bsdf::Diffuse(Diffuse {
+            reflectance: Rgb::splat(0.5),
+        })
+    };
+    for poly in [rect.clone(), gon(12)] {
+        let light = ClosedFormLight::of(&scene(&poly, diffuse())).expect("a closed form");
+        let ours = light.irradiance(Vec3::ZERO, Vec3::Z).x as f64;
+        let exact = polygon_irradiance(&poly, LE as f64);
+        assert!((ours / exact - 1.0).abs() < 1e-6, "{ours} vs {exact}");
+        // The same light from above it: its back.
+        assert_eq!(
+            light.irradiance(Vec3::new(0.0, 0.0, 3.0), -Vec3::Z),
+            Rgb::ZERO
+        );
+    }
+    let mut textured = scene(&rect, diffuse());
+    if let Some(e) = &mut textured.materials[1].emission {
+        e.texture = Some(wpbgi::scene::TexRef {
+            texture: 0,
+            wrap_s: wpbgi::scene::Wrap::Repeat,
+            wrap_t: wpbgi::scene::Wrap::Repeat,
+            transform: glam::Affine2::IDENTITY,
+            srgb: true,
+            scale: glam::Vec4::ONE,
+            bias: glam::Vec4::ZERO,
+        });
+    }
+    assert!(ClosedFormLight::of(&textured).is_none());
+    let mut lit = scene(&rect, diffuse());
+    lit.environment = Some(wpbgi::scene::Environment::constant(Rgb::ONE));
+    assert!(ClosedFormLight::of(&lit).is_none());
+    assert!(ClosedFormLight::of(&scene(&gon(CLOSED_FORM_TRIANGLES + 3), diffuse())).is_none());
 }
 
 /// A rough conductor under a small square light: the radiance map's value towards the mirror

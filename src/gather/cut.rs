@@ -42,7 +42,7 @@ pub(crate) const PIECES_PER_PIXEL: f32 = 1.0;
 /// from 4 radii, every reference scene's relMSE came out 0.3–0.8 % lower and its render
 /// 1–13 % faster (docs/render.md); from a BSDF-refined buffer the glossy scenes' error rose,
 /// so a refined buffer takes them whole only in its faint directions
-/// ([`Microbuffer::is_faint_at`]).
+/// (`Microbuffer::is_faint_at`).
 /// The bake keeps opening them all ([`splat_cut`]): its furnaces are where the rule came from
 /// (docs/bounces.md), and they were not measured again.
 pub const STRADDLE_RADII: f32 = 4.0;

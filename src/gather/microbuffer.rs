@@ -557,7 +557,7 @@ impl Microbuffer {
     /// the total over the base pixels, down to `max_level` splits. The maximum is taken over a
     /// 3 × 3 grid of directions in the pixel and the lobe centres that fall in it, so that a
     /// lobe narrower than a pixel is never missed. `wo` is the outgoing direction (local).
-    /// The base pixels far from the lobe are marked faint ([`Microbuffer::is_faint_at`]).
+    /// The base pixels far from the lobe are marked faint (`Microbuffer::is_faint_at`).
     pub fn refine_for_bsdf(&mut self, bsdf: &Bsdf, wo: Vec3, share: f32, max_level: u32) {
         let centres: Vec<Vec3> = bsdf.lobe_centres(wo).into_iter().flatten().collect();
         let mut lanes = BsdfLanes::default();

@@ -76,7 +76,8 @@ pub struct FinalSettings {
     /// BSDF importance: most splits of a base pixel.
     pub adaptive_levels: u32,
     /// Emitter samples per pixel at each rough hit, spread over a pixel's camera samples (as
-    /// many BSDF samples at glossy hits; see `LightShare`).
+    /// many BSDF samples at glossy hits; half at diffuse hits whose light has a closed form;
+    /// see `LightShare`).
     pub light_samples: u32,
     /// Receivers smoother than this follow their specular chain.
     pub specular_below: f32,
