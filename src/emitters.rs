@@ -93,6 +93,8 @@ pub struct EmitterSampler {
     environment: Option<EnvironmentSampler>,
     /// Bounding-sphere radius, for the power of directional lights.
     scene_radius: f32,
+    /// The emitters' unshadowed light in closed form, where they allow it.
+    closed_form: Option<ClosedFormLight>,
 }
 
 impl EmitterSampler {
@@ -167,7 +169,14 @@ impl EmitterSampler {
             cdf,
             environment,
             scene_radius,
+            closed_form: ClosedFormLight::of(scene),
         }
+    }
+
+    /// The emitters' unshadowed irradiance in closed form, where they are a few triangles of
+    /// constant radiance and nothing else emits ([`ClosedFormLight`]).
+    pub fn closed_form(&self) -> Option<&ClosedFormLight> {
+        self.closed_form.as_ref()
     }
 
     /// Whether the scene emits nothing.
@@ -413,4 +422,21 @@ impl ClosedFormLight {
             })
             .fold(Rgb::ZERO, |a, b| a + b)
     }
+}
+
+/// `unshadowed` light, known in closed form, times the share of it that emitter samples found
+/// unblocked: `visible / all`, per channel (zero where `all` is), the ratio estimator of Heitz,
+/// Hill and McGuire ("Combining analytic direct illumination and stochastic shadows", 2018).
+/// Where nothing blocks the light the result is exact, and where everything does it is zero,
+/// whatever the samples; only penumbrae keep noise. The ratio of two estimates is biased by
+/// O(1/k) for k samples: at 512 samples a pixel, cbox-diffuse's rendered direct light moved by
+/// 2e-6 of the image's light on average against the plain estimate (docs/render.md).
+pub fn shadowed(unshadowed: Rgb, visible: Rgb, all: Rgb) -> Rgb {
+    let ratio = |v: f32, a: f32| if a > 0.0 { v / a } else { 0.0 };
+    unshadowed
+        * Rgb::new(
+            ratio(visible.x, all.x),
+            ratio(visible.y, all.y),
+            ratio(visible.z, all.z),
+        )
 }

@@ -7,7 +7,7 @@
 
 use crate::accel::Accel;
 use crate::bsdf::{Bsdf, TransportMode};
-use crate::emitters::{ClosedFormLight, EmitterSampler};
+use crate::emitters::EmitterSampler;
 use crate::geometry::frame::Frame;
 use crate::geometry::offset::{interpolate_with_error, offset_origin};
 use crate::scene::Scene;
@@ -27,9 +27,6 @@ pub struct Tracer<'a> {
     /// The triangles of its emitting meshes alone (see [`Tracer::may_reach_emitter`]), built
     /// on its first use: the path tracer and the bake never ask.
     emissive: OnceLock<Accel>,
-    /// Its emitters' unshadowed light in closed form, where they allow it (see
-    /// [`Tracer::closed_form_light`]), found on its first use.
-    closed_form: OnceLock<Option<ClosedFormLight>>,
 }
 
 impl<'a> Tracer<'a> {
@@ -40,7 +37,6 @@ impl<'a> Tracer<'a> {
             accel: Accel::build(scene),
             emitters: EmitterSampler::new(scene),
             emissive: OnceLock::new(),
-            closed_form: OnceLock::new(),
         }
     }
 
@@ -56,14 +52,6 @@ impl<'a> Tracer<'a> {
                 .emissive
                 .get_or_init(|| Accel::build_over(self.scene, |m| self.scene.emits(m)))
                 .occluded(origin, dir, 0.0, f32::INFINITY)
-    }
-
-    /// The scene's emitters' unshadowed irradiance in closed form, where they are a few
-    /// triangles of constant radiance and nothing else emits ([`ClosedFormLight`]).
-    pub fn closed_form_light(&self) -> Option<&ClosedFormLight> {
-        self.closed_form
-            .get_or_init(|| ClosedFormLight::of(self.scene))
-            .as_ref()
     }
 
     /// Next-event estimation at `hit`, shaded by `bsdf` and seen from local direction

@@ -12,6 +12,7 @@
 use crate::accel::{Accel, Segment, OCCLUSION_SET};
 use crate::bsdf::fresnel::fresnel_dielectric;
 use crate::bsdf::{Bsdf, TransportMode};
+use crate::emitters::shadowed;
 use crate::geometry::frame::Frame;
 use crate::sampler::{mix64, permute, sobol02, Sampler, GOLDEN_GAMMA};
 use crate::spectrum::{max_component, Rgb};
@@ -400,10 +401,10 @@ fn direct_light(
     sampler: &mut Sampler,
 ) -> Rgb {
     // A diffuse surface under a few triangles of constant radiance: their unshadowed light in
-    // closed form, scaled by the fraction of it the shadow rays find unblocked (the ratio
-    // estimator of Heitz, Hill and McGuire 2018, see `scaled`), from half the shadow rays.
+    // closed form, scaled by the share of it the shadow rays find unblocked (`shadowed`), from
+    // half the shadow rays.
     let closed_form = match bsdf {
-        Bsdf::Diffuse(d) if view.z > 0.0 => ctx.closed_form_light().map(|light| {
+        Bsdf::Diffuse(d) if view.z > 0.0 => ctx.emitters.closed_form().map(|light| {
             d.reflectance * std::f32::consts::FRAC_1_PI * light.irradiance(hit.p, hit.frame.n)
         }),
         _ => None,
@@ -456,7 +457,7 @@ fn direct_light(
     }
     set.add_visible(&ctx.accel, &mut sum);
     if let Some(exact) = closed_form {
-        return scaled(exact, sum, unshadowed);
+        return shadowed(exact, sum, unshadowed);
     }
     if glossy {
         let scramble = [scramble[1] ^ 0x5bd1_e995, scramble[0] ^ 0x1b87_3593];
@@ -497,22 +498,6 @@ fn direct_light(
         }
     }
     sum / k as f32
-}
-
-/// `exact` times `part / whole`, per channel (zero where `whole` is): a diffuse hit's
-/// unshadowed direct light in closed form times the share of the emitter samples' light that
-/// reached it. Where nothing blocks the light the result is exact, and where everything does
-/// it is zero, whatever the samples; only penumbrae keep noise. The ratio of two estimates is
-/// biased by O(1/k) for k samples: at 512 samples a pixel, cbox-diffuse's direct light moved
-/// by 2e-6 of the image's light on average against the plain estimate (docs/render.md).
-fn scaled(exact: Rgb, part: Rgb, whole: Rgb) -> Rgb {
-    let ratio = |p: f32, w: f32| if w > 0.0 { p / w } else { 0.0 };
-    exact
-        * Rgb::new(
-            ratio(part.x, whole.x),
-            ratio(part.y, whole.y),
-            ratio(part.z, whole.z),
-        )
 }
 
 #[cfg(test)]
@@ -625,7 +610,7 @@ mod tests {
     fn unshadowed_diffuse_direct_light_is_exact_from_few_samples() {
         let scene = floor_under_a_light();
         let ctx = Tracer::new(&scene);
-        assert!(ctx.closed_form_light().is_some());
+        assert!(ctx.emitters.closed_form().is_some());
         // The irradiance of a rectangle [0, a] × [0, b] at height c over the receiver, corner
         // above it, per unit radiance: π F with F the corner-rectangle form factor.
         let corner = |a: f64, b: f64, c: f64| {
