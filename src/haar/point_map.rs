@@ -9,10 +9,11 @@
 //! kept: a tree of 21 nodes (588 bytes) for 64 floats (256 bytes).
 //!
 //! A [`PointMap`] keeps such a map as its texels at the depth its tree reaches, wherever they
-//! take no more memory than the tree: one load instead of a walk. Each texel is the tree's own
-//! evaluation at the texel's centre, and a point's texel is found by the same arithmetic that
-//! picks the tree's quadrants (a multiplication by a power of two, exact, then truncation), so
-//! both forms give the same value bit for bit at every point (`tests/haar.rs`).
+//! take no more memory than the tree: one load instead of a walk. Each texel holds the sums the
+//! tree's walk makes to reach it, in the same order ([`SparseHaar::point_texels_into`]), and a
+//! point's texel is found by the same arithmetic that picks the tree's quadrants (a
+//! multiplication by a power of two, exact, then truncation), so both forms give the same value
+//! bit for bit at every point (`tests/haar.rs`).
 
 use super::sparse::SparseHaar;
 use super::transform::Coefficient;
@@ -43,14 +44,12 @@ impl<T: Coefficient> From<SparseHaar<T>> for PointMap<T> {
         if depth == 0 || texel_bytes > map.tree_bytes() {
             return PointMap::Tree(map);
         }
-        let centre = |k: usize| (k as f32 + 0.5) / side as f32;
-        let texels = (0..side * side)
-            .map(|k| map.eval(centre(k % side), centre(k / side)))
-            .collect();
+        let mut texels = Vec::new();
+        map.point_texels_into(depth, &mut texels);
         PointMap::Texels {
             levels: map.levels(),
             depth,
-            texels,
+            texels: texels.into_boxed_slice(),
         }
     }
 }

@@ -331,6 +331,46 @@ impl<T: Coefficient> SparseHaar<T> {
         }
     }
 
+    /// The map's texels at the `depth` its tree reaches ([`SparseHaar::stored_levels`];
+    /// `2^depth` a side, row-major) into `out`, each the value [`SparseHaar::eval`] gives
+    /// inside it, bit for bit: the same sums in the same order, each node's once for the
+    /// texels below it rather than once a lookup.
+    pub(crate) fn point_texels_into(&self, depth: u32, out: &mut Vec<T>) {
+        let side = 1usize << depth;
+        out.clear();
+        out.resize(side * side, self.scale);
+        if !self.nodes.is_empty() {
+            self.point_fill(0, 0, (0, 0), self.scale, depth, out);
+        }
+    }
+
+    /// [`SparseHaar::point_texels_into`] below `node`, cell `(i, j)` of level `l`, whose
+    /// value so far is `value`.
+    fn point_fill(
+        &self,
+        node: u32,
+        l: u32,
+        (i, j): (usize, usize),
+        value: T,
+        depth: u32,
+        out: &mut [T],
+    ) {
+        let size = 1usize << (depth - l);
+        if node == NONE || l == depth {
+            let side = 1usize << depth;
+            for y in j * size..(j + 1) * size {
+                out[y * side + i * size..y * side + (i + 1) * size].fill(value);
+            }
+            return;
+        }
+        let n = &self.nodes[node as usize];
+        for (q, &child) in n.children.iter().enumerate() {
+            let below = value + detail_value(n.details, q, l);
+            let cell = (2 * i + (q & 1), 2 * j + (q >> 1));
+            self.point_fill(child, l + 1, cell, below, depth, out);
+        }
+    }
+
     /// The levels the tree holds nodes on: how many [`SparseHaar::eval`] may walk.
     pub(crate) fn stored_levels(&self) -> u32 {
         self.stored_depth(0, 0)
