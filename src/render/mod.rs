@@ -76,8 +76,8 @@ pub struct FinalSettings {
     /// BSDF importance: most splits of a base pixel.
     pub adaptive_levels: u32,
     /// Emitter samples per pixel at each rough hit, spread over a pixel's camera samples (as
-    /// many BSDF samples at glossy hits; half at diffuse hits whose light has a closed form;
-    /// see `LightShare`).
+    /// many BSDF samples at glossy hits; in large frames, half at diffuse hits whose light
+    /// has a closed form; see `LightShare`).
     pub light_samples: u32,
     /// Receivers smoother than this follow their specular chain.
     pub specular_below: f32,
@@ -391,6 +391,7 @@ pub fn render_final_cancellable(
         specular_below: settings.specular_below,
         chain_depth: settings.chain_depth,
         smooth_quarters: settings.gather == GatherMode::Paths,
+        halve_closed_form: w.min(h) >= primary::HALVED_FROM,
         seed: settings.seed,
     };
     // The centre hits of the tiles the crop touches and of the pixels around them: the edge

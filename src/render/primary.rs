@@ -91,9 +91,20 @@ pub struct PrimarySettings {
     /// receivers there (cbox-mirror, 256², 16 rays, denoised: relMSE 2.54e-3 with one,
     /// 2.27e-3 with four); the buffers' gathers interpolate instead.
     pub smooth_quarters: bool,
+    /// Whether a diffuse hit whose direct light has a closed form takes half its share of
+    /// light samples ([`LightShare::halved`]): in frames of [`HALVED_FROM`] pixels and more on
+    /// their shorter side.
+    pub halve_closed_form: bool,
     /// Seed of the per-pixel random sequences.
     pub seed: u64,
 }
+
+/// The smallest frame (shorter side, in pixels) in which a diffuse hit whose direct light has
+/// a closed form takes half its share of light samples. At 512² the halved shadow rays cost
+/// cbox-diffuse +0.5 % relMSE for a third of its primary pass; at 256², where a pixel's noise
+/// is not averaged with its neighbours', +1.6 % (docs/render.md). Decided by the whole frame,
+/// so that a crop samples as its frame does.
+pub const HALVED_FROM: u32 = 512;
 
 /// A branch of a specular chain (the reflection or refraction of a mirror or clear glass) is
 /// followed while its throughput, largest channel, exceeds this fraction of its camera
@@ -284,7 +295,8 @@ pub(crate) fn trace_primary(
             continue;
         }
         if within(settings.max_depth, chain + 2) {
-            out.direct += throughput * direct_light(ctx, light, &hit, &bsdf, view, sampler);
+            let hit_light = (light, settings.halve_closed_form);
+            out.direct += throughput * direct_light(ctx, hit_light, &hit, &bsdf, view, sampler);
         }
         if let Some(scale) = gather_scale.filter(|_| within(settings.max_depth, chain + 3)) {
             receivers.push(Receiver {
@@ -394,7 +406,7 @@ impl ShadowSet {
 /// power heuristic. Returns the outgoing radiance towards `view`.
 fn direct_light(
     ctx: &Tracer,
-    share: LightShare,
+    (share, halve_closed_form): (LightShare, bool),
     hit: &SurfaceHit,
     bsdf: &Bsdf,
     view: Vec3,
@@ -402,14 +414,14 @@ fn direct_light(
 ) -> Rgb {
     // A diffuse surface under a few triangles of constant radiance: their unshadowed light in
     // closed form, scaled by the share of it the shadow rays find unblocked (`shadowed`), from
-    // half the shadow rays.
+    // half the shadow rays in large frames.
     let closed_form = match bsdf {
         Bsdf::Diffuse(d) if view.z > 0.0 => ctx.emitters.closed_form().map(|light| {
             d.reflectance * std::f32::consts::FRAC_1_PI * light.irradiance(hit.p, hit.frame.n)
         }),
         _ => None,
     };
-    let share = if closed_form.is_some() {
+    let share = if closed_form.is_some() && halve_closed_form {
         share.halved()
     } else {
         share
@@ -640,7 +652,7 @@ mod tests {
             for light_samples in [2, 8] {
                 let share = LightShare::of_sample(light_samples, 0, 1, ([3, 5], 9));
                 let mut sampler = Sampler::new(1, 2, 3);
-                let l = direct_light(&ctx, share, &hit, &bsdf, view, &mut sampler);
+                let l = direct_light(&ctx, (share, true), &hit, &bsdf, view, &mut sampler);
                 let exact = Rgb::new(4.0, 3.0, 2.0) * (0.5 * std::f32::consts::FRAC_1_PI * e);
                 if under {
                     let rel = ((l - exact) / exact).abs().max_element();

@@ -120,8 +120,9 @@ pub struct RenderArgs {
     pub dense: bool,
     /// Emitter samples per pixel for direct light (at each rough hit; a pixel of many camera
     /// samples, on an edge or a mirror, shares them out, at least two per sample). A diffuse
-    /// hit under a few emitting triangles of constant radiance, and no other light, takes half
-    /// of them: its unshadowed light is exact, and they only say how much is blocked.
+    /// hit under a few emitting triangles of constant radiance, and no other light, has its
+    /// unshadowed light exact, and they only say how much is blocked: from 512 pixels on the
+    /// frame's shorter side, it takes half of them.
     #[arg(long, default_value_t = FinalSettings::default().light_samples)]
     pub light_samples: u32,
     /// Longest path in segments, as Mitsuba's max_depth (-1: everything the cache holds).
