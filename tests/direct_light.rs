@@ -129,17 +129,21 @@ fn irradiance(poly: &[Vec3], samples: u32) -> f32 {
     })
 }
 
-#[test]
-fn diffuse_surfel_under_a_rectangle_light() {
-    // 1 × 0.6, off-axis and tilted by 25° about x.
+/// A 1 × 0.6 rectangle light, off-axis and tilted by 25° about x, facing the origin.
+fn tilted_rectangle() -> Vec<Vec3> {
     let (c, s) = (25f32.to_radians().cos(), 25f32.to_radians().sin());
     let corner = |x: f32, y: f32| Vec3::new(0.3 + x, -0.2 + y * c, 1.0 + y * s);
-    let rect = facing_origin(vec![
+    facing_origin(vec![
         corner(-0.5, -0.3),
         corner(0.5, -0.3),
         corner(0.5, 0.3),
         corner(-0.5, 0.3),
-    ]);
+    ])
+}
+
+#[test]
+fn diffuse_surfel_under_a_rectangle_light() {
+    let rect = tilted_rectangle();
     let exact = polygon_irradiance(&rect, LE as f64);
     let ours = irradiance(&rect, 1024) as f64;
     eprintln!(
@@ -175,14 +179,7 @@ fn diffuse_surfel_under_a_disk_light() {
 /// none.
 #[test]
 fn closed_form_light_is_lamberts_formula() {
-    let (c, s) = (25f32.to_radians().cos(), 25f32.to_radians().sin());
-    let corner = |x: f32, y: f32| Vec3::new(0.3 + x, -0.2 + y * c, 1.0 + y * s);
-    let rect = facing_origin(vec![
-        corner(-0.5, -0.3),
-        corner(0.5, -0.3),
-        corner(0.5, 0.3),
-        corner(-0.5, 0.3),
-    ]);
+    let rect = tilted_rectangle();
     let gon = |n: usize| -> Vec<Vec3> {
         let ring = (0..n).map(|i| {
             let a = i as f32 / n as f32 * std::f32::consts::TAU;

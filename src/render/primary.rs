@@ -518,6 +518,24 @@ mod tests {
     use crate::bsdf::Diffuse;
     use crate::scene::{Emission, Material, Mesh, Scattering, Scene};
 
+    /// Asserts that `shares`, of one pixel with `light_samples`, take its first `total` light
+    /// points once each (one total and scramble among them, each at least
+    /// [`LightShare::LEAST`] or all there are); returns the total.
+    fn takes_each_point_once(shares: &[LightShare], light_samples: u32) -> u32 {
+        let (total, scramble) = (shares[0].total, shares[0].scramble);
+        let mut taken = vec![0; total as usize];
+        for share in shares {
+            assert_eq!((share.total, share.scramble), (total, scramble));
+            assert!(share.count >= LightShare::LEAST.min(light_samples));
+            for i in share.first..share.first + share.count {
+                taken[i as usize] += 1;
+            }
+        }
+        let label = format!("{light_samples} over {}", shares.len());
+        assert!(taken.iter().all(|&n| n == 1), "{label}");
+        total
+    }
+
     /// The shares of a pixel's camera samples, halved, still take the first half of its light
     /// points once each, every one at least [`LightShare::LEAST`].
     #[test]
@@ -528,19 +546,7 @@ mod tests {
                     .map(|s| LightShare::of_sample(light_samples, s, samples, ([1, 2], 7)))
                     .map(LightShare::halved)
                     .collect();
-                let total = shares[0].total;
-                let mut taken = vec![0; total as usize];
-                for share in &shares {
-                    assert_eq!(share.total, total);
-                    assert!(share.count >= LightShare::LEAST.min(light_samples));
-                    for i in share.first..share.first + share.count {
-                        taken[i as usize] += 1;
-                    }
-                }
-                assert!(
-                    taken.iter().all(|&n| n == 1),
-                    "{light_samples} over {samples}"
-                );
+                let total = takes_each_point_once(&shares, light_samples);
                 let whole = LightShare::of_sample(light_samples, 0, samples, ([1, 2], 7));
                 assert!(2 * total <= whole.total + samples * LightShare::LEAST);
             }
@@ -681,20 +687,9 @@ mod tests {
                             LightShare::of_sample(light_samples, s, samples, ([1, 2], shuffle))
                         })
                         .collect();
-                    let total = shares[0].total;
+                    let total = takes_each_point_once(&shares, light_samples);
                     assert!(total >= light_samples);
-                    let mut taken = vec![0; total as usize];
-                    for share in &shares {
-                        assert_eq!((share.total, share.scramble), (total, [1, 2]));
-                        assert!(share.count >= LightShare::LEAST.min(light_samples));
-                        for i in share.first..share.first + share.count {
-                            taken[i as usize] += 1;
-                        }
-                    }
-                    assert!(
-                        taken.iter().all(|&n| n == 1),
-                        "{light_samples} over {samples}"
-                    );
+                    assert_eq!(shares[0].scramble, [1, 2]);
                     orders.push(shares.iter().map(|s| s.first).collect::<Vec<_>>());
                 }
                 if samples > 1 {
