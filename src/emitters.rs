@@ -359,6 +359,12 @@ impl EmitterSampler {
 /// a clipping and Lambert's formula at every shading point that asks.
 pub const CLOSED_FORM_TRIANGLES: usize = 16;
 
+/// How near a point may lie to an emitting triangle's plane, relative to the coordinates'
+/// magnitude, and still see it ([`ClosedFormLight::irradiance`]): 25 times the rounding bound
+/// of a hit point (γ₇ ≈ 4.2e-7, `geometry::offset`), so that a point on the triangle's own
+/// surface is never taken for one above it.
+pub const COPLANAR: f32 = 1e-5;
+
 /// The unshadowed irradiance of a scene's emitters in closed form (Lambert's formula), where
 /// they are at most [`CLOSED_FORM_TRIANGLES`] triangles of constant radiance and nothing else
 /// emits (no texture on the emission, no punctual light, no environment).
@@ -368,8 +374,10 @@ pub struct ClosedFormLight {
 
 struct ClosedFormTriangle {
     corners: [Vec3; 3],
-    /// The front face's normal (counter-clockwise winding), not normalised.
+    /// The front face's unit normal (counter-clockwise winding).
     normal: Vec3,
+    /// The largest coordinate magnitude of its corners (for [`COPLANAR`]).
+    extent: f32,
     /// Radiance from the front and from the back face.
     front: Rgb,
     back: Rgb,
@@ -391,9 +399,18 @@ impl ClosedFormLight {
             }
             for t in &m.triangles {
                 let corners = t.map(|i| m.positions[i as usize]);
+                let normal = (corners[1] - corners[0]).cross(corners[2] - corners[0]);
+                if !(normal.length() > 0.0) {
+                    // No area: the emitter samples never pick it either.
+                    continue;
+                }
                 tris.push(ClosedFormTriangle {
                     corners,
-                    normal: (corners[1] - corners[0]).cross(corners[2] - corners[0]),
+                    normal: normal.normalize(),
+                    extent: corners
+                        .iter()
+                        .map(|c| c.abs().max_element())
+                        .fold(0.0, f32::max),
                     front: e.radiance,
                     back: if e.two_sided { e.radiance } else { Rgb::ZERO },
                 });
@@ -404,16 +421,21 @@ impl ClosedFormLight {
 
     /// The irradiance at `p` through the hemisphere around the unit normal `n`, as if nothing
     /// stood between it and the emitters: Σ L · (projected solid angle), each triangle's
-    /// radiance that of the face `p` sees.
+    /// radiance that of the face `p` sees. A triangle whose plane passes through `p` (to
+    /// within [`COPLANAR`]) sends nothing there, as the emitter samples find (their cosine at
+    /// the light is zero): a point on an emitting surface, or beside a light set flush into
+    /// a ceiling, where Lambert's formula is undefined (π inside the triangle, 0 outside,
+    /// and rounding decides between them).
     pub fn irradiance(&self, p: Vec3, n: Vec3) -> Rgb {
+        let at = p.abs().max_element();
         self.tris
             .iter()
             .map(|t| {
-                let radiance = if (p - t.corners[0]).dot(t.normal) > 0.0 {
-                    t.front
-                } else {
-                    t.back
-                };
+                let height = (p - t.corners[0]).dot(t.normal);
+                if height.abs() <= COPLANAR * at.max(t.extent) {
+                    return Rgb::ZERO;
+                }
+                let radiance = if height > 0.0 { t.front } else { t.back };
                 if radiance == Rgb::ZERO {
                     Rgb::ZERO
                 } else {

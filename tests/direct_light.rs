@@ -203,6 +203,20 @@ fn closed_form_light_is_lamberts_formula() {
             Rgb::ZERO
         );
     }
+    // On the light's own plane, inside one of its triangles and beside it (a light flush
+    // with a ceiling), facing its way or the other: nothing, as the emitter samples find, not
+    // Lambert's π (undefined there). A hair off the plane is still on it.
+    let light = ClosedFormLight::of(&scene(&rect, diffuse())).expect("a closed form");
+    let (u, v) = (rect[1] - rect[0], rect[3] - rect[0]);
+    let normal = u.cross(v).normalize();
+    for (a, b) in [(0.3, 0.4), (1.5, 0.5), (-0.5, -0.5)] {
+        let on = rect[0] + a * u + b * v;
+        for p in [on, on + normal * 1e-7, on - normal * 1e-7] {
+            for n in [normal, -normal] {
+                assert_eq!(light.irradiance(p, n), Rgb::ZERO, "at {p}, facing {n}");
+            }
+        }
+    }
     let mut textured = scene(&rect, diffuse());
     if let Some(e) = &mut textured.materials[1].emission {
         e.texture = Some(wpbgi::scene::TexRef {

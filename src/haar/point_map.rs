@@ -10,7 +10,7 @@
 //!
 //! A [`PointMap`] keeps such a map as its texels at the depth its tree reaches, wherever they
 //! take no more memory than the tree: one load instead of a walk. Each texel holds the sums the
-//! tree's walk makes to reach it, in the same order ([`SparseHaar::point_texels_into`]), and a
+//! tree's walk makes to reach it, in the same order (`SparseHaar::point_texels_into`), and a
 //! point's texel is found by the same arithmetic that picks the tree's quadrants (a
 //! multiplication by a power of two, exact, then truncation), so both forms give the same value
 //! bit for bit at every point (`tests/haar.rs`).

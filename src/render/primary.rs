@@ -92,7 +92,7 @@ pub struct PrimarySettings {
     /// 2.27e-3 with four); the buffers' gathers interpolate instead.
     pub smooth_quarters: bool,
     /// Whether a diffuse hit whose direct light has a closed form takes half its share of
-    /// light samples ([`LightShare::halved`]): in frames of [`HALVED_FROM`] pixels and more on
+    /// light samples (`LightShare::halved`): in frames of [`HALVED_FROM`] pixels and more on
     /// their shorter side.
     pub halve_closed_form: bool,
     /// Seed of the per-pixel random sequences.
