@@ -150,6 +150,9 @@ pub fn splat_cut_beyond(
         // node lying in the receiver's plane, facing its way, is that surface itself: it
         // sends nothing towards the receiver and does not occlude. Farther than
         // `straddle_radii` from a uniform buffer it joins the cut as any node does.
+        let dir = v / d;
+        // Where `dir` falls in the buffer, looked up at most once.
+        let mut located = None;
         if !mb.spherical && n.dot(v).abs() < sender.node.radius {
             if sender.holds_plane_of(p, n) {
                 continue;
@@ -158,7 +161,9 @@ pub fn splat_cut_beyond(
             // hardly weighs (faint pixels), which take them as a uniform buffer does.
             let far = d2 > (straddle_radii * sender.node.radius).powi(2);
             let open = !far
-                || (mb.is_refined() && !mb.locate(v / d).is_some_and(|at| mb.is_faint_at(&at)));
+                || (mb.is_refined()
+                    && !(*located.get_or_insert_with(|| mb.locate(dir)))
+                        .is_some_and(|at| mb.is_faint_at(&at)));
             if open {
                 stack.extend(sender.node.children.into_iter().filter(|&c| c != NO_NODE));
                 continue;
@@ -166,10 +171,9 @@ pub fn splat_cut_beyond(
         }
         // Against the largest pixel first: it rejects most nodes near the root without a
         // pixel lookup.
-        let dir = v / d;
         let base = mb.pixel_solid_angle();
         let accepted = if !senders.needs_leaves(j, mesh) && fits_pixel(senders, j, d2, dir, base) {
-            mb.locate(dir).filter(|at| {
+            located.unwrap_or_else(|| mb.locate(dir)).filter(|at| {
                 let pixel = mb.solid_angle_at(at);
                 pixel == base || fits_pixel(senders, j, d2, dir, pixel)
             })

@@ -437,13 +437,7 @@ impl Microbuffer {
     /// Whether `at` lies in a base pixel whose part of the receiver's reflected light is
     /// faint (see [`Microbuffer::refine_for_bsdf`]): a cut may stay coarse there.
     pub(crate) fn is_faint_at(&self, at: &Located) -> bool {
-        if self.faint.is_empty() {
-            return false;
-        }
-        let n = self.n;
-        let x = ((at.square.x * n as f32) as u32).min(n - 1);
-        let y = ((at.square.y * n as f32) as u32).min(n - 1);
-        self.faint[((u32::from(at.lower) * n + y) * n + x) as usize]
+        !self.faint.is_empty() && self.faint[self.base_cell(at.square, at.lower) as usize]
     }
 
     /// Where world direction `w` (unit) falls in the buffer, or `None` below the horizon of a
@@ -481,14 +475,18 @@ impl Microbuffer {
         Some((p.clamp(Vec2::ZERO, Vec2::ONE), lower))
     }
 
+    /// The base cell (and base pixel: the base grid numbers both alike) holding point `p` of
+    /// a hemisphere.
+    fn base_cell(&self, p: Vec2, lower: bool) -> u32 {
+        let n = self.n;
+        let x = ((p.x * n as f32) as u32).min(n - 1);
+        let y = ((p.y * n as f32) as u32).min(n - 1);
+        (u32::from(lower) * n + y) * n + x
+    }
+
     /// The leaf cell holding point `p` of a hemisphere.
     fn cell_at(&self, p: Vec2, lower: bool) -> u32 {
-        let n = self.n;
-        let (x, y) = (
-            ((p.x * n as f32) as u32).min(n - 1),
-            ((p.y * n as f32) as u32).min(n - 1),
-        );
-        let mut c = (u32::from(lower) * n + y) * n + x;
+        let mut c = self.base_cell(p, lower);
         while self.cells[c as usize].children != NO_CELL {
             let cell = &self.cells[c as usize];
             let mid = cell.corner + Vec2::splat(0.5 * cell.side);

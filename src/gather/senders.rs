@@ -762,7 +762,6 @@ fn sender_nodes(
     Ok(nodes)
 }
 
-/// A node's stored map (G or H), decoded; `None` where the node stores none.
 /// `maps` laid out for the gather's point lookups ([`PointMap`]).
 fn point_maps<T: Coefficient + Send>(maps: Vec<SparseHaar<T>>) -> Vec<PointMap<T>> {
     maps.into_par_iter().map(PointMap::from).collect()
@@ -777,6 +776,7 @@ fn optional_point_maps<T: Coefficient + Send>(
         .collect()
 }
 
+/// A node's stored map (G or H), decoded; `None` where the node stores none.
 type StoredMap<T> = Result<Option<SparseHaar<T>>, CacheError>;
 
 /// Map `index` of `cache`'s pool, or `None` for [`NO_MAP`].

@@ -43,6 +43,16 @@ fn kept_subtrees<T: Coefficient>(h: &Haar2d<T>, cut: f32) -> Vec<bool> {
     alive
 }
 
+/// Set the texels of cell `(i, j)` of level `l` to `value`, in `out`: the texels of level
+/// `levels` (`2^levels` a side, row-major).
+fn fill_cell<T: Copy>(out: &mut [T], levels: u32, (l, i, j): (u32, usize, usize), value: T) {
+    let size = 1usize << (levels - l);
+    let side = 1usize << levels;
+    for y in j * size..(j + 1) * size {
+        out[y * side + i * size..y * side + (i + 1) * size].fill(value);
+    }
+}
+
 #[derive(Clone, Debug, PartialEq)]
 struct Node<T> {
     details: Details<T>,
@@ -303,12 +313,7 @@ impl<T: Coefficient> SparseHaar<T> {
     fn decode_to(&self, stop: u32, out: &mut [T], node: u32, l: u32, (i, j): (usize, usize), m: T) {
         if node == NONE || l == stop {
             // m is the mean over 4^(stop − l) texels, scaled by 2^−l: each texel is m 2^l.
-            let v = m * (1u32 << l) as f32;
-            let size = 1usize << (stop - l);
-            let side = 1usize << stop;
-            for y in j * size..(j + 1) * size {
-                out[y * side + i * size..y * side + (i + 1) * size].fill(v);
-            }
+            fill_cell(out, stop, (l, i, j), m * (1u32 << l) as f32);
             return;
         }
         let n = &self.nodes[node as usize];
@@ -355,12 +360,8 @@ impl<T: Coefficient> SparseHaar<T> {
         depth: u32,
         out: &mut [T],
     ) {
-        let size = 1usize << (depth - l);
         if node == NONE || l == depth {
-            let side = 1usize << depth;
-            for y in j * size..(j + 1) * size {
-                out[y * side + i * size..y * side + (i + 1) * size].fill(value);
-            }
+            fill_cell(out, depth, (l, i, j), value);
             return;
         }
         let n = &self.nodes[node as usize];
