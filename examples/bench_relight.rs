@@ -1,7 +1,9 @@
 //! Relighting against baking again (issue 25): for each edit kind on cbox-rough and
 //! cbox-glossy, the seconds `bake::relight` takes from a cache of the unedited scene, beside a
 //! fresh bake of the edited scene with the same settings (the default preset, automatic
-//! bounces), their ratio, how the relight went (rescaled or baked again), and the relMSE
+//! bounces), their ratio, from the cache alone and with the transport kept beside it (`wpbgi
+//! bake --keep-transport`), how the relight went with it (rescaled, re-solved from the
+//! transport, or baked again), and the relMSE
 //! between the final renders (256², default settings) of the relit and the fresh caches. The
 //! issue asks for a tenth of the bake's time at relMSE 1e-3.
 //!
@@ -9,8 +11,10 @@
 
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
+use wpbgi::bake::bounce::kept::beside;
+use wpbgi::bake::bounce::TransportHandoff;
 use wpbgi::bake::relight::{relight, Relighting};
-use wpbgi::bake::BakeSettings;
+use wpbgi::bake::{bake_with_transport, BakeSettings};
 use wpbgi::cache::store::BakedCache;
 use wpbgi::image::error_against;
 use wpbgi::render::FinalSettings;
@@ -55,13 +59,19 @@ fn main() -> Result<()> {
     };
     let settings = BakeSettings::default();
     let render = FinalSettings::default();
-    println!(
-        "{:<12} {:<20} {:>9} {:>9} {:>7} {:>10}  how",
-        "scene", "edit", "bake s", "relight s", "ratio", "relMSE"
-    );
     for name in scenes {
         let original = Scene::load(&data(&format!("{name}.gltf")))?;
-        let (_, cache, _) = bake_cache(&original, &settings, &format!("relight-{name}"))?;
+        let (path, cache, kept_seconds) = bake_keeping_transport(&original, &settings, name)?;
+        let transport = beside(&path);
+        let transport_bytes = std::fs::metadata(&transport)?.len();
+        println!(
+            "{name}: bake with --keep-transport {kept_seconds:.2} s, transport {} MB",
+            transport_bytes / 1_000_000
+        );
+        println!(
+            "{:<12} {:<20} {:>9} {:>9} {:>7} {:>9} {:>7} {:>10}  how (with the transport)",
+            "scene", "edit", "bake s", "alone s", "ratio", "kept s", "ratio", "relMSE"
+        );
         let camera = original.camera(None, 256, 256)?;
         let mut edits: Vec<(&str, String)> =
             EDITS.iter().map(|(k, e)| (*k, e.to_string())).collect();
@@ -69,16 +79,29 @@ fn main() -> Result<()> {
         for (kind, text) in edits {
             let edit: Edit = text.parse()?;
             let output = std::env::temp_dir().join(format!("wpbgi-bench-relit-{name}.wpc"));
-            let start = Instant::now();
-            let relit = relight(
-                &original,
-                &cache,
-                std::slice::from_ref(&edit),
-                &output,
-                &|_, _| {},
-                &AtomicBool::new(false),
-            )?;
-            let relight_seconds = start.elapsed().as_secs_f64();
+            let relit = |keep: bool| -> Result<(Relighting, f64)> {
+                // The cache alone (as before the transport was kept), then with it.
+                let aside = transport.with_extension("aside");
+                if !keep {
+                    std::fs::rename(&transport, &aside)?;
+                }
+                let start = Instant::now();
+                let relit = relight(
+                    &original,
+                    &cache,
+                    std::slice::from_ref(&edit),
+                    &output,
+                    &|_, _| {},
+                    &AtomicBool::new(false),
+                );
+                let seconds = start.elapsed().as_secs_f64();
+                if !keep {
+                    std::fs::rename(&aside, &transport)?;
+                }
+                Ok((relit?.how, seconds))
+            };
+            let (_, alone_seconds) = relit(false)?;
+            let (how, kept_seconds) = relit(true)?;
             let edited = original.edited(&[edit])?;
             let (_, fresh, bake_seconds) =
                 bake_cache(&edited, &settings, &format!("relight-{name}-fresh"))?;
@@ -86,15 +109,45 @@ fn main() -> Result<()> {
             let (a, _) = timed_render(&edited, &relit_cache, &camera, &render)?;
             let (b, _) = timed_render(&edited, &fresh, &camera, &render)?;
             let (_, rel) = error_against(&a.beauty, &b.beauty).ok_or("image sizes differ")?;
-            let how = match relit.how {
+            let how = match how {
                 Relighting::Rescaled { .. } => "rescaled".to_string(),
+                Relighting::Resolved { .. } => "re-solved from the kept transport".to_string(),
                 Relighting::Rebaked { why } => format!("baked again: {why}"),
             };
             println!(
-                "{name:<12} {kind:<20} {bake_seconds:>9.2} {relight_seconds:>9.2} {:>7.3} {rel:>10.2e}  {how}",
-                relight_seconds / bake_seconds
+                "{name:<12} {kind:<20} {bake_seconds:>9.2} {alone_seconds:>9.2} {:>7.3} {kept_seconds:>9.2} {:>7.3} {rel:>10.2e}  {how}",
+                alone_seconds / bake_seconds,
+                kept_seconds / bake_seconds
             );
         }
     }
     Ok(())
+}
+
+/// Bake `scene` and write its cache with the transport beside it (`wpbgi bake
+/// --keep-transport`): the cache's path, the cache, and the seconds of the whole.
+fn bake_keeping_transport(
+    scene: &Scene,
+    settings: &BakeSettings,
+    name: &str,
+) -> Result<(std::path::PathBuf, BakedCache, f64)> {
+    let start = Instant::now();
+    let mut handoff = TransportHandoff {
+        keep: true,
+        ..TransportHandoff::default()
+    };
+    let baked = bake_with_transport(
+        scene,
+        settings,
+        &|_, _| {},
+        &AtomicBool::new(false),
+        &mut handoff,
+    )?;
+    let path = std::env::temp_dir().join(format!("wpbgi-bench-relight-{name}.wpc"));
+    wpbgi::bake::store::save(&path, scene, &baked)?;
+    if let Some(kept) = handoff.kept {
+        kept.write(&beside(&path))?;
+    }
+    let seconds = start.elapsed().as_secs_f64();
+    Ok((path.clone(), BakedCache::read(&path, None)?, seconds))
 }

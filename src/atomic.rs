@@ -23,6 +23,24 @@ pub fn write_atomically(
     path: &Path,
     write: impl FnOnce(&Path) -> std::result::Result<(), String>,
 ) -> Result<()> {
+    replace(path, write, true)
+}
+
+/// [`write_atomically`] without syncing the file before the rename, for a file that can be
+/// made again and is checked when read (a kept transport): after a power cut it may be
+/// empty or short under its name, never a mixture of two versions while the system runs.
+pub fn write_atomically_unsynced(
+    path: &Path,
+    write: impl FnOnce(&Path) -> std::result::Result<(), String>,
+) -> Result<()> {
+    replace(path, write, false)
+}
+
+fn replace(
+    path: &Path,
+    write: impl FnOnce(&Path) -> std::result::Result<(), String>,
+    sync: bool,
+) -> Result<()> {
     let tmp = temporary_path(path).ok_or_else(|| Error::Output {
         path: path.to_path_buf(),
         reason: "not a file name".into(),
@@ -35,9 +53,11 @@ pub fn write_atomically(
         let _ = std::fs::remove_file(&tmp);
         return Err(output_error(e));
     }
-    std::fs::File::open(&tmp)
-        .and_then(|f| f.sync_all())
-        .map_err(|e| output_error(e.to_string()))?;
+    if sync {
+        std::fs::File::open(&tmp)
+            .and_then(|f| f.sync_all())
+            .map_err(|e| output_error(e.to_string()))?;
+    }
     std::fs::rename(&tmp, path).map_err(|e| {
         let _ = std::fs::remove_file(&tmp);
         output_error(e.to_string())

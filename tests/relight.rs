@@ -4,8 +4,10 @@
 mod common;
 
 use std::sync::atomic::AtomicBool;
+use wpbgi::bake::bounce::kept::beside;
+use wpbgi::bake::bounce::TransportHandoff;
 use wpbgi::bake::relight::{relight, Relighting};
-use wpbgi::bake::{BakeSettings, Quality};
+use wpbgi::bake::{bake_with_transport, BakeSettings, Quality};
 use wpbgi::cache::store::BakedCache;
 use wpbgi::image::error_against;
 use wpbgi::scene::edit::Edit;
@@ -135,6 +137,121 @@ fn an_edit_of_scattering_bakes_again_and_says_why() {
         std::fs::read(&output).expect("relit") == std::fs::read(&fresh).expect("fresh"),
         "the re-baked cache is the edited scene's bake"
     );
+}
+
+/// Bake `scene` keeping its transport beside the cache at `path` (what `wpbgi bake
+/// --keep-transport` writes), and open the cache.
+fn bake_keeping_transport(scene: &Scene, path: &std::path::Path) -> BakedCache {
+    let mut handoff = TransportHandoff {
+        keep: true,
+        ..TransportHandoff::default()
+    };
+    let baked = bake_with_transport(
+        scene,
+        &settings(),
+        &|_, _| {},
+        &AtomicBool::new(false),
+        &mut handoff,
+    )
+    .expect("bake");
+    wpbgi::bake::store::save(path, scene, &baked).expect("save");
+    let kept = handoff.kept.expect("the bounces hand out their transport");
+    kept.write(&beside(path)).expect("write the transport");
+    BakedCache::read(path, None).expect("read")
+}
+
+/// The bytes of a fresh bake of `scene` with the tests' settings, written to `path`.
+fn fresh_bake_bytes(scene: &Scene, path: &std::path::Path) -> Vec<u8> {
+    let baked = wpbgi::bake::bake(scene, &settings(), &|_, _| {}).expect("bake");
+    wpbgi::bake::store::save(path, scene, &baked).expect("save");
+    std::fs::read(path).expect("fresh")
+}
+
+/// With the transport kept beside the cache, edits of a reflectance, a conductor's tint and a
+/// dielectric's transmittance re-solve the bounces from it instead of gathering again, and
+/// the relit cache is a fresh bake of the edited scene byte for byte (the transport is
+/// geometry; replaying it is the same arithmetic as recording it). A roughness edit that
+/// changes a BSDF operator's grid, and a damaged or truncated transport file, are refused
+/// with the reason, and the edited scene is baked again, byte for byte as before.
+#[test]
+fn a_kept_transport_re_solves_scattering_edits_as_a_fresh_bake_would() {
+    let dir = scratch("transport");
+    let original = Scene::load(&common::mitsuba_data("cbox-rough.gltf")).expect("scene");
+    let cache = bake_keeping_transport(&original, &dir.join("original.wpc"));
+    let transport = std::fs::read(beside(&dir.join("original.wpc"))).expect("transport");
+    let damaged = {
+        let mut bytes = transport.clone();
+        let middle = bytes.len() / 2;
+        bytes[middle] ^= 0x10;
+        bytes
+    };
+    let truncated = transport[..transport.len() - 4096].to_vec();
+    for (k, (edit, file, expected)) in [
+        ("white.reflectance*=0.8", &transport, None),
+        (
+            "gold-a0.2.specular_reflectance=0.9,0.6,0.3",
+            &transport,
+            None,
+        ),
+        ("glass-a0.1.specular_transmittance=0.7", &transport, None),
+        // α 0.3: the operator's grid goes from 16² to 8² texels a hemisphere.
+        (
+            "gold-a0.2.alpha*=1.5",
+            &transport,
+            Some("recorded for other geometry, receivers or BSDF grids"),
+        ),
+        ("white.reflectance*=0.8", &damaged, Some("checksum fails")),
+        ("white.reflectance*=0.8", &truncated, Some("checksum fails")),
+    ]
+    .into_iter()
+    .enumerate()
+    {
+        std::fs::write(beside(&dir.join("original.wpc")), file).expect("transport");
+        let edits = edits(&[edit]);
+        let output = dir.join(format!("relit-{k}.wpc"));
+        let relit = relight(
+            &original,
+            &cache,
+            &edits,
+            &output,
+            &|_, _| {},
+            &AtomicBool::new(false),
+        )
+        .expect("relight");
+        match (&relit.how, expected) {
+            (Relighting::Resolved { kept_direct, .. }, None) => {
+                assert!(
+                    beside(&output).exists(),
+                    "{edit}: the relit cache keeps the transport beside it"
+                );
+                // Every surfel but the edited material's keeps its direct light.
+                let edited_material = &edits[0].target;
+                let edited = cache
+                    .surfels
+                    .iter()
+                    .filter(|s| {
+                        let material = original.meshes[s.mesh as usize].material;
+                        original.materials[material].name == *edited_material
+                    })
+                    .count();
+                assert_eq!(kept_direct.0 + edited, kept_direct.1, "{edit}");
+                assert!(edited > 0, "{edit}");
+            }
+            (Relighting::Rebaked { why }, Some(reason)) => {
+                assert!(
+                    why.contains("was not used") && why.contains(reason),
+                    "{edit}: {why}"
+                )
+            }
+            (how, _) => panic!("{edit} ({k}): expected {expected:?}, got {how:?}"),
+        }
+        let edited = original.edited(&edits).expect("edited");
+        assert!(
+            std::fs::read(&output).expect("relit")
+                == fresh_bake_bytes(&edited, &dir.join(format!("fresh-{k}.wpc"))),
+            "{edit} ({k}): the relit cache is the edited scene's bake"
+        );
+    }
 }
 
 /// Edits that name nothing, or a parameter the target lacks, or a bad value, are refused in a

@@ -287,6 +287,10 @@ fn relight(
             out.set_item("how", "rescaled")?;
             out.set_item("factor", factor.to_array().to_vec())?;
         }
+        wpbgi::bake::relight::Relighting::Resolved { why, .. } => {
+            out.set_item("how", "resolved")?;
+            out.set_item("why", why)?;
+        }
         wpbgi::bake::relight::Relighting::Rebaked { why } => {
             out.set_item("how", "rebaked")?;
             out.set_item("why", why)?;

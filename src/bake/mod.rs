@@ -12,6 +12,6 @@ pub mod store;
 
 pub use baked::Baked;
 pub use direct::DirectLight;
-pub use pipeline::{bake, bake_cancellable};
+pub use pipeline::{bake, bake_cancellable, bake_with_transport};
 pub use plan::Plan;
 pub use settings::{BakeSettings, Quality};

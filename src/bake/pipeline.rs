@@ -11,16 +11,18 @@ use super::lightcuts::LightTree;
 use super::plan::Plan;
 use super::settings::BakeSettings;
 use crate::accel::Accel;
-use crate::bake::bounce::add_bounces;
 use crate::bake::bounce::bsdf_operator::{quantised_alpha, Operators, SurfelOperator};
+use crate::bake::bounce::kept::KeptDirect;
+use crate::bake::bounce::{add_bounces, TransportHandoff};
 use crate::bsdf::Bsdf;
+use crate::cache::store::bake_hash;
 use crate::emitters::EmitterSampler;
 use crate::error::{Error, Result};
 use crate::haar::{texel_directions, Haar2d, SparseHaar};
 use crate::progress::Progress;
 use crate::scene::{LightKind, Scene};
 use crate::spectrum::Rgb;
-use crate::surfels::coding::encode;
+use crate::surfels::coding::{encode, CodedTree};
 use crate::surfels::radiance::{
     intensity_of, map_levels, mesh_flags, projected_area_map, SurfelRadiance, PROJECTED_AREA_LEVELS,
 };
@@ -123,6 +125,25 @@ pub fn bake_cancellable(
     progress: Progress,
     cancel: &AtomicBool,
 ) -> Result<Baked> {
+    bake_with_transport(
+        scene,
+        settings,
+        progress,
+        cancel,
+        &mut TransportHandoff::default(),
+    )
+}
+
+/// [`bake_cancellable`], its bounces replaying a transport kept from an earlier bake where
+/// `handoff` hands in one whose key is this bake's, and handing theirs out where it asks
+/// (see [`TransportHandoff`]; the cache is the same either way).
+pub fn bake_with_transport(
+    scene: &Scene,
+    settings: &BakeSettings,
+    progress: Progress,
+    cancel: &AtomicBool,
+    handoff: &mut TransportHandoff,
+) -> Result<Baked> {
     let stop = || crate::error::check_cancel(cancel);
     settings.validate()?;
     scene.check_renderable()?;
@@ -150,7 +171,28 @@ pub fn bake_cancellable(
 
     let t = Instant::now();
     progress("surfels", 0.0);
-    let surfels = sample_surfels_with_density(scene, settings.points, settings.seed, &density);
+    // A relight whose edits leave the geometry and the emitters alone takes the surfels
+    // with their direct light (below) from the bake it relights: the same surfels.
+    let kept_direct = handoff
+        .reuse
+        .as_ref()
+        .and_then(|t| t.direct.as_ref())
+        .zip(handoff.direct_holds.as_deref())
+        .filter(|(d, holds)| {
+            d.radiance.len() == d.surfels.len()
+                && d.emitted.len() == d.surfels.len()
+                && holds.len() == scene.materials.len()
+                && d.surfels.iter().all(|s| {
+                    scene
+                        .meshes
+                        .get(s.mesh as usize)
+                        .is_some_and(|m| (s.triangle as usize) < m.triangles.len())
+                })
+        });
+    let surfels = match kept_direct {
+        Some((d, _)) => d.surfels.clone(),
+        None => sample_surfels_with_density(scene, settings.points, settings.seed, &density),
+    };
     progress("surfels", 1.0);
     stage("surfels", t);
     stop()?;
@@ -175,11 +217,23 @@ pub fn bake_cancellable(
         b.alpha().is_some_and(|a| a < NEAR_SPECULAR_ALPHA)
     });
     let done = std::sync::atomic::AtomicUsize::new(0);
+    // A relight's kept direct light, per surfel where the edits left its material alone.
+    let kept_at = |i: usize, s: &Surfel| {
+        kept_direct.and_then(|(d, holds)| {
+            holds[scene.meshes[s.mesh as usize].material]
+                .then(|| (d.radiance[i].clone(), d.emitted[i]))
+        })
+    };
+    let reused = std::sync::atomic::AtomicUsize::new(0);
     let (radiance, emitted): (Vec<SurfelRadiance>, Vec<Rgb>) = surfels
         .par_iter()
         .enumerate()
         .map(|(i, s)| {
             stop()?;
+            if let Some(kept) = kept_at(i, s) {
+                reused.fetch_add(1, Ordering::Relaxed);
+                return Ok(kept);
+            }
             let (bsdf, op) = (&bsdfs[i], near_specular[i].as_ref());
             let at = (s, shading_normals[i]);
             let r = surfel_radiance(scene, &direct, at, i as u64, (bsdf, op), settings.tau);
@@ -192,6 +246,16 @@ pub fn bake_cancellable(
         .collect::<Result<_>>()?;
     progress("direct light", 1.0);
     stage("direct light", t);
+    handoff.direct_reused = reused.into_inner();
+    if let Some(t) = handoff.reuse.as_mut() {
+        t.direct = None; // taken where it held; the bounces need the links alone
+    }
+    let direct_kept = handoff.keep.then(|| KeptDirect {
+        key: bake_hash(scene, &settings.to_json()),
+        surfels: surfels.clone(),
+        radiance: radiance.clone(),
+        emitted: emitted.clone(),
+    });
 
     let t = Instant::now();
     let tree = SurfelTree::build(&surfels);
@@ -214,13 +278,19 @@ pub fn bake_cancellable(
     plan.json["map_resolution"] = (1u32 << levels).into();
     let mesh_flags = mesh_flags(scene);
     progress("coding", 0.0);
-    let coded = encode(
-        &tree,
-        &intensity_of(&surfels, &mesh_flags, &radiance),
-        levels,
-        eps,
-        settings.tau,
-    );
+    // The bounces read the tree's geometry alone and code it again for the total light at
+    // the end: only a direct-only cache keeps the direct light's coding.
+    let coded = if settings.bounces.max > 0 {
+        CodedTree::uncoded(&tree, eps)
+    } else {
+        encode(
+            &tree,
+            &intensity_of(&surfels, &mesh_flags, &radiance),
+            levels,
+            eps,
+            settings.tau,
+        )
+    };
     let area_leaf =
         |i: u32| SparseHaar::compress_below(&projected_area_map(&surfels[i as usize]), 0.0);
     let projected = encode(&tree, &area_leaf, PROJECTED_AREA_LEVELS, eps, settings.tau);
@@ -252,8 +322,12 @@ pub fn bake_cancellable(
             &settings.bounces,
             progress,
             cancel,
+            handoff,
         )?);
         baked.timings.push(("bounces", t.elapsed().as_secs_f64()));
+        if let Some(kept) = handoff.kept.as_mut() {
+            kept.direct = direct_kept;
+        }
     }
     Ok(baked)
 }

@@ -195,6 +195,19 @@ fn sum_below<T: Coefficient + Send + Sync>(
     g
 }
 
+impl<T> CodedTree<T> {
+    /// A coding of `tree` at split level `split_level` that stores no map yet: what a bake
+    /// whose bounces code the tree for their light holds until they do.
+    pub fn uncoded(tree: &SurfelTree, split_level: u32) -> Self {
+        CodedTree {
+            split_level,
+            nodes: (0..tree.nodes.len())
+                .map(|_| NodeCoding::default())
+                .collect(),
+        }
+    }
+}
+
 impl<T: Coefficient> CodedTree<T> {
     /// Node `j`'s function rebuilt from what is stored (see the module docs).
     pub fn reconstruct(&self, tree: &SurfelTree, j: u32) -> Option<Haar2d<T>> {

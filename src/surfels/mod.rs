@@ -35,8 +35,9 @@ use std::hash::{BuildHasherDefault, Hasher};
 /// Candidates drawn per surfel kept (Yuksel's recommendation is 3–5).
 pub(crate) const CANDIDATES_PER_SURFEL: usize = 5;
 
-/// A surface sample.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// A surface sample (plain data, 44 bytes: a kept transport stores surfels as they are).
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
 pub struct Surfel {
     /// Its centre, on the surface.
     pub p: Vec3,

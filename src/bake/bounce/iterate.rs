@@ -35,6 +35,7 @@
 //! the same code, so the cache does not depend on the budget.
 
 use super::bsdf_operator::SurfelOperator;
+use super::kept::{KeptTransport, TransportHandoff, TransportKey};
 use super::receivers::Receivers;
 use super::report::{BounceReport, TransportReport};
 use super::settings::{default_transport_budget, BounceSettings};
@@ -113,6 +114,7 @@ pub fn add_bounces(
     settings: &BounceSettings,
     progress: Progress,
     cancel: &AtomicBool,
+    handoff: &mut TransportHandoff,
 ) -> Result<BounceReport> {
     let mut report = BounceReport::default();
     if settings.max == 0 || baked.surfels.is_empty() {
@@ -195,52 +197,36 @@ pub fn add_bounces(
         .transport_budget
         .unwrap_or_else(default_transport_budget)
         .saturating_sub(incident_bytes);
-    let mut index = SlotIndex::new(&slots);
-    let mut kept: Vec<Vec<ReceiverLinks>> = Vec::new();
-    let mut transport = TransportReport {
-        receivers: receivers.count(),
-        slots: slots.total(),
-        incident_bytes,
-        ..TransportReport::default()
-    };
-    let mut full = false;
-    for (c, chunk) in groups.chunks(RECORD_CHUNK).enumerate() {
-        // The flag is looked at per group: a chunk takes up to a second or so.
-        let recorded: Vec<Vec<ReceiverLinks>> = chunk
-            .par_iter()
-            .map_init(Scratch::default, |scratch, group| {
-                if cancel.load(Ordering::Relaxed) {
-                    return Vec::new();
-                }
-                let links = gather.record(group, scratch);
-                for l in &links {
-                    l.mark(&index);
-                }
-                links
-            })
-            .collect();
-        if cancel.load(Ordering::Relaxed) {
-            return Err(Error::Cancelled);
-        }
-        for links in recorded {
-            let bytes: u64 = links.iter().map(|l| l.bytes() as u64).sum();
-            transport.bytes_unbounded += bytes;
-            full = full || transport.bytes + bytes > budget;
-            if !full {
-                transport.bytes += bytes;
-                kept.push(links);
+    let key = transport_key(baked, &ops, &kinds, settings, &slots);
+    let reused = handoff.reuse.take().and_then(|t| {
+        let checked = t.check(&key, &slots, &groups, |l, read| {
+            let i = l.surfel as usize;
+            let directional = ops[i].as_ref().map(|op| {
+                let levels = map_levels(&bsdfs[i]).unwrap_or(3);
+                (op.shared.size(), 1usize << (2 * levels))
+            });
+            l.check(directional, read)
+        });
+        match checked {
+            Ok(()) => Some(t),
+            Err(why) => {
+                handoff.refused = Some(why);
+                None
             }
         }
-        let done = ((c + 1) * RECORD_CHUNK).min(groups.len()) as f32 / groups.len() as f32;
-        progress("bounces", 0.9 * done / settings.max as f32);
-    }
-    index.freeze();
-    kept.par_iter_mut()
-        .flatten()
-        .for_each(|l| l.compact(&index));
-    transport.kept_groups = kept.len();
-    transport.regathered_groups = groups.len() - kept.len();
-    transport.read_slots = index.len();
+    });
+    handoff.replayed = reused.is_some();
+    let (index, kept, transport) = match reused {
+        Some(t) => (SlotIndex::from_words(t.words), t.kept, t.report),
+        None => record_transport(
+            &gather,
+            &groups,
+            (&slots, &receivers),
+            budget,
+            incident_bytes,
+            (settings.max, progress, cancel),
+        )?,
+    };
     report.transport = transport;
     let regathered = &groups[kept.len()..];
     let read = read_nodes(&slots, &index, &baked.tree);
@@ -319,10 +305,122 @@ pub fn add_bounces(
         .zip(&light)
         .for_each(|(t, l)| *t = add_scaled(t, l, 1.0, tau));
     baked.coded = coded_for(baked);
+    if handoff.keep {
+        handoff.kept = Some(KeptTransport {
+            key,
+            report: report.transport,
+            words: index.words(),
+            kept,
+            direct: None,
+        });
+    }
     report.final_seconds = start.elapsed().as_secs_f64();
     progress("bounces", 1.0);
     baked.plan.json["bounces"] = report.to_json();
     Ok(report)
+}
+
+/// The first bounce's recording: every group's links, kept in group order while they fit
+/// `budget` bytes (the groups past it gather again in every bounce), their slots compact, with
+/// the index of the slots they read and the transport's size. `bounces` scales the progress
+/// reported (the recording is most of the first of them).
+fn record_transport(
+    gather: &Gather,
+    groups: &[Cluster],
+    (slots, receivers): (&Slots, &Receivers),
+    budget: u64,
+    incident_bytes: u64,
+    (bounces, progress, cancel): (u32, Progress, &AtomicBool),
+) -> Result<(SlotIndex, Vec<Vec<ReceiverLinks>>, TransportReport)> {
+    let mut index = SlotIndex::new(slots);
+    let mut kept: Vec<Vec<ReceiverLinks>> = Vec::new();
+    let mut transport = TransportReport {
+        receivers: receivers.count(),
+        slots: slots.total(),
+        incident_bytes,
+        ..TransportReport::default()
+    };
+    let mut full = false;
+    for (c, chunk) in groups.chunks(RECORD_CHUNK).enumerate() {
+        // The flag is looked at per group: a chunk takes up to a second or so.
+        let recorded: Vec<Vec<ReceiverLinks>> = chunk
+            .par_iter()
+            .map_init(Scratch::default, |scratch, group| {
+                if cancel.load(Ordering::Relaxed) {
+                    return Vec::new();
+                }
+                let links = gather.record(group, scratch);
+                for l in &links {
+                    l.mark(&index);
+                }
+                links
+            })
+            .collect();
+        if cancel.load(Ordering::Relaxed) {
+            return Err(Error::Cancelled);
+        }
+        for links in recorded {
+            let bytes: u64 = links.iter().map(|l| l.bytes() as u64).sum();
+            transport.bytes_unbounded += bytes;
+            full = full || transport.bytes + bytes > budget;
+            if !full {
+                transport.bytes += bytes;
+                kept.push(links);
+            }
+        }
+        let done = ((c + 1) * RECORD_CHUNK).min(groups.len()) as f32 / groups.len() as f32;
+        progress("bounces", 0.9 * done / bounces as f32);
+    }
+    index.freeze();
+    kept.par_iter_mut()
+        .flatten()
+        .for_each(|l| l.compact(&index));
+    transport.kept_groups = kept.len();
+    transport.regathered_groups = groups.len() - kept.len();
+    transport.read_slots = index.len();
+    Ok((index, kept, transport))
+}
+
+/// The hash of everything the transport of `baked`'s bounces depends on: the surfels (the
+/// scene's geometry as the bake sampled it, so also the tree), their shading normals and
+/// whether they gather spherically, each receiver's kind (its map's levels, its BSDF
+/// operator's grid), the tree's map levels, the slots, and the settings that choose the
+/// receivers and their groups. Reflectances, tints, transmittances and emission are not in
+/// it: they change no link.
+fn transport_key(
+    baked: &Baked,
+    ops: &[Option<SurfelOperator>],
+    kinds: &[Option<u32>],
+    settings: &BounceSettings,
+    slots: &Slots,
+) -> TransportKey {
+    let mut h = xxhash_rust::xxh3::Xxh3::new();
+    h.update(&super::kept::VERSION.to_le_bytes());
+    for (i, s) in baked.surfels.iter().enumerate() {
+        let n = baked.shading_normals[i];
+        for x in [
+            s.p.x, s.p.y, s.p.z, s.n.x, s.n.y, s.n.z, s.area, s.b.x, s.b.y,
+        ] {
+            h.update(&x.to_le_bytes());
+        }
+        for x in [n.x, n.y, n.z] {
+            h.update(&x.to_le_bytes());
+        }
+        let (side, hemispheres) = ops[i]
+            .as_ref()
+            .map_or((0, 0), |op| (op.shared.n, op.shared.hemispheres));
+        let two_sided = u32::from(baked.bsdfs[i].is_two_sided());
+        let kind = kinds[i].map_or(u32::MAX, |l| l);
+        for x in [s.mesh, s.triangle, side, hemispheres, two_sided, kind] {
+            h.update(&x.to_le_bytes());
+        }
+    }
+    h.update(&baked.plan.map_levels.to_le_bytes());
+    h.update(&slots.total().to_le_bytes());
+    h.update(&(settings.receiver_stride as u64).to_le_bytes());
+    h.update(&[u8::from(settings.view_tree)]);
+    h.update(&baked.settings.tau.to_le_bytes());
+    h.digest128().to_le_bytes()
 }
 
 /// The tree of `baked` as senders of geometry alone ([`Senders::geometry_of`]), from its

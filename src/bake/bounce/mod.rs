@@ -2,6 +2,7 @@
 
 pub mod bsdf_operator;
 pub mod iterate;
+pub mod kept;
 pub mod receivers;
 pub mod report;
 pub mod settings;
@@ -10,5 +11,6 @@ pub mod view_tree;
 
 pub use bsdf_operator::BsdfOperator;
 pub use iterate::add_bounces;
+pub use kept::{KeptTransport, TransportHandoff};
 pub use report::{BounceReport, TransportReport};
 pub use settings::BounceSettings;

@@ -164,6 +164,24 @@ impl SlotIndex {
         }
     }
 
+    /// A frozen index whose bitmap is `words` (as [`SlotIndex::words`] gave them).
+    pub(super) fn from_words(words: Vec<u64>) -> SlotIndex {
+        let mut index = SlotIndex {
+            words: words.into_iter().map(AtomicU64::new).collect(),
+            ranks: Vec::new(),
+        };
+        index.freeze();
+        index
+    }
+
+    /// The bitmap of read slots, 64 a word.
+    pub(super) fn words(&self) -> Vec<u64> {
+        self.words
+            .iter()
+            .map(|w| w.load(Ordering::Relaxed))
+            .collect()
+    }
+
     fn mark(&self, slot: u32) {
         self.words[(slot / 64) as usize].fetch_or(1 << (slot % 64), Ordering::Relaxed);
     }
@@ -237,10 +255,11 @@ impl SlotIndex {
 }
 
 /// One (slot, weight) term of a receiver's light.
-#[derive(Clone, Copy, Debug, PartialEq)]
-struct Term {
-    slot: u32,
-    w: f32,
+#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
+pub(super) struct Term {
+    pub(super) slot: u32,
+    pub(super) w: f32,
 }
 
 /// The lists a thread's [`ReceiverLinks::of_buffer`] works in, kept from receiver to receiver
@@ -367,6 +386,54 @@ impl ReceiverLinks {
     pub(crate) fn with_map_texels(mut self, texels: Vec<u16>) -> ReceiverLinks {
         self.map_texels = texels.into_boxed_slice();
         self
+    }
+
+    /// Links from their parts (as [`ReceiverLinks::parts`] gives them), for a kept
+    /// transport read back ([`super::kept`]), which checks them before they are used.
+    pub(super) fn from_parts(
+        surfel: u32,
+        pixel_ends: Box<[u32]>,
+        terms: Box<[Term]>,
+        map_texels: Box<[u16]>,
+    ) -> ReceiverLinks {
+        ReceiverLinks {
+            surfel,
+            pixel_ends,
+            terms,
+            map_texels,
+        }
+    }
+
+    /// The pixels' ends, the terms and the map texels.
+    pub(super) fn parts(&self) -> (&[u32], &[Term], &[u16]) {
+        (&self.pixel_ends, &self.terms, &self.map_texels)
+    }
+
+    /// Whether these links can be replayed for a receiver that is directional with a grid
+    /// of `pixels` texels and a sphere map of `map_texels` (`None`: a diffuse one) against
+    /// `read` read slots: every index in range, the pixels' ends in order. The reason, when
+    /// not.
+    pub(super) fn check(
+        &self,
+        directional: Option<(usize, usize)>,
+        read: usize,
+    ) -> Result<(), String> {
+        let (pixels, texels) = directional.unwrap_or((0, 0));
+        if self.pixel_ends.len() != pixels || self.map_texels.len() != texels {
+            return Err(format!(
+                "surfel {}'s links are not of its kind of receiver",
+                self.surfel
+            ));
+        }
+        let ends_in_order = self.pixel_ends.windows(2).all(|w| w[0] <= w[1])
+            && self
+                .pixel_ends
+                .last()
+                .is_none_or(|&end| end as usize == self.terms.len());
+        if !ends_in_order || self.terms.iter().any(|t| t.slot as usize >= read) {
+            return Err(format!("surfel {}'s links are out of range", self.surfel));
+        }
+        Ok(())
     }
 
     /// Per texel of a directional receiver's outgoing map, its operator texel or

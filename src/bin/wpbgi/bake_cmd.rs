@@ -6,8 +6,10 @@ use serde_json::{json, Value};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
+use wpbgi::bake::bounce::kept::beside;
 use wpbgi::bake::bounce::BounceSettings;
-use wpbgi::bake::{bake_cancellable, BakeSettings, Quality};
+use wpbgi::bake::bounce::TransportHandoff;
+use wpbgi::bake::{bake_with_transport, BakeSettings, Quality};
 use wpbgi::cache::store::BakedCache;
 
 /// `--quality`: a bake preset, by its name; `--help` gives each one's surfels and light
@@ -104,6 +106,12 @@ pub struct BakeArgs {
     /// Default: 40 % of the machine's memory.
     #[arg(long, value_name = "MB")]
     transport_memory: Option<u64>,
+    /// Also write the bounces' recorded light transport beside the cache (OUTPUT.transport,
+    /// several times the cache's size): `wpbgi relight` then re-solves the bounces for an
+    /// edited reflectance, tint, transmittance or emission from it instead of baking again
+    /// (docs/relight.md). Only the groups kept in --transport-memory are written.
+    #[arg(long)]
+    keep_transport: bool,
     /// About one surfel in N gathers indirect light in each bounce; the others blend the
     /// light of their nearest gathering neighbours on the same surface (indirect light varies
     /// slowly, and the final render gathers it again). 1: every surfel gathers.
@@ -229,12 +237,30 @@ pub fn bake_command(a: BakeArgs) -> Result<()> {
             b.update(stage, f);
         }
     };
-    crate::interrupt::guard_outputs([a.output.clone()]);
-    let baked = bake_cancellable(&scene, &settings, &progress, crate::interrupt::flag())?;
+    let transport_path = beside(&a.output);
+    crate::interrupt::guard_outputs([a.output.clone(), transport_path.clone()]);
+    let mut handoff = TransportHandoff {
+        keep: a.keep_transport,
+        ..TransportHandoff::default()
+    };
+    let baked = bake_with_transport(
+        &scene,
+        &settings,
+        &progress,
+        crate::interrupt::flag(),
+        &mut handoff,
+    )?;
     bar.as_ref().map(crate::StagedBar::finish);
     let coefficients = baked.coded.stored_counts().1;
     let t = Instant::now();
     wpbgi::bake::store::save(&a.output, &scene, &baked)?;
+    let transport_bytes = match handoff.kept.take() {
+        Some(kept) => {
+            kept.write(&transport_path)?;
+            std::fs::metadata(&transport_path).map_or(0, |m| m.len())
+        }
+        None => 0,
+    };
     // The cache holds what the inputs determine; times and memory are reported here.
     let mut stats = wpbgi::bake::store::cache_stats(&baked);
     let bytes = std::fs::metadata(&a.output).map(|m| m.len()).unwrap_or(0);
@@ -261,6 +287,9 @@ pub fn bake_command(a: BakeArgs) -> Result<()> {
         });
     }
     stats["operators"] = json!(baked.operators.len());
+    if a.keep_transport {
+        stats["transport_file"] = json!({"path": transport_path, "bytes": transport_bytes});
+    }
     let peak = wpbgi::compare::memory::peak();
     let per_surfel = bytes as f64 / baked.surfels.len().max(1) as f64;
     let total = start.elapsed().as_secs_f64();
@@ -324,6 +353,18 @@ pub fn bake_command(a: BakeArgs) -> Result<()> {
                 baked.surfels.len(),
                 t.read_slots,
                 t.slots,
+            );
+        }
+        if a.keep_transport {
+            say!(
+                "  transport kept in {} ({} MB){}",
+                transport_path.display(),
+                transport_bytes / 1_000_000,
+                if transport_bytes == 0 {
+                    ": none, the bake has no bounces"
+                } else {
+                    ""
+                }
             );
         }
     }

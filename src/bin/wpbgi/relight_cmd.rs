@@ -38,7 +38,10 @@ pub fn relight_command(a: RelightArgs) -> Result<()> {
             b.update(stage, f);
         }
     };
-    crate::interrupt::guard_outputs([a.output.clone()]);
+    crate::interrupt::guard_outputs([
+        a.output.clone(),
+        wpbgi::bake::bounce::kept::beside(&a.output),
+    ]);
     let relit = relight(
         &scene,
         &cache,
@@ -50,6 +53,10 @@ pub fn relight_command(a: RelightArgs) -> Result<()> {
     bar.as_ref().map(crate::StagedBar::finish);
     let (how, detail) = match &relit.how {
         Relighting::Rescaled { factor } => ("rescaled", json!({"factor": factor.to_array()})),
+        Relighting::Resolved { why, kept_direct } => (
+            "resolved",
+            json!({"why": why, "kept_direct_surfels": kept_direct.0, "surfels": kept_direct.1}),
+        ),
         Relighting::Rebaked { why } => ("rebaked", json!({"why": why})),
     };
     if a.json {

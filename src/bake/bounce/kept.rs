@@ -1,0 +1,650 @@
+//! The bounces' recorded transport kept beside a cache (`wpbgi bake --keep-transport`), so that
+//! `wpbgi relight` can re-solve the bounces for edited materials and lights without gathering
+//! again (docs/relight.md).
+//!
+//! The transport ([`super::transport`]) is geometry: the receivers' links to the senders'
+//! slots and the directional receivers' map texels, fixed by the surfels, the tree, the
+//! microbuffers' resolutions and the BSDF operators' grids, none of which a reflectance, a
+//! tint, a transmittance or an emission changes. The bounces' first pass records it (most of
+//! their time: 3.8 of cbox-rough's 5.0 s at the default preset); a bake that is handed a kept
+//! transport whose [`TransportKey`] is its own replays it instead, and writes the same cache
+//! byte for byte as a bake that recorded it.
+//!
+//! The file (`CACHE.transport`, [`beside`]) is little-endian:
+//!
+//! | bytes | what |
+//! |---|---|
+//! | 16 | magic `WPBGI-TRANSPORT\0` |
+//! | 4 | format version ([`VERSION`]) |
+//! | 16 | the key: a hash of everything the transport depends on |
+//! | 8 × 8 | the [`TransportReport`]: bytes, bytes unbounded, kept and regathered groups, receivers, read slots, slots, incident bytes |
+//! | 8 + 8 × w | the read slots' bitmap: w words |
+//! | 8 | receiver groups kept |
+//! | per group | its receivers (u32), then per receiver: surfel, pixel ends, terms and map texels counts (u32 each), the pixel ends (u32), the terms (u32 slot, f32 weight), the map texels (u16) |
+//! | 1 | 1 when the direct light follows, else 0 |
+//! | 16 + 8 + 56 × n + … | the direct light: its key, n surfels (44 bytes each: position, normal, area, mesh, triangle, barycentrics), their emission (3 × f32), then per surfel 0 and an RGB (3 × f32) or 1 and a wavelet map as the cache stores one |
+//! | 8 | XXH3-64 of every byte before it |
+//!
+//! Anything that does not check out (magic, version, length, checksum, a count or an index
+//! out of range, receivers that are not the bake's) is refused with a reason, and the bake
+//! records the transport as if none had been handed to it.
+
+use super::report::TransportReport;
+use super::transport::{ReceiverLinks, SlotIndex, Slots, Term};
+use crate::atomic::write_atomically_unsynced;
+use crate::error::Result;
+use crate::gather::fpbgi::Cluster;
+use crate::haar::SparseHaar;
+use crate::spectrum::Rgb;
+use crate::surfels::radiance::SurfelRadiance;
+use crate::surfels::Surfel;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use xxhash_rust::xxh3::Xxh3;
+
+/// The file's first bytes.
+const MAGIC: &[u8; 16] = b"WPBGI-TRANSPORT\0";
+
+/// The format this build writes and reads.
+pub const VERSION: u32 = 1;
+
+/// The hash of everything a bake's transport depends on (see [`super::iterate`]'s
+/// `transport_key`): equal keys, equal transports.
+pub type TransportKey = [u8; 16];
+
+/// The transport file kept beside `cache`: its name with `.transport` appended.
+pub fn beside(cache: &Path) -> PathBuf {
+    let mut name = cache.as_os_str().to_owned();
+    name.push(".transport");
+    PathBuf::from(name)
+}
+
+/// A bake's recorded transport, out of memory or into it.
+pub struct KeptTransport {
+    /// What it is the transport of.
+    pub key: TransportKey,
+    /// Its size, as the bake that recorded it reported it.
+    pub report: TransportReport,
+    /// The read slots' bitmap ([`SlotIndex`]'s words).
+    pub(super) words: Vec<u64>,
+    /// The links of the receiver groups kept, in group order, their slots compact.
+    pub(super) kept: Vec<Vec<ReceiverLinks>>,
+    /// The bake's direct light, where it was handed out with the transport.
+    pub direct: Option<KeptDirect>,
+}
+
+/// A bake's direct light per surfel (emission included, as the direct pass leaves it), for a
+/// relight to take where an edit leaves a surfel's material and every emitter as they were:
+/// it is what the direct pass would compute there again, bit for bit (each surfel's light
+/// samples are seeded by its number).
+#[derive(Clone, Debug, PartialEq)]
+pub struct KeptDirect {
+    /// The content hash of the bake it was computed in ([`bake_hash`](crate::cache::store::bake_hash)
+    /// of the scene and settings): a relight takes it only from beside that bake's cache.
+    pub key: [u8; 16],
+    /// The surfels (what the edited scene's sampling would draw again: they depend on
+    /// geometry alone).
+    pub surfels: Vec<Surfel>,
+    /// Each surfel's outgoing radiance after the direct pass.
+    pub radiance: Vec<SurfelRadiance>,
+    /// Each surfel's emission, included in `radiance`.
+    pub emitted: Vec<Rgb>,
+}
+
+/// What a bake's bounces do with a kept transport: replay one handed in, hand theirs out.
+#[derive(Default)]
+pub struct TransportHandoff {
+    /// A transport kept from an earlier bake, replayed if its key is this bake's.
+    pub reuse: Option<KeptTransport>,
+    /// Whether to hand this bake's transport out (in `kept`), with its direct light.
+    pub keep: bool,
+    /// Per material of the scene, whether its surfels may take their direct light from
+    /// `reuse`'s (the edits left the material and every emitter as they were); `None`: none
+    /// may.
+    pub direct_holds: Option<Vec<bool>>,
+    /// Surfels whose direct light was taken from `reuse`.
+    pub direct_reused: usize,
+    /// The transport handed out, when `keep` was asked.
+    pub kept: Option<KeptTransport>,
+    /// Whether `reuse` was replayed.
+    pub replayed: bool,
+    /// Why `reuse` was not replayed, when it was handed in and was not.
+    pub refused: Option<String>,
+}
+
+impl KeptTransport {
+    /// The links of the groups kept, checked against the bake's: the same key, the slots'
+    /// bitmap of their size, every group's receivers its members in order, and every index
+    /// in range (see [`check_links`]). The reason, when they are not.
+    pub(super) fn check(
+        &self,
+        key: &TransportKey,
+        slots: &Slots,
+        groups: &[Cluster],
+        check_links: impl Fn(&ReceiverLinks, usize) -> std::result::Result<(), String>,
+    ) -> std::result::Result<(), String> {
+        if self.key != *key {
+            return Err("it was recorded for other geometry, receivers or BSDF grids".into());
+        }
+        if self.words.len() as u64 != slots.total().div_ceil(64) {
+            return Err("its bitmap of read slots is not of this bake's size".into());
+        }
+        if self.kept.len() > groups.len() {
+            return Err("it holds more receiver groups than the bake has".into());
+        }
+        let read = SlotIndex::from_words(self.words.clone()).len();
+        for (links, group) in self.kept.iter().zip(groups) {
+            if links.len() != group.members.len()
+                || links
+                    .iter()
+                    .zip(&group.members)
+                    .any(|(l, &m)| l.surfel != m)
+            {
+                return Err("its receivers are not the bake's".into());
+            }
+            for l in links {
+                check_links(l, read)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Write to `path` atomically (not synced: the file can be made again, and is checked
+    /// when read).
+    pub fn write(&self, path: &Path) -> Result<()> {
+        write_atomically_unsynced(path, |tmp| {
+            let stream = || -> std::io::Result<()> {
+                let file = std::fs::File::create(tmp)?;
+                let mut out = Hashed {
+                    inner: std::io::BufWriter::with_capacity(1 << 20, file),
+                    hash: Xxh3::new(),
+                };
+                self.stream(&mut out)?;
+                let digest = out.hash.digest();
+                out.inner.write_all(&digest.to_le_bytes())?;
+                out.inner.flush()
+            };
+            stream().map_err(|e| e.to_string())
+        })
+    }
+
+    fn stream(&self, out: &mut impl Write) -> std::io::Result<()> {
+        out.write_all(MAGIC)?;
+        out.write_all(&VERSION.to_le_bytes())?;
+        out.write_all(&self.key)?;
+        for x in report_fields(&self.report) {
+            out.write_all(&x.to_le_bytes())?;
+        }
+        out.write_all(&(self.words.len() as u64).to_le_bytes())?;
+        let mut bytes = Vec::new();
+        put(&mut bytes, &self.words);
+        out.write_all(&bytes)?;
+        out.write_all(&(self.kept.len() as u64).to_le_bytes())?;
+        for group in &self.kept {
+            bytes.clear();
+            bytes.extend_from_slice(&(group.len() as u32).to_le_bytes());
+            for l in group {
+                let (ends, terms, texels) = l.parts();
+                put(
+                    &mut bytes,
+                    &[l.surfel, len32(ends), len32(terms), len32(texels)],
+                );
+                put(&mut bytes, ends);
+                put(&mut bytes, terms);
+                put(&mut bytes, texels);
+            }
+            out.write_all(&bytes)?;
+        }
+        match &self.direct {
+            None => out.write_all(&[0])?,
+            Some(d) => {
+                bytes.clear();
+                bytes.push(1);
+                bytes.extend_from_slice(&d.key);
+                bytes.extend_from_slice(&(d.radiance.len() as u64).to_le_bytes());
+                put(&mut bytes, &d.surfels);
+                for e in &d.emitted {
+                    put(&mut bytes, &e.to_array());
+                }
+                out.write_all(&bytes)?;
+                for r in &d.radiance {
+                    bytes.clear();
+                    match r {
+                        SurfelRadiance::Rgb(c) => {
+                            bytes.push(0);
+                            put(&mut bytes, &c.to_array());
+                        }
+                        SurfelRadiance::Map(m) => {
+                            bytes.push(1);
+                            m.write_to(&mut bytes);
+                        }
+                    }
+                    out.write_all(&bytes)?;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Read the transport file `path`; the reason, in words, when it cannot be used.
+    pub fn read(path: &Path) -> std::result::Result<KeptTransport, String> {
+        let file = std::fs::File::open(path).map_err(|e| e.to_string())?;
+        // SAFETY: the map is read-only and dropped before returning; a file truncated under
+        // it by another process is the one hazard, as for the cache's own map.
+        let map = unsafe { memmap2::Mmap::map(&file) }.map_err(|e| e.to_string())?;
+        parse(&map)
+    }
+}
+
+/// A transport from the bytes of its file.
+fn parse(bytes: &[u8]) -> std::result::Result<KeptTransport, String> {
+    let body_len = bytes
+        .len()
+        .checked_sub(8)
+        .ok_or("it is shorter than its header")?;
+    let (body, trailer) = bytes.split_at(body_len);
+    let mut r = Reader { bytes: body };
+    if r.take(16)? != MAGIC {
+        return Err("it is not a wpbgi transport file".into());
+    }
+    let version = r.u32()?;
+    if version != VERSION {
+        return Err(format!(
+            "it has format {version}, this build reads {VERSION}"
+        ));
+    }
+    let stored = u64::from_le_bytes(trailer.try_into().map_err(|_| "no checksum")?);
+    if xxhash_rust::xxh3::xxh3_64(body) != stored {
+        return Err("its checksum fails (damaged or truncated)".into());
+    }
+    let key: TransportKey = r.take(16)?.try_into().map_err(|_| "short key")?;
+    let mut fields = [0u64; 8];
+    for f in &mut fields {
+        *f = r.u64()?;
+    }
+    let report = report_of(fields);
+    let words = r.count(8)?;
+    let words: Vec<u64> = get(r.take(words * 8)?);
+    let groups = r.count(4)?;
+    let mut kept = Vec::with_capacity(groups);
+    for _ in 0..groups {
+        let members = r.u32()? as usize;
+        let mut group = Vec::with_capacity(members.min(r.bytes.len() / 16));
+        for _ in 0..members {
+            let surfel = r.u32()?;
+            let (ends, terms, texels) = (r.u32()?, r.u32()?, r.u32()?);
+            let ends: Vec<u32> = get(r.take(ends as usize * 4)?);
+            let terms: Vec<Term> = get(r.take(terms as usize * 8)?);
+            let texels: Vec<u16> = get(r.take(texels as usize * 2)?);
+            group.push(ReceiverLinks::from_parts(
+                surfel,
+                ends.into(),
+                terms.into(),
+                texels.into(),
+            ));
+        }
+        kept.push(group);
+    }
+    let direct = match r.take(1)?[0] {
+        0 => None,
+        1 => Some(parse_direct(&mut r)?),
+        _ => return Err("its direct light is marked neither absent nor present".into()),
+    };
+    if !r.bytes.is_empty() {
+        return Err("it has bytes past its direct light".into());
+    }
+    Ok(KeptTransport {
+        key,
+        report,
+        words,
+        kept,
+        direct,
+    })
+}
+
+/// Bytes of a [`Surfel`] in the file (and in memory).
+const SURFEL_BYTES: usize = std::mem::size_of::<Surfel>();
+
+/// The direct light's part of a transport file.
+fn parse_direct(r: &mut Reader) -> std::result::Result<KeptDirect, String> {
+    let key: TransportKey = r.take(16)?.try_into().map_err(|_| "short key")?;
+    let count = r.count(SURFEL_BYTES + 12 + 1 + 12)?;
+    let surfels: Vec<Surfel> = get(r.take(count * SURFEL_BYTES)?);
+    let emitted: Vec<f32> = get(r.take(count * 12)?);
+    let emitted = emitted
+        .chunks_exact(3)
+        .map(|c| Rgb::new(c[0], c[1], c[2]))
+        .collect();
+    let mut radiance = Vec::with_capacity(count);
+    for _ in 0..count {
+        radiance.push(match r.take(1)?[0] {
+            0 => {
+                let c: Vec<f32> = get(r.take(12)?);
+                SurfelRadiance::Rgb(Rgb::new(c[0], c[1], c[2]))
+            }
+            1 => {
+                let (map, used) =
+                    SparseHaar::read_from(r.bytes).ok_or("a surfel's direct light is damaged")?;
+                r.take(used)?;
+                SurfelRadiance::Map(map)
+            }
+            _ => return Err("a surfel's direct light is of no kind".into()),
+        });
+    }
+    Ok(KeptDirect {
+        key,
+        surfels,
+        radiance,
+        emitted,
+    })
+}
+
+/// A cursor over a file's bytes that refuses to read past them.
+struct Reader<'a> {
+    bytes: &'a [u8],
+}
+
+impl<'a> Reader<'a> {
+    fn take(&mut self, n: usize) -> std::result::Result<&'a [u8], String> {
+        if n > self.bytes.len() {
+            return Err("it is truncated".into());
+        }
+        let (head, rest) = self.bytes.split_at(n);
+        self.bytes = rest;
+        Ok(head)
+    }
+
+    fn u32(&mut self) -> std::result::Result<u32, String> {
+        let b = self.take(4)?;
+        Ok(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+    }
+
+    fn u64(&mut self) -> std::result::Result<u64, String> {
+        let b = self.take(8)?;
+        Ok(u64::from_le_bytes([
+            b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7],
+        ]))
+    }
+
+    /// A count of items of at least `item` bytes each, refused where the bytes left could
+    /// not hold them (so no allocation follows a damaged count).
+    fn count(&mut self, item: usize) -> std::result::Result<usize, String> {
+        let n = self.u64()?;
+        match usize::try_from(n) {
+            Ok(n) if n.saturating_mul(item) <= self.bytes.len() => Ok(n),
+            _ => Err("it is truncated".into()),
+        }
+    }
+}
+
+/// Values whose every field is a little-endian number of 4 or 8 bytes (or 2), as the file
+/// holds them.
+trait LittleEndian: bytemuck::Pod {
+    /// The value with its fields' bytes swapped (big-endian machines only).
+    fn swapped(self) -> Self;
+}
+
+impl LittleEndian for u16 {
+    fn swapped(self) -> Self {
+        self.swap_bytes()
+    }
+}
+
+impl LittleEndian for u32 {
+    fn swapped(self) -> Self {
+        self.swap_bytes()
+    }
+}
+
+impl LittleEndian for f32 {
+    fn swapped(self) -> Self {
+        f32::from_bits(self.to_bits().swap_bytes())
+    }
+}
+
+impl LittleEndian for u64 {
+    fn swapped(self) -> Self {
+        self.swap_bytes()
+    }
+}
+
+impl LittleEndian for Surfel {
+    fn swapped(self) -> Self {
+        let f = |x: f32| x.swapped();
+        Surfel {
+            p: self.p.map(f),
+            n: self.n.map(f),
+            area: f(self.area),
+            mesh: self.mesh.swap_bytes(),
+            triangle: self.triangle.swap_bytes(),
+            b: self.b.map(f),
+        }
+    }
+}
+
+impl LittleEndian for Term {
+    fn swapped(self) -> Self {
+        Term {
+            slot: self.slot.swap_bytes(),
+            w: f32::from_bits(self.w.to_bits().swap_bytes()),
+        }
+    }
+}
+
+/// Append `values` to `bytes` in the file's byte order.
+fn put<T: LittleEndian>(bytes: &mut Vec<u8>, values: &[T]) {
+    if cfg!(target_endian = "little") {
+        bytes.extend_from_slice(bytemuck::cast_slice(values));
+    } else {
+        for v in values {
+            bytes.extend_from_slice(bytemuck::bytes_of(&v.swapped()));
+        }
+    }
+}
+
+/// The values whose bytes, in the file's byte order, are `bytes` (a whole number of them,
+/// at any alignment).
+fn get<T: LittleEndian>(bytes: &[u8]) -> Vec<T> {
+    let values: Vec<T> = bytemuck::pod_collect_to_vec(bytes);
+    if cfg!(target_endian = "little") {
+        values
+    } else {
+        values.into_iter().map(T::swapped).collect()
+    }
+}
+
+/// A length that the bounces keep below 2³² (slots and pixels are numbered in 32 bits).
+fn len32<T>(items: &[T]) -> u32 {
+    items.len() as u32
+}
+
+fn report_fields(r: &TransportReport) -> [u64; 8] {
+    [
+        r.bytes,
+        r.bytes_unbounded,
+        r.kept_groups as u64,
+        r.regathered_groups as u64,
+        r.receivers as u64,
+        r.read_slots as u64,
+        r.slots,
+        r.incident_bytes,
+    ]
+}
+
+fn report_of(f: [u64; 8]) -> TransportReport {
+    TransportReport {
+        bytes: f[0],
+        bytes_unbounded: f[1],
+        kept_groups: f[2] as usize,
+        regathered_groups: f[3] as usize,
+        receivers: f[4] as usize,
+        read_slots: f[5] as usize,
+        slots: f[6],
+        incident_bytes: f[7],
+    }
+}
+
+/// A writer that hashes what goes through it.
+struct Hashed<W: Write> {
+    inner: W,
+    hash: Xxh3,
+}
+
+impl<W: Write> Write for Hashed<W> {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        let n = self.inner.write(buf)?;
+        self.hash.update(&buf[..n]);
+        Ok(n)
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        self.inner.flush()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two groups: a diffuse receiver, and a directional one of four pixels and a
+    /// four-texel map.
+    fn sample() -> KeptTransport {
+        let term = |slot, w| Term { slot, w };
+        KeptTransport {
+            key: [7; 16],
+            report: TransportReport {
+                bytes: 1,
+                bytes_unbounded: 2,
+                kept_groups: 2,
+                regathered_groups: 3,
+                receivers: 4,
+                read_slots: 5,
+                slots: 6,
+                incident_bytes: 7,
+            },
+            words: vec![0b1011, u64::MAX],
+            kept: vec![
+                vec![ReceiverLinks::from_parts(
+                    3,
+                    Box::default(),
+                    vec![term(0, 0.5), term(2, -1.25)].into(),
+                    Box::default(),
+                )],
+                vec![ReceiverLinks::from_parts(
+                    9,
+                    vec![1, 1, 2, 3].into(),
+                    vec![term(1, 1.0), term(0, 2.0), term(4, f32::MIN_POSITIVE)].into(),
+                    vec![0, 3, u16::MAX, 1].into(),
+                )],
+            ],
+            direct: Some(KeptDirect {
+                key: [3; 16],
+                surfels: vec![
+                    Surfel {
+                        p: glam::Vec3::new(1.0, 2.0, 3.0),
+                        n: glam::Vec3::Z,
+                        area: 0.25,
+                        mesh: 7,
+                        triangle: 11,
+                        b: glam::Vec2::new(0.125, 0.5),
+                    };
+                    2
+                ],
+                radiance: vec![
+                    SurfelRadiance::Rgb(Rgb::new(0.5, 1.0, -0.0)),
+                    SurfelRadiance::Map(SparseHaar::compress(
+                        &crate::haar::Haar2d::forward(
+                            &(0..16).map(|i| Rgb::splat(i as f32)).collect::<Vec<_>>(),
+                            4,
+                        ),
+                        0.0,
+                    )),
+                ],
+                emitted: vec![Rgb::ZERO, Rgb::new(1.0, 2.0, 3.0)],
+            }),
+        }
+    }
+
+    fn file_bytes(t: &KeptTransport) -> Vec<u8> {
+        let mut bytes = Vec::new();
+        t.stream(&mut bytes).expect("in memory");
+        let digest = xxhash_rust::xxh3::xxh3_64(&bytes);
+        bytes.extend_from_slice(&digest.to_le_bytes());
+        bytes
+    }
+
+    #[test]
+    fn a_transport_reads_back_as_written() {
+        let t = sample();
+        let back = parse(&file_bytes(&t)).expect("parse");
+        assert_eq!(
+            (back.key, back.report, &back.words),
+            (t.key, t.report, &t.words)
+        );
+        assert_eq!(back.direct, t.direct);
+        assert_eq!(back.kept.len(), t.kept.len());
+        for (a, b) in back.kept.iter().flatten().zip(t.kept.iter().flatten()) {
+            assert_eq!((a.surfel, a.parts()), (b.surfel, b.parts()));
+        }
+    }
+
+    /// Every prefix of a file is refused, and so is every byte changed, without a panic: a
+    /// change the checksum misses (none here) would still meet the counts' and the links'
+    /// checks.
+    #[test]
+    fn damaged_files_are_refused_in_words() {
+        let bytes = file_bytes(&sample());
+        for len in 0..bytes.len() {
+            assert!(parse(&bytes[..len]).is_err(), "a prefix of {len} bytes");
+        }
+        for i in 0..bytes.len() {
+            let mut damaged = bytes.clone();
+            damaged[i] ^= 0x40;
+            let why = parse(&damaged).err().unwrap_or_default();
+            assert!(!why.is_empty(), "byte {i} changed");
+        }
+        // A count past the file's end, with a checksum that matches it, is refused before
+        // anything is allocated for it.
+        let mut bytes = Vec::new();
+        sample().stream(&mut bytes).expect("in memory");
+        let words_count = 16 + 4 + 16 + 64;
+        bytes[words_count..words_count + 8].copy_from_slice(&u64::MAX.to_le_bytes());
+        let digest = xxhash_rust::xxh3::xxh3_64(&bytes);
+        bytes.extend_from_slice(&digest.to_le_bytes());
+        assert_eq!(parse(&bytes).err().as_deref(), Some("it is truncated"));
+    }
+
+    /// The links' own check: slots past the read ones, pixel ends out of order or past the
+    /// terms, and links of the wrong kind of receiver are refused.
+    #[test]
+    fn links_out_of_range_are_refused() {
+        let t = sample();
+        let (diffuse, directional) = (&t.kept[0][0], &t.kept[1][0]);
+        assert!(diffuse.check(None, 3).is_ok());
+        assert!(diffuse.check(None, 2).is_err(), "slot 2 of 2 read");
+        assert!(diffuse.check(Some((4, 4)), 3).is_err(), "not directional");
+        assert!(directional.check(Some((4, 4)), 5).is_ok());
+        assert!(directional.check(Some((4, 16)), 5).is_err(), "map size");
+        assert!(directional.check(None, 5).is_err(), "not diffuse");
+        let unordered = ReceiverLinks::from_parts(
+            9,
+            vec![2, 1, 2, 3].into(),
+            directional.parts().1.into(),
+            directional.parts().2.into(),
+        );
+        assert!(
+            unordered.check(Some((4, 4)), 5).is_err(),
+            "ends out of order"
+        );
+        let short = ReceiverLinks::from_parts(
+            9,
+            vec![1, 1, 2, 2].into(),
+            directional.parts().1.into(),
+            directional.parts().2.into(),
+        );
+        assert!(
+            short.check(Some((4, 4)), 5).is_err(),
+            "ends short of the terms"
+        );
+    }
+}
