@@ -70,19 +70,10 @@ fn scaling_every_emitter_rescales_the_cache_as_a_fresh_bake_would_be() {
             .unwrap_or_default();
         assert!(rescales.contains("grey or coloured"), "{rescales}");
         let edits = edits(&[edit]);
-        let relit = relight(
-            &original,
-            &cache,
-            &edits,
-            &path("relit"),
-            &|_, _| {},
-            &AtomicBool::new(false),
-        )
-        .expect("relight");
+        let how = relit_to(&original, &cache, &edits, &path("relit"));
         assert!(
-            matches!(relit.how, Relighting::Rescaled { .. }),
-            "{name}: {:?}",
-            relit.how
+            matches!(how, Relighting::Rescaled { .. }),
+            "{name}: {how:?}"
         );
         let edited = original.edited(&edits).expect("edited");
         let relit_cache =
@@ -107,16 +98,7 @@ fn an_edit_of_scattering_bakes_again_and_says_why() {
     let cache = common::bake_to_cache(&original, &settings(), &dir.join("original.wpc"));
     let edits = edits(&["white.reflectance=0.5", "gold-a0.2.alpha=0.02"]);
     let output = dir.join("relit.wpc");
-    let relit = relight(
-        &original,
-        &cache,
-        &edits,
-        &output,
-        &|_, _| {},
-        &AtomicBool::new(false),
-    )
-    .expect("relight");
-    match &relit.how {
+    match &relit_to(&original, &cache, &edits, &output) {
         Relighting::Rebaked { why } => {
             assert!(why.contains("\"white\""), "{why}");
             // α 0.02 needs the finest maps, 64², where the cache's α 0.2 chose 16².
@@ -130,11 +112,8 @@ fn an_edit_of_scattering_bakes_again_and_says_why() {
         other => panic!("expected a re-bake, got {other:?}"),
     }
     let edited = original.edited(&edits).expect("edited");
-    let baked = wpbgi::bake::bake(&edited, &settings(), &|_, _| {}).expect("bake");
-    let fresh = dir.join("fresh.wpc");
-    wpbgi::bake::store::save(&fresh, &edited, &baked).expect("save");
     assert!(
-        std::fs::read(&output).expect("relit") == std::fs::read(&fresh).expect("fresh"),
+        std::fs::read(&output).expect("relit") == fresh_bake_bytes(&edited, &dir.join("fresh.wpc")),
         "the re-baked cache is the edited scene's bake"
     );
 }
@@ -158,6 +137,25 @@ fn bake_keeping_transport(scene: &Scene, path: &std::path::Path) -> BakedCache {
     let kept = handoff.kept.expect("the bounces hand out their transport");
     kept.write(&beside(path)).expect("write the transport");
     BakedCache::read(path, None).expect("read")
+}
+
+/// How `relight` of `cache` (a bake of `original`) with `edits` into `output` went.
+fn relit_to(
+    original: &Scene,
+    cache: &BakedCache,
+    edits: &[Edit],
+    output: &std::path::Path,
+) -> Relighting {
+    relight(
+        original,
+        cache,
+        edits,
+        output,
+        &|_, _| {},
+        &AtomicBool::new(false),
+    )
+    .expect("relight")
+    .how
 }
 
 /// The bytes of a fresh bake of `scene` with the tests' settings, written to `path`.
@@ -209,16 +207,7 @@ fn a_kept_transport_re_solves_scattering_edits_as_a_fresh_bake_would() {
         std::fs::write(beside(&dir.join("original.wpc")), file).expect("transport");
         let edits = edits(&[edit]);
         let output = dir.join(format!("relit-{k}.wpc"));
-        let relit = relight(
-            &original,
-            &cache,
-            &edits,
-            &output,
-            &|_, _| {},
-            &AtomicBool::new(false),
-        )
-        .expect("relight");
-        match (&relit.how, expected) {
+        match (&relit_to(&original, &cache, &edits, &output), expected) {
             (Relighting::Resolved { kept_direct, .. }, None) => {
                 assert!(
                     beside(&output).exists(),
@@ -420,16 +409,8 @@ fn every_light_doubled_rescales_and_one_alone_bakes_again() {
     let cache = common::bake_to_cache(&original, &settings(), &dir.join("original.wpc"));
     let run = |list: &[&str], output: &str| {
         let edits = edits(list);
-        let relit = relight(
-            &original,
-            &cache,
-            &edits,
-            &dir.join(output),
-            &|_, _| {},
-            &AtomicBool::new(false),
-        )
-        .expect("relight");
-        (relit.how, original.edited(&edits).expect("edited"))
+        let how = relit_to(&original, &cache, &edits, &dir.join(output));
+        (how, original.edited(&edits).expect("edited"))
     };
     let (how, edited) = run(&["light.emission*=2", "lamp.intensity*=2"], "both.wpc");
     assert_eq!(
