@@ -34,6 +34,13 @@ try:
     raise SystemExit("the relit cache was not refused for the original scene")
 except wpbgi.Error as e:
     assert "stale" in str(e), e
+# With the transport kept beside the cache, a reflectance edit is re-solved from it.
+wpbgi.bake(scene, cache_path + ".kept", quality="draft", points=3000, bounces=2,
+           keep_transport=True)
+darker = ["white.reflectance*=0.8"]
+relit = wpbgi.relight(scene, cache_path + ".kept", cache_path + ".darker", darker)
+assert relit["how"] == "resolved", relit
+wpbgi.Cache(scene.edited(darker), cache_path + ".darker")
 try:
     scene.edited(["lamp.emission=1"])
     raise SystemExit("an edit that names nothing was not refused")

@@ -230,25 +230,36 @@ fn bake_settings(settings: Option<&Bound<'_, PyDict>>) -> PyResult<wpbgi::BakeSe
 }
 
 /// Bake `scene` to `cache_path` (written atomically: a failed or cancelled bake leaves what
-/// was there). Returns the bake's report.
+/// was there). With `keep_transport`, the bounces' transport is also written beside it
+/// (`cache_path` + ".transport", as `wpbgi bake --keep-transport`), for `relight` to
+/// re-solve edits of reflectances, tints and transmittances from. Returns the bake's report.
 #[pyfunction]
-#[pyo3(signature = (scene, cache_path, *, threads=0, progress=None, **settings))]
+#[pyo3(signature = (scene, cache_path, *, threads=0, progress=None, keep_transport=false, **settings))]
 fn bake(
     py: Python<'_>,
     scene: &Scene,
     cache_path: PathBuf,
     threads: usize,
     progress: Option<PyObject>,
+    keep_transport: bool,
     settings: Option<&Bound<'_, PyDict>>,
 ) -> PyResult<Py<PyDict>> {
     let s = bake_settings(settings)?;
     let scene = &scene.inner;
     let start = std::time::Instant::now();
+    let mut handoff = wpbgi::bake::bounce::TransportHandoff {
+        keep: keep_transport,
+        ..Default::default()
+    };
     let baked = reporting(py, threads, progress, |report, cancel| {
-        wpbgi::bake::bake_cancellable(scene, &s, report, cancel)
+        wpbgi::bake::bake_with_transport(scene, &s, report, cancel, &mut handoff)
     })?;
     wpbgi::bake::store::save(&cache_path, scene, &baked)
         .map_err(|e| to_py(wpbgi::Error::Cache(e)))?;
+    if let Some(kept) = handoff.kept.take() {
+        kept.write(&wpbgi::bake::bounce::kept::beside(&cache_path))
+            .map_err(to_py)?;
+    }
     let report = PyDict::new(py);
     report.set_item("surfels", baked.surfels.len())?;
     report.set_item("bounces", baked.bounces.as_ref().map_or(0, |b| b.bounces))?;

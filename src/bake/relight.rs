@@ -153,7 +153,7 @@ pub fn relight(
             save(output, &scene, &baked)?;
             let unused = unused.or(handoff.refused);
             if handoff.replayed {
-                keep_beside(&transport, &beside(output))?;
+                keep_beside(&transport, &beside(output));
                 Relighting::Resolved {
                     why,
                     kept_direct: (handoff.direct_reused, baked.surfels.len()),
@@ -213,22 +213,17 @@ fn direct_holds(scene: &Scene, edits: &[Edit]) -> Option<Vec<bool>> {
 }
 
 /// Keep the transport file `from` beside the relit cache too, as `to` (the edits changed no
-/// link of it): a hard link where the file system allows, else a copy, written atomically.
-fn keep_beside(from: &Path, to: &Path) -> Result<()> {
+/// link of it), so that edits chain: a hard link, which costs no space. Where none can be
+/// made (another file system) the relit cache goes without: a copy would cost seconds and
+/// several times the cache's size on disk, unasked.
+fn keep_beside(from: &Path, to: &Path) {
     if std::fs::canonicalize(from).ok() == std::fs::canonicalize(to).ok() {
-        return Ok(());
+        return;
     }
-    // A stale transport of an earlier cache at `to` goes first (the hard link needs the
-    // name free).
+    // A stale transport of an earlier cache at `to` goes first (the link needs the name
+    // free), and must go either way: it is not this cache's.
     let _ = std::fs::remove_file(to);
-    if std::fs::hard_link(from, to).is_ok() {
-        return Ok(());
-    }
-    crate::atomic::write_atomically_unsynced(to, |tmp| {
-        std::fs::copy(from, tmp)
-            .map(|_| ())
-            .map_err(|e| e.to_string())
-    })
+    let _ = std::fs::hard_link(from, to);
 }
 
 /// Where an edit makes a material smoother than the cache's directional maps resolve (`side`

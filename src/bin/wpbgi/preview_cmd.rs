@@ -192,6 +192,9 @@ fn windowed(
         edit: a.window_edit.clone(),
     };
     let mut relights = 0;
+    // The transports kept beside the relit caches (hard links, see `relight`), removed when
+    // the window closes: the next edit re-solves from the one beside the cache it relights.
+    let mut kept_transports = Vec::new();
     // The window's edits (key e): relit through a cache file that lives as long as its
     // memory map (the name is removed at once).
     let mut relighter = |scene: &Scene, cache: &BakedCache, text: &str| {
@@ -212,10 +215,15 @@ fn windowed(
         .map_err(|e| e.to_string())?;
         let cache = BakedCache::read(&path, None).map_err(|e| e.to_string());
         let _ = std::fs::remove_file(&path);
+        kept_transports.push(wpbgi::bake::bounce::kept::beside(&path));
         say!("{text}: {}", relit.how);
         Ok((relit.scene, cache?))
     };
-    let report = run_window(cache, scene, camera, &settings, Some(&mut relighter))?;
+    let report = run_window(cache, scene, camera, &settings, Some(&mut relighter));
+    for t in &kept_transports {
+        let _ = std::fs::remove_file(t);
+    }
+    let report = report?;
     say!(
         "{} frames on {}; the last: cut of {} nodes in {:.1} ms, drawn in {:.1} ms",
         report.frames,
