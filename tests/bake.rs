@@ -380,10 +380,14 @@ fn surfel_density_refines_the_named_material() {
 /// Issue 19: the bounces record the light transport once and replay it. The cache of a
 /// multi-bounce bake is byte-identical for 1 and 2 threads, and for any transport budget:
 /// receivers past the budget gather again in every bounce through the same code (none kept,
-/// about half kept, all kept).
+/// about half kept, all kept). So is the transport kept beside it (issue 25), and a bake handed
+/// a kept transport of about half the receivers replays it, gathers the rest, and writes the
+/// same cache.
 #[test]
 fn multi_bounce_cache_is_identical_for_any_thread_count_and_transport_budget() {
-    use wpbgi::bake::bounce::BounceSettings;
+    use wpbgi::bake::bake_with_transport;
+    use wpbgi::bake::bounce::kept::beside;
+    use wpbgi::bake::bounce::{BounceSettings, KeptTransport, TransportHandoff};
     let scene = cbox();
     let dir = common::Scratch::new("transport");
     let with_budget = |budget: Option<u64>| BakeSettings {
@@ -394,18 +398,35 @@ fn multi_bounce_cache_is_identical_for_any_thread_count_and_transport_budget() {
         ..settings()
     };
     let hash = bake_hash(&scene, &with_budget(None).to_json());
-    let bake_with = |threads: usize, budget: Option<u64>| {
+    let bake_handing = |threads: usize, budget: Option<u64>, handoff: &mut TransportHandoff| {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()
             .expect("pool");
+        let cancel = std::sync::atomic::AtomicBool::new(false);
         let baked = pool
-            .install(|| bake(&scene, &with_budget(budget), &|_, _| {}))
+            .install(|| {
+                let settings = with_budget(budget);
+                bake_with_transport(&scene, &settings, &|_, _| {}, &cancel, handoff)
+            })
             .expect("bakes");
         let path = dir.join(format!("t{threads}-{budget:?}.wpc"));
         write(&path, hash, &baked, serde_json::json!({})).expect("writes");
+        if let Some(kept) = handoff.kept.take() {
+            kept.write(&beside(&path)).expect("writes the transport");
+        }
         let report = baked.bounces.expect("bounces ran").transport;
         (std::fs::read(&path).expect("reads"), report)
+    };
+    let bake_with = |threads: usize, budget: Option<u64>| {
+        let mut keep = TransportHandoff {
+            keep: true,
+            ..TransportHandoff::default()
+        };
+        bake_handing(threads, budget, &mut keep)
+    };
+    let transport = |threads: usize, budget: Option<u64>| {
+        std::fs::read(beside(&dir.join(format!("t{threads}-{budget:?}.wpc")))).expect("reads")
     };
     let (reference, unbounded) = bake_with(1, None);
     assert_eq!(unbounded.regathered_groups, 0);
@@ -415,6 +436,10 @@ fn multi_bounce_cache_is_identical_for_any_thread_count_and_transport_budget() {
     assert!(
         reference == two_threads,
         "1 and 2 threads wrote different caches"
+    );
+    assert!(
+        transport(1, None) == transport(2, None),
+        "1 and 2 threads kept different transports"
     );
     for budget in [0, unbounded.bytes / 2] {
         let (bounded, report) = bake_with(2, Some(budget));
@@ -428,6 +453,18 @@ fn multi_bounce_cache_is_identical_for_any_thread_count_and_transport_budget() {
             "a transport budget of {budget} bytes changed the cache"
         );
     }
+    let half = unbounded.bytes / 2;
+    let path = dir.join(format!("t2-{:?}.wpc", Some(half)));
+    let mut replay = TransportHandoff {
+        reuse: Some(KeptTransport::read(&beside(&path)).expect("reads back")),
+        ..TransportHandoff::default()
+    };
+    let (replayed, _) = bake_handing(1, None, &mut replay);
+    assert!(replay.replayed, "refused: {:?}", replay.refused);
+    assert!(
+        reference == replayed,
+        "replaying half the receivers' transport changed the cache"
+    );
 }
 
 /// The staleness check hashes the settings the cache stores as text: every float must read
