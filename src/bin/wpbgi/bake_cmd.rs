@@ -256,7 +256,12 @@ pub fn bake_command(a: BakeArgs) -> Result<()> {
     wpbgi::bake::store::save(&a.output, &scene, &baked)?;
     let transport_bytes = match handoff.kept.take() {
         Some(kept) => {
-            kept.write(&transport_path)?;
+            kept.write(&transport_path).with_context(|| {
+                format!(
+                    "{} was written, but its transport was not kept",
+                    a.output.display()
+                )
+            })?;
             std::fs::metadata(&transport_path).map_or(0, |m| m.len())
         }
         None => 0,
