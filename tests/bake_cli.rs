@@ -916,3 +916,74 @@ fn usd_render_settings_pick_camera_size_and_output() {
     assert_eq!(out.status.code(), Some(1));
     assert!(String::from_utf8_lossy(&out.stderr).contains("-o"));
 }
+
+/// `bake --keep-transport` writes the transport beside the cache and says so (`--json`: its
+/// path and size), `inspect` reports it, and `relight` re-solves a reflectance edit from it,
+/// writing what a bake of the edited scene writes.
+#[test]
+fn a_kept_transport_is_reported_and_relight_re_solves_from_it() {
+    let d = dir("keep-transport");
+    let (cache, relit, fresh) = (d.join("kept.wpc"), d.join("relit.wpc"), d.join("fresh.wpc"));
+    let path = |p: &Path| p.to_str().expect("utf-8 path").to_string();
+    let s = path(&scene());
+    let baked = wpbgi(&[
+        "bake",
+        &s,
+        "-o",
+        &path(&cache),
+        "--points",
+        "2000",
+        "--light-samples",
+        "16",
+        "--bounces",
+        "2",
+        "--keep-transport",
+        "--json",
+    ]);
+    assert_ok(&baked);
+    let stdout = String::from_utf8_lossy(&baked.stdout);
+    let done: serde_json::Value =
+        serde_json::from_str(stdout.lines().last().expect("a line")).expect("JSON");
+    let bytes = std::fs::metadata(d.join("kept.wpc.transport"))
+        .expect("kept")
+        .len();
+    assert_eq!(done["stats"]["transport_file"]["bytes"], bytes);
+    assert!(bytes > 0);
+
+    let inspected = wpbgi(&["inspect", &path(&cache), "--json"]);
+    assert_ok(&inspected);
+    let report: serde_json::Value = serde_json::from_slice(&inspected.stdout).expect("JSON");
+    assert_eq!(report["transport"]["bytes"], bytes);
+
+    let edit = "white.reflectance*=0.8";
+    let out = wpbgi(&[
+        "relight",
+        &path(&cache),
+        "--scene",
+        &s,
+        "-o",
+        &path(&relit),
+        "--set",
+        edit,
+        "--json",
+    ]);
+    assert_ok(&out);
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(report["how"], "resolved", "{report}");
+    let out = wpbgi(&[
+        "--set",
+        edit,
+        "bake",
+        &s,
+        "-o",
+        &path(&fresh),
+        "--points",
+        "2000",
+        "--light-samples",
+        "16",
+        "--bounces",
+        "2",
+    ]);
+    assert_ok(&out);
+    assert!(std::fs::read(&relit).expect("relit") == std::fs::read(&fresh).expect("fresh"));
+}

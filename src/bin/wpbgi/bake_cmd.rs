@@ -390,6 +390,13 @@ pub fn inspect_command(a: InspectArgs) -> Result<()> {
         .map(|s| json!({"name": s.name, "offset": s.offset, "bytes": s.length, "checksum": format!("{:016x}", s.checksum)}))
         .collect();
     let hash = wpbgi::cache::hash_hex(c.cache.hash);
+    // A transport kept beside the cache (`bake --keep-transport`); whether it fits an edit is
+    // for `relight` to check.
+    let transport_path = beside(&a.cache);
+    let transport = std::fs::metadata(&transport_path)
+        .ok()
+        .filter(|m| m.is_file())
+        .map(|m| json!({"path": transport_path, "bytes": m.len()}));
     let report = json!({
         "file": a.cache,
         "format_version": c.cache.version,
@@ -400,6 +407,7 @@ pub fn inspect_command(a: InspectArgs) -> Result<()> {
         "plan": c.plan["plan"],
         "stats": c.plan["stats"],
         "sections": sections,
+        "transport": transport,
     });
     if a.json {
         println!("{}", serde_json::to_string_pretty(&report)?);
@@ -420,6 +428,14 @@ pub fn inspect_command(a: InspectArgs) -> Result<()> {
                 "  {:<10} {:>12} bytes at {:>10}  xxh3 {:016x}",
                 s.name, s.length, s.offset, s.checksum
             );
+        }
+        match &transport {
+            Some(t) => println!(
+                "transport kept beside it: {} ({} bytes; relight re-solves scattering edits from it)",
+                transport_path.display(),
+                t["bytes"]
+            ),
+            None => println!("no transport kept beside it (bake --keep-transport)"),
         }
     }
     if let Some(p) = &a.ply {
