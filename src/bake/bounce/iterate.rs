@@ -197,7 +197,7 @@ pub fn add_bounces(
         .transport_budget
         .unwrap_or_else(default_transport_budget)
         .saturating_sub(incident_bytes);
-    let key = transport_key(baked, &ops, &kinds, settings, &slots);
+    let key = transport_key(scene, baked, &ops, &kinds, settings, &slots);
     let reused = handoff.reuse.take().and_then(|t| {
         let checked = t.check(&key, &slots, &groups, |l, read| {
             let i = l.surfel as usize;
@@ -381,13 +381,14 @@ fn record_transport(
     Ok((index, kept, transport))
 }
 
-/// The hash of everything the transport of `baked`'s bounces depends on: the surfels (the
-/// scene's geometry as the bake sampled it, so also the tree), their shading normals and
-/// whether they gather spherically, each receiver's kind (its map's levels, its BSDF
-/// operator's grid), the tree's map levels, the slots, and the settings that choose the
-/// receivers and their groups. Reflectances, tints, transmittances and emission are not in
-/// it: they change no link.
+/// The hash of everything the transport of `baked`'s bounces depends on: the scene's
+/// triangles (the rays that close the buffers' gaps hit them), the surfels (so also the
+/// tree), their shading normals and whether they gather spherically, each receiver's kind
+/// (its map's levels, its BSDF operator's grid), the tree's map levels, the slots, and the
+/// settings that choose the receivers and their groups. Reflectances, tints, transmittances
+/// and emission are not in it: they change no link.
 fn transport_key(
+    scene: &Scene,
     baked: &Baked,
     ops: &[Option<SurfelOperator>],
     kinds: &[Option<u32>],
@@ -396,6 +397,18 @@ fn transport_key(
 ) -> TransportKey {
     let mut h = xxhash_rust::xxh3::Xxh3::new();
     h.update(&super::kept::VERSION.to_le_bytes());
+    let mut bytes = Vec::new();
+    for mesh in &scene.meshes {
+        bytes.clear();
+        bytes.extend_from_slice(&(mesh.positions.len() as u64).to_le_bytes());
+        for p in &mesh.positions {
+            bytes.extend(p.to_array().iter().flat_map(|x| x.to_le_bytes()));
+        }
+        for t in &mesh.triangles {
+            bytes.extend(t.iter().flat_map(|v| v.to_le_bytes()));
+        }
+        h.update(&bytes);
+    }
     for (i, s) in baked.surfels.iter().enumerate() {
         let n = baked.shading_normals[i];
         for x in [
@@ -410,7 +423,7 @@ fn transport_key(
             .as_ref()
             .map_or((0, 0), |op| (op.shared.n, op.shared.hemispheres));
         let two_sided = u32::from(baked.bsdfs[i].is_two_sided());
-        let kind = kinds[i].map_or(u32::MAX, |l| l);
+        let kind = kinds[i].unwrap_or(u32::MAX);
         for x in [s.mesh, s.triangle, side, hemispheres, two_sided, kind] {
             h.update(&x.to_le_bytes());
         }
