@@ -243,6 +243,41 @@ fn a_kept_transport_re_solves_scattering_edits_as_a_fresh_bake_would() {
     }
 }
 
+/// Edits chain: the relit cache keeps the transport beside it, and relighting it re-solves
+/// again, every surfel whose material no edit has touched since the bake keeping its direct
+/// light; the result is a fresh bake of the twice-edited scene, byte for byte.
+#[test]
+fn edits_chain_from_the_kept_transport() {
+    let dir = scratch("chain");
+    let original = Scene::load(&common::mitsuba_data("cbox-rough.gltf")).expect("scene");
+    let cache = bake_keeping_transport(&original, &dir.join("original.wpc"));
+    let first = edits(&["white.reflectance*=0.8"]);
+    let once = original.edited(&first).expect("edited");
+    let how = relit_to(&original, &cache, &first, &dir.join("once.wpc"));
+    assert!(matches!(how, Relighting::Resolved { .. }), "{how:?}");
+    let relit = BakedCache::open_fresh(&once, &dir.join("once.wpc")).expect("fresh");
+    let second = edits(&["gold-a0.2.specular_reflectance=0.9,0.6,0.3"]);
+    let twice = once.edited(&second).expect("edited");
+    let surfels_of = |name: &str| {
+        let material = |s: &&wpbgi::cache::store::SurfelRecord| {
+            original.materials[original.meshes[s.mesh as usize].material].name == name
+        };
+        cache.surfels.iter().filter(material).count()
+    };
+    match relit_to(&once, &relit, &second, &dir.join("twice.wpc")) {
+        Relighting::Resolved { kept_direct, .. } => assert_eq!(
+            kept_direct.0 + surfels_of("white") + surfels_of("gold-a0.2"),
+            kept_direct.1
+        ),
+        other => panic!("expected a re-solve, got {other:?}"),
+    }
+    assert!(
+        std::fs::read(dir.join("twice.wpc")).expect("relit")
+            == fresh_bake_bytes(&twice, &dir.join("fresh.wpc")),
+        "the twice-relit cache is the twice-edited scene's bake"
+    );
+}
+
 /// Edits that name nothing, or a parameter the target lacks, or a bad value, are refused in a
 /// sentence that names them.
 #[test]

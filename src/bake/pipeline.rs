@@ -15,7 +15,7 @@ use crate::bake::bounce::bsdf_operator::{quantised_alpha, Operators, SurfelOpera
 use crate::bake::bounce::kept::KeptDirect;
 use crate::bake::bounce::{add_bounces, TransportHandoff};
 use crate::bsdf::Bsdf;
-use crate::cache::store::bake_hash;
+use crate::cache::store::{emitters_hash, geometry_hash, material_hash};
 use crate::emitters::EmitterSampler;
 use crate::error::{Error, Result};
 use crate::haar::{texel_directions, Haar2d, SparseHaar};
@@ -171,17 +171,18 @@ pub fn bake_with_transport(
 
     let t = Instant::now();
     progress("surfels", 0.0);
-    // A relight whose edits leave the geometry and the emitters alone takes the surfels
-    // with their direct light (below) from the bake it relights: the same surfels.
-    let kept_direct = handoff
+    // A bake handed the surfels and direct light of a bake of the same geometry and settings
+    // (a relight's: see `KeptDirect`) takes the surfels, and where the emitters are the
+    // same too, the direct light of every surfel whose material is.
+    let settings_json = settings.to_json();
+    let kept = handoff
         .reuse
         .as_ref()
         .and_then(|t| t.direct.as_ref())
-        .zip(handoff.direct_holds.as_deref())
-        .filter(|(d, holds)| {
-            d.radiance.len() == d.surfels.len()
+        .filter(|d| {
+            d.geometry == geometry_hash(scene, &settings_json)
+                && d.radiance.len() == d.surfels.len()
                 && d.emitted.len() == d.surfels.len()
-                && holds.len() == scene.materials.len()
                 && d.surfels.iter().all(|s| {
                     scene
                         .meshes
@@ -189,8 +190,21 @@ pub fn bake_with_transport(
                         .is_some_and(|m| (s.triangle as usize) < m.triangles.len())
                 })
         });
-    let surfels = match kept_direct {
-        Some((d, _)) => d.surfels.clone(),
+    let kept_direct = kept
+        .filter(|d| {
+            d.emitters == emitters_hash(scene) && d.materials.len() == scene.materials.len()
+        })
+        .map(|d| {
+            let holds: Vec<bool> = d
+                .materials
+                .iter()
+                .zip(&scene.materials)
+                .map(|(h, m)| *h == material_hash(m))
+                .collect();
+            (d, holds)
+        });
+    let surfels = match kept {
+        Some(d) => d.surfels.clone(),
         None => sample_surfels_with_density(scene, settings.points, settings.seed, &density),
     };
     progress("surfels", 1.0);
@@ -219,7 +233,7 @@ pub fn bake_with_transport(
     let done = std::sync::atomic::AtomicUsize::new(0);
     // A relight's kept direct light, per surfel where the edits left its material alone.
     let kept_at = |i: usize, s: &Surfel| {
-        kept_direct.and_then(|(d, holds)| {
+        kept_direct.as_ref().and_then(|(d, holds)| {
             holds[scene.meshes[s.mesh as usize].material]
                 .then(|| (d.radiance[i].clone(), d.emitted[i]))
         })
@@ -251,7 +265,9 @@ pub fn bake_with_transport(
         t.direct = None; // taken where it held; the bounces need the links alone
     }
     let direct_kept = handoff.keep.then(|| KeptDirect {
-        key: bake_hash(scene, &settings.to_json()),
+        geometry: geometry_hash(scene, &settings_json),
+        emitters: emitters_hash(scene),
+        materials: scene.materials.iter().map(material_hash).collect(),
         surfels: surfels.clone(),
         radiance: radiance.clone(),
         emitted: emitted.clone(),

@@ -16,9 +16,9 @@
 //! emitter added or removed) changes how light bounces, and the cache is baked again for the
 //! edited scene with the settings it was baked with. Where the cache was baked with its
 //! transport kept beside it ([`super::bounce::kept`]), that bake replays the transport
-//! instead of recording it, and keeps the direct light of every surfel whose material and
-//! emitters the edits left alone: the same cache, byte for byte, in about half the time (the
-//! report says which way was taken and why).
+//! instead of recording it, and keeps the direct light of every surfel whose material (and
+//! the scene's emitters) are as they were in the bake that kept it: the same cache, byte for
+//! byte, in about half the time (the report says which way was taken and why).
 //!
 //! Either way the new cache carries the hash of the edited scene's bake, so `render` accepts
 //! it for the edited scene and refuses it for the original.
@@ -137,14 +137,7 @@ pub fn relight(
             let mut unused = None;
             if transport.exists() {
                 match KeptTransport::read(&transport) {
-                    Ok(t) => {
-                        // The direct light is the cache's own bake's (its hash), and holds
-                        // where the edits left the material and the emitters alone.
-                        if t.direct.as_ref().is_some_and(|d| d.key == cache.cache.hash) {
-                            handoff.direct_holds = direct_holds(&scene, edits);
-                        }
-                        handoff.reuse = Some(t);
-                    }
+                    Ok(t) => handoff.reuse = Some(t),
                     Err(reason) => unused = Some(reason),
                 }
             }
@@ -180,36 +173,6 @@ pub fn relight(
         scene,
         seconds: start.elapsed().as_secs_f64(),
     })
-}
-
-/// The edit parameters that change how a material scatters light and nothing else: every
-/// other (an emission, a light's intensity) changes the emitters, so every surfel's direct
-/// light.
-const SCATTERING: &[&str] = &[
-    "reflectance",
-    "specular_reflectance",
-    "specular_transmittance",
-    "alpha",
-    "base_color",
-    "metallic",
-    "roughness",
-];
-
-/// Per material of `scene`, whether its surfels' direct light holds after `edits`: only
-/// scattering parameters edited, and not its own. `None` where an edit changes the emitters.
-fn direct_holds(scene: &Scene, edits: &[Edit]) -> Option<Vec<bool>> {
-    let mut holds = vec![true; scene.materials.len()];
-    for e in edits {
-        if !SCATTERING.contains(&e.parameter.as_str()) {
-            return None;
-        }
-        for (m, material) in scene.materials.iter().enumerate() {
-            if material.name == e.target {
-                holds[m] = false;
-            }
-        }
-    }
-    Some(holds)
 }
 
 /// Keep the transport file `from` beside the relit cache too, as `to` (the edits changed no

@@ -73,6 +73,51 @@ pub struct NodeRecord {
 /// materials, textures, lights; so a changed external buffer or image counts, not only the main
 /// file), the settings and the crate version. Cameras do not change a bake and are left out.
 pub fn bake_hash(scene: &Scene, settings: &Value) -> [u8; 16] {
+    // Debug formatting prints every float so that it parses back to the same value.
+    let materials = format!("{:?}", scene.materials);
+    let lights = format!("{:?}", scene.lights);
+    cache::content_hash(&[
+        &geometry_bytes(scene),
+        &texture_bytes(scene),
+        materials.as_bytes(),
+        lights.as_bytes(),
+        &environment_bytes(scene),
+        settings.to_string().as_bytes(),
+        crate::VERSION.as_bytes(),
+    ])
+}
+
+/// The hash of what a bake's surfels and their shadow rays depend on besides how the
+/// materials scatter and what emits: the geometry, the textures, each material's cut-outs,
+/// the settings and the crate version (see [`bake_hash`]).
+pub fn geometry_hash(scene: &Scene, settings: &Value) -> [u8; 16] {
+    let cutouts: Vec<_> = scene.materials.iter().map(|m| m.cutout).collect();
+    cache::content_hash(&[
+        &geometry_bytes(scene),
+        &texture_bytes(scene),
+        format!("{cutouts:?}").as_bytes(),
+        settings.to_string().as_bytes(),
+        crate::VERSION.as_bytes(),
+    ])
+}
+
+/// The hash of everything that emits light in `scene`: each material's emission, the
+/// lights and the environment.
+pub fn emitters_hash(scene: &Scene) -> [u8; 16] {
+    let emission: Vec<_> = scene.materials.iter().map(|m| &m.emission).collect();
+    cache::content_hash(&[
+        format!("{emission:?}").as_bytes(),
+        format!("{:?}", scene.lights).as_bytes(),
+        &environment_bytes(scene),
+    ])
+}
+
+/// The hash of one material's whole description (see [`bake_hash`]).
+pub fn material_hash(material: &crate::scene::Material) -> [u8; 16] {
+    cache::content_hash(&[format!("{material:?}").as_bytes()])
+}
+
+fn geometry_bytes(scene: &Scene) -> Vec<u8> {
     let mut geometry = Vec::new();
     for m in &scene.meshes {
         geometry.extend_from_slice(bytemuck::cast_slice(&m.positions));
@@ -85,15 +130,20 @@ pub fn bake_hash(scene: &Scene, settings: &Value) -> [u8; 16] {
         }
         geometry.extend_from_slice(&(m.material as u64).to_le_bytes());
     }
+    geometry
+}
+
+fn texture_bytes(scene: &Scene) -> Vec<u8> {
     let mut textures = Vec::new();
     for t in &scene.textures {
         textures.extend_from_slice(&t.width.to_le_bytes());
         textures.extend_from_slice(bytemuck::cast_slice(&t.texels));
     }
-    // Debug formatting prints every float so that it parses back to the same value.
-    let materials = format!("{:?}", scene.materials);
-    let lights = format!("{:?}", scene.lights);
-    let environment = match &scene.environment {
+    textures
+}
+
+fn environment_bytes(scene: &Scene) -> Vec<u8> {
+    match &scene.environment {
         Some(e) => {
             let mut bytes = format!("{:?} {:?} {}", e.scale, e.to_local, e.name).into_bytes();
             if let Some(m) = &e.map {
@@ -103,16 +153,7 @@ pub fn bake_hash(scene: &Scene, settings: &Value) -> [u8; 16] {
             bytes
         }
         None => Vec::new(),
-    };
-    cache::content_hash(&[
-        &geometry,
-        &textures,
-        materials.as_bytes(),
-        lights.as_bytes(),
-        &environment,
-        settings.to_string().as_bytes(),
-        crate::VERSION.as_bytes(),
-    ])
+    }
 }
 
 /// A cache's records, read back and checked (the bake's `bake::store` writes them).

@@ -22,7 +22,7 @@
 //! | 8 | receiver groups kept |
 //! | per group | its receivers (u32), then per receiver: surfel, pixel ends, terms and map texels counts (u32 each), the pixel ends (u32), the terms (u32 slot, f32 weight), the map texels (u16) |
 //! | 1 | 1 when the direct light follows, else 0 |
-//! | 16 + 8 + 56 × n + … | the direct light: its key, n surfels (44 bytes each: position, normal, area, mesh, triangle, barycentrics), their emission (3 × f32), then per surfel 0 and an RGB (3 × f32) or 1 and a wavelet map as the cache stores one |
+//! | 32 + 8 + 16 × m + 8 + 56 × n + … | the direct light: the hashes of its geometry and settings and of its emitters, m materials' hashes, n surfels (44 bytes each: position, normal, area, mesh, triangle, barycentrics), their emission (3 × f32), then per surfel 0 and an RGB (3 × f32) or 1 and a wavelet map as the cache stores one |
 //! | 8 | XXH3-64 of every byte before it |
 //!
 //! Anything that does not check out (magic, version, length, checksum, a count or an index
@@ -73,15 +73,19 @@ pub struct KeptTransport {
     pub direct: Option<KeptDirect>,
 }
 
-/// A bake's direct light per surfel (emission included, as the direct pass leaves it), for a
-/// relight to take where an edit leaves a surfel's material and every emitter as they were:
-/// it is what the direct pass would compute there again, bit for bit (each surfel's light
-/// samples are seeded by its number).
+/// A bake's surfels and their direct light (emission included, as the direct pass leaves it),
+/// with what they were computed from: a later bake of the same geometry and settings takes
+/// the surfels, and where the emitters are also the same, the direct light of every surfel
+/// whose material is too. That is what its own passes would compute again, bit for bit (each
+/// surfel's light samples are seeded by its number).
 #[derive(Clone, Debug, PartialEq)]
 pub struct KeptDirect {
-    /// The content hash of the bake it was computed in ([`bake_hash`](crate::cache::store::bake_hash)
-    /// of the scene and settings): a relight takes it only from beside that bake's cache.
-    pub key: [u8; 16],
+    /// [`geometry_hash`](crate::cache::store::geometry_hash) of the bake's scene and settings.
+    pub geometry: [u8; 16],
+    /// [`emitters_hash`](crate::cache::store::emitters_hash) of its scene.
+    pub emitters: [u8; 16],
+    /// [`material_hash`](crate::cache::store::material_hash) of each of its materials.
+    pub materials: Vec<[u8; 16]>,
     /// The surfels (what the edited scene's sampling would draw again: they depend on
     /// geometry alone).
     pub surfels: Vec<Surfel>,
@@ -98,10 +102,6 @@ pub struct TransportHandoff {
     pub reuse: Option<KeptTransport>,
     /// Whether to hand this bake's transport out (in `kept`), with its direct light.
     pub keep: bool,
-    /// Per material of the scene, whether its surfels may take their direct light from
-    /// `reuse`'s (the edits left the material and every emitter as they were); `None`: none
-    /// may.
-    pub direct_holds: Option<Vec<bool>>,
     /// Surfels whose direct light was taken from `reuse`.
     pub direct_reused: usize,
     /// The transport handed out, when `keep` was asked.
@@ -200,7 +200,12 @@ impl KeptTransport {
             Some(d) => {
                 bytes.clear();
                 bytes.push(1);
-                bytes.extend_from_slice(&d.key);
+                bytes.extend_from_slice(&d.geometry);
+                bytes.extend_from_slice(&d.emitters);
+                bytes.extend_from_slice(&(d.materials.len() as u64).to_le_bytes());
+                for m in &d.materials {
+                    bytes.extend_from_slice(m);
+                }
                 bytes.extend_from_slice(&(d.radiance.len() as u64).to_le_bytes());
                 put(&mut bytes, &d.surfels);
                 for e in &d.emitted {
@@ -307,7 +312,14 @@ const SURFEL_BYTES: usize = std::mem::size_of::<Surfel>();
 
 /// The direct light's part of a transport file.
 fn parse_direct(r: &mut Reader) -> std::result::Result<KeptDirect, String> {
-    let key: TransportKey = r.take(16)?.try_into().map_err(|_| "short key")?;
+    let hash = |r: &mut Reader| -> std::result::Result<[u8; 16], String> {
+        r.take(16)?.try_into().map_err(|_| "short hash".to_string())
+    };
+    let geometry = hash(r)?;
+    let emitters = hash(r)?;
+    let materials = (0..r.count(16)?)
+        .map(|_| hash(r))
+        .collect::<std::result::Result<Vec<_>, _>>()?;
     let count = r.count(SURFEL_BYTES + 12 + 1 + 12)?;
     let surfels: Vec<Surfel> = get(r.take(count * SURFEL_BYTES)?);
     let emitted: Vec<f32> = get(r.take(count * 12)?);
@@ -332,7 +344,9 @@ fn parse_direct(r: &mut Reader) -> std::result::Result<KeptDirect, String> {
         });
     }
     Ok(KeptDirect {
-        key,
+        geometry,
+        emitters,
+        materials,
         surfels,
         radiance,
         emitted,
@@ -538,7 +552,9 @@ mod tests {
                 )],
             ],
             direct: Some(KeptDirect {
-                key: [3; 16],
+                geometry: [3; 16],
+                emitters: [4; 16],
+                materials: vec![[5; 16], [6; 16]],
                 surfels: vec![
                     Surfel {
                         p: glam::Vec3::new(1.0, 2.0, 3.0),
