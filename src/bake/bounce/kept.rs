@@ -8,7 +8,10 @@
 //! tint, a transmittance or an emission changes. The bounces' first pass records it (most of
 //! their time: 3.8 of cbox-rough's 5.0 s at the default preset); a bake that is handed a kept
 //! transport whose [`TransportKey`] is its own replays it instead, and writes the same cache
-//! byte for byte as a bake that recorded it.
+//! byte for byte as a bake that recorded it. The surfels and their direct light are kept with
+//! it ([`KeptDirect`]), with hashes of what they came from: a bake of the same geometry takes
+//! the surfels, and where its emitters are the same, each surfel's direct light where its
+//! material is.
 //!
 //! The file (`CACHE.transport`, [`beside`]) is little-endian:
 //!
