@@ -111,8 +111,10 @@ enum Command {
     Inspect(bake_cmd::InspectArgs),
     /// Make a cache for the scene with its materials and lights edited (--set
     /// 'light.emission*=2'): edits that scale every emitter by one factor rescale the cache in
-    /// the time of copying it; others bake the edited scene again with the cache's settings.
-    /// The new cache is fresh for the edited scene and stale for the original.
+    /// the time of copying it; others re-solve the bounces from the transport kept beside the
+    /// cache (CACHE.transport, from `bake --keep-transport`) where it fits, or else bake the
+    /// edited scene again with the cache's settings; both write what a bake of the edited
+    /// scene writes. The new cache is fresh for the edited scene and stale for the original.
     Relight(relight_cmd::RelightArgs),
     /// Render the final image from a cache: primary hits and direct light by ray tracing,
     /// indirect light gathered from the cache through microbuffers (FPBGI clusters by
