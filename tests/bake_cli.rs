@@ -926,20 +926,31 @@ fn a_kept_transport_is_reported_and_relight_re_solves_from_it() {
     let (cache, relit, fresh) = (d.join("kept.wpc"), d.join("relit.wpc"), d.join("fresh.wpc"));
     let path = |p: &Path| p.to_str().expect("utf-8 path").to_string();
     let s = path(&scene());
-    let baked = wpbgi(&[
-        "bake",
-        &s,
-        "-o",
-        &path(&cache),
-        "--points",
-        "2000",
-        "--light-samples",
-        "16",
-        "--bounces",
-        "2",
-        "--keep-transport",
-        "--json",
-    ]);
+    // A small bake of the scene with `edits` into `out`, with `extra` arguments.
+    let bake_into = |edits: &[&str], out: &Path, extra: &[&str]| {
+        let mut args: Vec<String> = edits
+            .iter()
+            .flat_map(|e| ["--set", e])
+            .map(String::from)
+            .collect();
+        for a in [
+            "bake",
+            &s,
+            "-o",
+            &path(out),
+            "--points",
+            "2000",
+            "--light-samples",
+            "16",
+            "--bounces",
+            "2",
+        ] {
+            args.push(a.to_string());
+        }
+        args.extend(extra.iter().map(|a| a.to_string()));
+        wpbgi(&args.iter().map(String::as_str).collect::<Vec<_>>())
+    };
+    let baked = bake_into(&[], &cache, &["--keep-transport", "--json"]);
     assert_ok(&baked);
     let stdout = String::from_utf8_lossy(&baked.stdout);
     let done: serde_json::Value =
@@ -970,20 +981,7 @@ fn a_kept_transport_is_reported_and_relight_re_solves_from_it() {
     assert_ok(&out);
     let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
     assert_eq!(report["how"], "resolved", "{report}");
-    let out = wpbgi(&[
-        "--set",
-        edit,
-        "bake",
-        &s,
-        "-o",
-        &path(&fresh),
-        "--points",
-        "2000",
-        "--light-samples",
-        "16",
-        "--bounces",
-        "2",
-    ]);
+    let out = bake_into(&[edit], &fresh, &[]);
     assert_ok(&out);
     assert!(std::fs::read(&relit).expect("relit") == std::fs::read(&fresh).expect("fresh"));
 }

@@ -174,13 +174,16 @@ pub fn bake_with_transport(
     // A bake handed the surfels and direct light of a bake of the same geometry and settings
     // (a relight's: see `KeptDirect`) takes the surfels, and where the emitters are the
     // same too, the direct light of every surfel whose material is.
-    let settings_json = settings.to_json();
+    // What this bake's surfels and direct light come from, hashed only where a kept direct
+    // light is handed in or asked for (the geometry's hash reads every vertex and texel).
+    let geometry = (handoff.keep || handoff.reuse.is_some())
+        .then(|| geometry_hash(scene, &settings.to_json()));
     let kept = handoff
         .reuse
         .as_ref()
         .and_then(|t| t.direct.as_ref())
         .filter(|d| {
-            d.geometry == geometry_hash(scene, &settings_json)
+            Some(d.geometry) == geometry
                 && d.radiance.len() == d.surfels.len()
                 && d.emitted.len() == d.surfels.len()
                 && d.surfels.iter().all(|s| {
@@ -231,7 +234,7 @@ pub fn bake_with_transport(
         b.alpha().is_some_and(|a| a < NEAR_SPECULAR_ALPHA)
     });
     let done = std::sync::atomic::AtomicUsize::new(0);
-    // A relight's kept direct light, per surfel where the edits left its material alone.
+    // The kept direct light, per surfel whose material is as it was in the bake that kept it.
     let kept_at = |i: usize, s: &Surfel| {
         kept_direct.as_ref().and_then(|(d, holds)| {
             holds[scene.meshes[s.mesh as usize].material]
@@ -264,14 +267,16 @@ pub fn bake_with_transport(
     if let Some(t) = handoff.reuse.as_mut() {
         t.direct = None; // taken where it held; the bounces need the links alone
     }
-    let direct_kept = handoff.keep.then(|| KeptDirect {
-        geometry: geometry_hash(scene, &settings_json),
-        emitters: emitters_hash(scene),
-        materials: scene.materials.iter().map(material_hash).collect(),
-        surfels: surfels.clone(),
-        radiance: radiance.clone(),
-        emitted: emitted.clone(),
-    });
+    let direct_kept = geometry
+        .filter(|_| handoff.keep)
+        .map(|geometry| KeptDirect {
+            geometry,
+            emitters: emitters_hash(scene),
+            materials: scene.materials.iter().map(material_hash).collect(),
+            surfels: surfels.clone(),
+            radiance: radiance.clone(),
+            emitted: emitted.clone(),
+        });
 
     let t = Instant::now();
     let tree = SurfelTree::build(&surfels);

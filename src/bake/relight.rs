@@ -53,7 +53,8 @@ pub enum Relighting {
         factor: Rgb,
     },
     /// The edited scene's bounces re-solved from the transport kept beside the cache
-    /// (`wpbgi bake --keep-transport`): its direct light made again, its transport replayed.
+    /// (`wpbgi bake --keep-transport`): its transport replayed, the direct light made again
+    /// for the edited materials' surfels only.
     Resolved {
         /// Why the cache could not be rescaled, in words.
         why: String,
@@ -135,7 +136,8 @@ pub fn relight(
             let transport = beside(&cache.cache.path);
             let mut handoff = TransportHandoff::default();
             let mut unused = None;
-            if transport.exists() {
+            let present = transport.exists();
+            if present {
                 match KeptTransport::read(&transport) {
                     Ok(t) => handoff.reuse = Some(t),
                     Err(reason) => unused = Some(reason),
@@ -157,7 +159,7 @@ pub fn relight(
                         "; the transport {} was not used: {reason}",
                         transport.display()
                     ),
-                    None if !transport.exists() && settings.bounces.max > 0 => {
+                    None if !present && settings.bounces.max > 0 => {
                         " (a cache baked with --keep-transport re-solves such edits without \
                          gathering again)"
                             .to_string()

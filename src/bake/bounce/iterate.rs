@@ -45,6 +45,7 @@ use crate::accel::Accel;
 use crate::bake::baked::Baked;
 use crate::bake::store::records_of;
 use crate::bsdf::Bsdf;
+use crate::cache::store::geometry_hash;
 use crate::error::{Error, Result};
 use crate::gather::fpbgi::{Cluster, ClusterGather, ClusterReceivers};
 use crate::gather::microbuffer::Microbuffer;
@@ -197,8 +198,10 @@ pub fn add_bounces(
         .transport_budget
         .unwrap_or_else(default_transport_budget)
         .saturating_sub(incident_bytes);
-    let key = transport_key(scene, baked, &ops, &kinds, settings, &slots);
-    let reused = handoff.reuse.take().and_then(|t| {
+    // The key is hashed only where a transport is handed in or asked for.
+    let key = (handoff.keep || handoff.reuse.is_some())
+        .then(|| transport_key(scene, baked, &ops, &kinds, &slots));
+    let reused = handoff.reuse.take().zip(key).and_then(|(t, key)| {
         let checked = t.check(&key, &slots, &groups, |l, read| {
             let i = l.surfel as usize;
             let directional = ops[i].as_ref().map(|op| {
@@ -305,7 +308,7 @@ pub fn add_bounces(
         .zip(&light)
         .for_each(|(t, l)| *t = add_scaled(t, l, 1.0, tau));
     baked.coded = coded_for(baked);
-    if handoff.keep {
+    if let Some(key) = key.filter(|_| handoff.keep) {
         handoff.kept = Some(KeptTransport {
             key,
             report: report.transport,
@@ -382,57 +385,35 @@ fn record_transport(
 }
 
 /// The hash of everything the transport of `baked`'s bounces depends on: the scene's
-/// triangles (the rays that close the buffers' gaps hit them), the surfels (so also the
-/// tree), their shading normals and whether they gather spherically, each receiver's kind
-/// (its map's levels, its BSDF operator's grid), the tree's map levels, the slots, and the
-/// settings that choose the receivers and their groups. Reflectances, tints, transmittances
-/// and emission are not in it: they change no link.
+/// geometry and the bake's settings ([`geometry_hash`]: the rays that close the buffers' gaps
+/// hit the triangles, the settings choose the receivers and their groups), the surfels (so
+/// also the tree), their shading normals, each receiver's kind (its map's levels, its BSDF
+/// operator's grid, whether it gathers spherically), the tree's map levels and the slots.
+/// Reflectances, tints, transmittances and emission are not in it: they change no link.
 fn transport_key(
     scene: &Scene,
     baked: &Baked,
     ops: &[Option<SurfelOperator>],
     kinds: &[Option<u32>],
-    settings: &BounceSettings,
     slots: &Slots,
 ) -> TransportKey {
+    let receivers: Vec<[u32; 4]> = (0..baked.surfels.len())
+        .map(|i| {
+            let (side, hemispheres) = ops[i]
+                .as_ref()
+                .map_or((0, 0), |op| (op.shared.n, op.shared.hemispheres));
+            let two_sided = u32::from(baked.bsdfs[i].is_two_sided());
+            [side, hemispheres, two_sided, kinds[i].unwrap_or(u32::MAX)]
+        })
+        .collect();
     let mut h = xxhash_rust::xxh3::Xxh3::new();
     h.update(&super::kept::VERSION.to_le_bytes());
-    let mut bytes = Vec::new();
-    for mesh in &scene.meshes {
-        bytes.clear();
-        bytes.extend_from_slice(&(mesh.positions.len() as u64).to_le_bytes());
-        for p in &mesh.positions {
-            bytes.extend(p.to_array().iter().flat_map(|x| x.to_le_bytes()));
-        }
-        for t in &mesh.triangles {
-            bytes.extend(t.iter().flat_map(|v| v.to_le_bytes()));
-        }
-        h.update(&bytes);
-    }
-    for (i, s) in baked.surfels.iter().enumerate() {
-        let n = baked.shading_normals[i];
-        for x in [
-            s.p.x, s.p.y, s.p.z, s.n.x, s.n.y, s.n.z, s.area, s.b.x, s.b.y,
-        ] {
-            h.update(&x.to_le_bytes());
-        }
-        for x in [n.x, n.y, n.z] {
-            h.update(&x.to_le_bytes());
-        }
-        let (side, hemispheres) = ops[i]
-            .as_ref()
-            .map_or((0, 0), |op| (op.shared.n, op.shared.hemispheres));
-        let two_sided = u32::from(baked.bsdfs[i].is_two_sided());
-        let kind = kinds[i].unwrap_or(u32::MAX);
-        for x in [s.mesh, s.triangle, side, hemispheres, two_sided, kind] {
-            h.update(&x.to_le_bytes());
-        }
-    }
+    h.update(&geometry_hash(scene, &baked.settings.to_json()));
+    h.update(bytemuck::cast_slice(&baked.surfels));
+    h.update(bytemuck::cast_slice(&baked.shading_normals));
+    h.update(bytemuck::cast_slice(&receivers));
     h.update(&baked.plan.map_levels.to_le_bytes());
     h.update(&slots.total().to_le_bytes());
-    h.update(&(settings.receiver_stride as u64).to_le_bytes());
-    h.update(&[u8::from(settings.view_tree)]);
-    h.update(&baked.settings.tau.to_le_bytes());
     h.digest128().to_le_bytes()
 }
 

@@ -33,7 +33,7 @@
 //! records the transport as if none had been handed to it.
 
 use super::report::TransportReport;
-use super::transport::{ReceiverLinks, SlotIndex, Slots, Term};
+use super::transport::{ReceiverLinks, Slots, Term};
 use crate::atomic::write_atomically_unsynced;
 use crate::error::Result;
 use crate::gather::fpbgi::Cluster;
@@ -68,7 +68,7 @@ pub struct KeptTransport {
     pub key: TransportKey,
     /// Its size, as the bake that recorded it reported it.
     pub report: TransportReport,
-    /// The read slots' bitmap ([`SlotIndex`]'s words).
+    /// The read slots' bitmap ([`SlotIndex`](super::transport::SlotIndex)'s words).
     pub(super) words: Vec<u64>,
     /// The links of the receiver groups kept, in group order, their slots compact.
     pub(super) kept: Vec<Vec<ReceiverLinks>>,
@@ -135,7 +135,7 @@ impl KeptTransport {
         if self.kept.len() > groups.len() {
             return Err("it holds more receiver groups than the bake has".into());
         }
-        let read = SlotIndex::from_words(self.words.clone()).len();
+        let read: usize = self.words.iter().map(|w| w.count_ones() as usize).sum();
         for (links, group) in self.kept.iter().zip(groups) {
             if links.len() != group.members.len()
                 || links
@@ -645,25 +645,13 @@ mod tests {
         assert!(directional.check(Some((4, 4)), 5).is_ok());
         assert!(directional.check(Some((4, 16)), 5).is_err(), "map size");
         assert!(directional.check(None, 5).is_err(), "not diffuse");
-        let unordered = ReceiverLinks::from_parts(
-            9,
-            vec![2, 1, 2, 3].into(),
-            directional.parts().1.into(),
-            directional.parts().2.into(),
-        );
-        assert!(
-            unordered.check(Some((4, 4)), 5).is_err(),
-            "ends out of order"
-        );
-        let short = ReceiverLinks::from_parts(
-            9,
-            vec![1, 1, 2, 2].into(),
-            directional.parts().1.into(),
-            directional.parts().2.into(),
-        );
-        assert!(
-            short.check(Some((4, 4)), 5).is_err(),
-            "ends short of the terms"
-        );
+        for (ends, why) in [
+            (vec![2, 1, 2, 3], "ends out of order"),
+            (vec![1, 1, 2, 2], "ends short of the terms"),
+        ] {
+            let (_, terms, texels) = directional.parts();
+            let links = ReceiverLinks::from_parts(9, ends.into(), terms.into(), texels.into());
+            assert!(links.check(Some((4, 4)), 5).is_err(), "{why}");
+        }
     }
 }
