@@ -161,7 +161,12 @@ impl SurfaceHit {
 
 /// Trace a ray and describe the closest hit.
 pub fn intersect(ctx: &Tracer, o: Vec3, d: Vec3) -> Option<SurfaceHit> {
-    let hit = ctx.accel.closest_hit(o, d, 0.0, f32::INFINITY)?;
+    intersect_within(ctx, o, d, f32::INFINITY)
+}
+
+/// [`intersect`], for hits nearer than `t_max` (in units of `d`'s length).
+pub fn intersect_within(ctx: &Tracer, o: Vec3, d: Vec3, t_max: f32) -> Option<SurfaceHit> {
+    let hit = ctx.accel.closest_hit(o, d, 0.0, t_max)?;
     let m = &ctx.scene.meshes[hit.mesh as usize];
     let t = m.triangles[hit.triangle as usize];
     let v = [t[0], t[1], t[2]].map(|k| Vec3A::from(m.positions[k as usize]));

@@ -35,8 +35,13 @@ fn settings() -> BakeSettings {
     }
 }
 
+/// The path tracer's depth that carries the light the cache of [`settings`] does: its two
+/// bounces, the receiver's, the surfel's direct light and the camera's segment.
+const TRACED_DEPTH: i32 = 5;
+
 /// The floor's mean (rows near the bottom of the view, columns in its middle third: the
-/// plate, seen directly) from the cache's render and from the path tracer at 256 spp, and
+/// plate, seen directly) from the cache's render and from the path tracer at 256 spp (to
+/// [`TRACED_DEPTH`]), and
 /// the path tracer's standard error of that mean per channel (its per-pixel variance is of
 /// one sample).
 fn plate_means(scene: &Scene, baked: &wpbgi::bake::Baked) -> (Vec3, Vec3, Vec3) {
@@ -52,7 +57,7 @@ fn plate_means(scene: &Scene, baked: &wpbgi::bake::Baked) -> (Vec3, Vec3, Vec3) 
         &camera,
         &RenderSettings {
             spp,
-            max_depth: 8,
+            max_depth: TRACED_DEPTH,
             seed: 3,
             ..Default::default()
         },
@@ -116,14 +121,18 @@ fn textured_roughness_builds_one_operator_per_level() {
         offs.push((off, noise));
     }
     let ((constant, noise_c), (textured, noise_t)) = (offs[0], offs[1]);
-    // A small bake's own error on the constant plate (8000 surfels, two of the path tracer's
-    // seven bounces): 8.3 % measured. The bound of 10 % is that figure with room, not a
-    // derivation; it catches a plate gone wrong (black is 100 % off, its untinted white
+    // A small bake's own error on the constant plate (8000 surfels, against the path tracer
+    // to the cache's depth): 2.8 % measured (0.8 % before the render traced its near fields,
+    // whose contacts of the plate with the sphere and the box are darker, closer to the path
+    // tracer pixel by pixel: relMSE 2.6e-3 → 1.7e-3 over these pixels, 1.0e-3 → 8.0e-4 over
+    // the image, at 48² against 4096 spp with the full bounces; 8.3 % when the path tracer
+    // went to depth 8, past the cache's light). The bound of 5 % is that figure with room,
+    // not a derivation; it catches a plate gone wrong (black is 100 % off, its untinted white
     // tens of per cent).
-    assert!(constant < 0.1, "constant plate {constant:.3} off");
+    assert!(constant < 0.05, "constant plate {constant:.3} off");
     // With the texture the cache is no further from the path tracer than without it, up to
-    // three standard errors of the difference of two independent path-traced means (2.6
-    // points here). Measured: 0.9 points closer.
+    // three standard errors of the difference of two independent path-traced means (2.4
+    // points here). Measured: 1.4 points closer.
     let allowed = 3.0 * noise_c.hypot(noise_t);
     assert!(
         textured < constant + allowed,

@@ -16,6 +16,12 @@
 //! square (tests/gather.rs), that lost 17 % of a ring of pixels where ray-cast and splatted
 //! leaves of one surface share pixels (a centre ray that misses the near discs drops their
 //! share of the pixel), and 6 % overhead from the gaps between discs.
+//!
+//! The final render sets its near leaves aside instead ([`NearLeaves::Aside`]) and traces
+//! rays through its buffer's pixels for them (`render::near_field`): discs tile a surface
+//! only roughly, and within a few radii of a receiver their gaps and overhangs are what it
+//! sees (light leaking into the centimetre gap between the Cornell box's ceiling and its
+//! hanging light, contacts too bright). The bake splits them, as above.
 
 use super::microbuffer::{Microbuffer, Sender};
 use super::senders::Senders;
@@ -58,15 +64,23 @@ pub struct CutStats {
     pub visited: u64,
     /// Nodes splatted into the buffer.
     pub splats: u64,
-    /// Near leaves split into pieces.
-    pub split_leaves: u64,
+    /// Near leaves split into pieces, or set aside to be traced ([`NearLeaves`]).
+    pub near_leaves: u64,
+}
+
+/// What a receiver's cut does with its near leaves (see the module docs).
+pub enum NearLeaves<'a> {
+    /// Split each into pieces and splat them.
+    Split,
+    /// Add each to the list, splatting nothing, for the caller to trace the near field.
+    Aside(&'a mut Vec<u32>),
 }
 
 impl std::ops::AddAssign for CutStats {
     fn add_assign(&mut self, o: CutStats) {
         self.visited += o.visited;
         self.splats += o.splats;
-        self.split_leaves += o.split_leaves;
+        self.near_leaves += o.near_leaves;
     }
 }
 
@@ -82,12 +96,13 @@ pub fn splat_cut(
     stack: &mut Vec<u32>,
 ) -> CutStats {
     let always_open = f32::INFINITY;
-    splat_cut_beyond(senders, (p, mesh), mb, start, stack, always_open)
+    let near = &mut NearLeaves::Split;
+    splat_cut_beyond(senders, (p, mesh), mb, start, stack, always_open, near)
 }
 
 /// [`splat_cut`], where a node straddling the plane of a receiver with a uniform buffer joins
 /// the cut whole, as any other node, when it lies at least `straddle_radii` of its radii away
-/// ([`STRADDLE_RADII`] in the render).
+/// ([`STRADDLE_RADII`] in the render), and the near leaves go as `near` says.
 pub fn splat_cut_beyond(
     senders: &Senders,
     (p, mesh): (Vec3, u32),
@@ -95,6 +110,7 @@ pub fn splat_cut_beyond(
     start: &[u32],
     stack: &mut Vec<u32>,
     straddle_radii: f32,
+    near: &mut NearLeaves,
 ) -> CutStats {
     let mut stats = CutStats::default();
     let n = mb.frame.n;
@@ -138,8 +154,13 @@ pub fn splat_cut_beyond(
                     stats.splats += u64::from(mb.splat_at(&sender, d, at, omega));
                 }
             } else {
-                stats.split_leaves += 1;
-                stats.splats += split_leaf(senders, sender.surfel, (p, mesh), pixel, mb);
+                stats.near_leaves += 1;
+                match near {
+                    NearLeaves::Split => {
+                        stats.splats += split_leaf(senders, sender.surfel, (p, mesh), pixel, mb);
+                    }
+                    NearLeaves::Aside(leaves) => leaves.push(sender.surfel),
+                }
             }
             continue;
         }

@@ -20,7 +20,7 @@
 //!   depth per pixel, the cluster buffer looked up along each member pixel's direction
 //!   (docs/method.md §3.4 step 3).
 
-use super::cut::{fits_pixel, splat_cut_beyond, CutStats};
+use super::cut::{fits_pixel, splat_cut_beyond, CutStats, NearLeaves};
 use super::microbuffer::Microbuffer;
 use super::senders::Senders;
 use crate::cache::store::NO_NODE;
@@ -227,13 +227,21 @@ impl ClusterReceivers {
 /// How the members of one cluster fill their microbuffers: the one receiver-gather loop of the
 /// final render and of the bake's bounces. Alone ([`ClusterGather::alone`]), a receiver
 /// traverses the whole tree; together ([`ClusterGather::shared`]), members share the
-/// cluster's far cut and each refines only its near nodes ([`member_buffer`]).
+/// cluster's far cut and each refines only its near nodes ([`ClusterGather::fill`]) before
+/// the shared buffer is composited into its own ([`composite_shared`]).
 pub struct ClusterGather<'a> {
     senders: &'a Senders,
     shared: Option<ClusterCut>,
     /// See [`ClusterGather::whole_straddling_beyond`].
     straddle_radii: f32,
+    /// The near leaves a receiver's cut set aside ([`ClusterGather::fill_tracing_near`]).
+    near_leaves: Vec<u32>,
 }
+
+/// A receiver's near field, traced by whoever gathers instead of splatted: it is handed the
+/// buffer, its senders recorded but not yet resolved, and the near leaves its cut set aside
+/// ([`NearLeaves::Aside`]), and records what it finds there.
+pub type NearField<'f> = &'f mut dyn FnMut(&mut Microbuffer, &[u32]);
 
 impl<'a> ClusterGather<'a> {
     /// Receivers that each traverse the whole tree.
@@ -242,6 +250,7 @@ impl<'a> ClusterGather<'a> {
             senders,
             shared: None,
             straddle_radii: f32::INFINITY,
+            near_leaves: Vec::new(),
         }
     }
 
@@ -267,6 +276,7 @@ impl<'a> ClusterGather<'a> {
             senders,
             shared: Some(cluster_cut(senders, receivers, far_eps, n)),
             straddle_radii: f32::INFINITY,
+            near_leaves: Vec::new(),
         }
     }
 
@@ -286,23 +296,51 @@ impl<'a> ClusterGather<'a> {
         mb: &mut Microbuffer,
         stack: &mut Vec<u32>,
     ) -> CutStats {
-        match &mut self.shared {
-            Some(cut) => {
-                let receiver = (p, mesh, self.straddle_radii);
-                member_buffer(self.senders, cut, receiver, mb, stack)
-            }
-            None => {
-                let root: &[u32] = if self.senders.nodes.is_empty() {
-                    &[]
-                } else {
-                    &[0]
-                };
-                let (senders, straddle) = (self.senders, self.straddle_radii);
-                let stats = splat_cut_beyond(senders, (p, mesh), mb, root, stack, straddle);
-                mb.resolve();
-                stats
+        self.fill_with((p, mesh), mb, stack, None)
+    }
+
+    /// [`ClusterGather::fill`], where the cut sets its near leaves aside and `near_field`
+    /// records what the receiver sees there before the buffer is resolved.
+    pub fn fill_tracing_near(
+        &mut self,
+        p: Vec3,
+        mesh: u32,
+        mb: &mut Microbuffer,
+        stack: &mut Vec<u32>,
+        near_field: NearField,
+    ) -> CutStats {
+        self.fill_with((p, mesh), mb, stack, Some(near_field))
+    }
+
+    fn fill_with(
+        &mut self,
+        (p, mesh): (Vec3, u32),
+        mb: &mut Microbuffer,
+        stack: &mut Vec<u32>,
+        near_field: Option<NearField>,
+    ) -> CutStats {
+        let start: &[u32] = match &self.shared {
+            Some(cut) => &cut.near,
+            None if self.senders.nodes.is_empty() => &[],
+            None => &[0],
+        };
+        self.near_leaves.clear();
+        let mut near = match near_field {
+            Some(_) => NearLeaves::Aside(&mut self.near_leaves),
+            None => NearLeaves::Split,
+        };
+        let (senders, straddle) = (self.senders, self.straddle_radii);
+        let stats = splat_cut_beyond(senders, (p, mesh), mb, start, stack, straddle, &mut near);
+        if let Some(near_field) = near_field {
+            if !self.near_leaves.is_empty() {
+                near_field(mb, &self.near_leaves);
             }
         }
+        mb.resolve();
+        if let Some(cut) = &mut self.shared {
+            composite_shared(cut, mb);
+        }
+        stats
     }
 }
 
@@ -397,18 +435,9 @@ pub fn cluster_cut(
     }
 }
 
-/// Fill the buffer of a member (at `p` on `mesh`, taking nodes that straddle its plane whole
-/// from `straddle_radii`, see [`splat_cut_beyond`]): its refinement of the near nodes,
-/// composited by depth with the cluster buffer looked up along each of its pixels' directions.
-pub fn member_buffer(
-    senders: &Senders,
-    cut: &mut ClusterCut,
-    (p, mesh, straddle_radii): (Vec3, u32, f32),
-    mb: &mut Microbuffer,
-    stack: &mut Vec<u32>,
-) -> CutStats {
-    let stats = splat_cut_beyond(senders, (p, mesh), mb, &cut.near, stack, straddle_radii);
-    mb.resolve();
+/// Composite the shared buffer of `cut` into a member's buffer `mb`, resolved: each of its
+/// pixels takes the shared light along its direction, by depth (docs/method.md §3.4 step 3).
+pub fn composite_shared(cut: &mut ClusterCut, mb: &mut Microbuffer) {
     let index = cut.lookup(mb);
     let (lookup, shared) = (&cut.lookups[index].2, &cut.buffer);
     // For a buffer that records links: the scale of each pixel's own links (radiance,
@@ -465,5 +494,4 @@ pub fn member_buffer(
     if recording {
         mb.composite_links(&own, shared, &from_shared);
     }
-    stats
 }

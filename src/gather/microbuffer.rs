@@ -693,6 +693,32 @@ impl Microbuffer {
         true
     }
 
+    /// Record what rays through the centres of pixels found (`hits`: a pixel and the surface
+    /// its ray hit, as a sender at the hit point with the surface's normal): each covers its
+    /// whole pixel, with the pixel's exact mean cosine, and hides the senders recorded there
+    /// that lie behind it or on its surface (their centre within their radius of its plane:
+    /// a pixel spans more depth than a sender's radius where it sees a surface obliquely).
+    /// The render's traced near field (`render::near_field`).
+    pub(crate) fn record_hits(&mut self, hits: &[(usize, Sender)]) {
+        let mut hit_of = vec![u32::MAX; self.pixels.len()];
+        for (i, (k, _)) in hits.iter().enumerate() {
+            hit_of[*k] = i as u32;
+        }
+        self.pending.retain(|s| {
+            let Some((_, hit)) = hits.get(hit_of[s.pixel as usize] as usize) else {
+                return true;
+            };
+            let behind = s.dist + s.shape.radius >= hit.offset.length();
+            let on_it = (s.shape.offset - hit.offset).dot(hit.normal).abs() <= s.shape.radius;
+            !(behind || on_it)
+        });
+        for (k, sender) in hits {
+            let (dist, cos) = (sender.offset.length(), self.mean_cos(*k));
+            let source = self.source_of(sender.lookup);
+            self.record(*k, (dist, cos, 1.0), sender, source);
+        }
+    }
+
     /// Record `sender` covering the fraction `coverage` of pixel `k`.
     pub fn cover(&mut self, k: usize, sender: &Sender, coverage: f32) {
         let dist = sender.offset.length();
@@ -920,13 +946,13 @@ impl Microbuffer {
         }
     }
 
-    /// Composite the links of a shared buffer into this one's, as [`member_buffer`]
+    /// Composite the links of a shared buffer into this one's, as [`composite_shared`]
     /// composites their radiance: this buffer's links of pixel k scaled by `own[k]`
     /// (radiance, cosine-weighted), and for each `(k, c, w, w_cos)` of `from_shared` the
     /// shared links of pixel c added to pixel k, weighted `w` (radiance) and `w_cos` (cosine,
     /// the member pixel's) times their radiance weight. No-op unless both record links.
     ///
-    /// [`member_buffer`]: super::fpbgi::member_buffer
+    /// [`composite_shared`]: super::fpbgi::composite_shared
     pub(crate) fn composite_links(
         &mut self,
         own: &[(f32, f32)],

@@ -21,6 +21,7 @@
 //! Every random number is keyed by (pixel, sample), and every tile is processed in a fixed
 //! order, so the image is the same for any thread count.
 
+pub mod near_field;
 pub mod paths;
 mod pixels;
 pub mod primary;
@@ -289,6 +290,8 @@ pub struct GatherStats {
     /// Of those, the glossy and rough-dielectric ones, which took their outgoing radiance
     /// from anchors with the same BSDF ([`sparse`]).
     pub interpolated_glossy: u64,
+    /// Rays traced for receivers' near fields ([`near_field`]).
+    pub near_rays: u64,
 }
 
 impl GatherStats {
@@ -301,6 +304,7 @@ impl GatherStats {
         self.pixels += o.pixels;
         self.interpolated += o.interpolated;
         self.interpolated_glossy += o.interpolated_glossy;
+        self.near_rays += o.near_rays;
     }
 }
 
@@ -710,7 +714,15 @@ fn gather_tile(
     let (interpolated, glossy) =
         plan.run(receivers, &mut value, clearance, floor, |which, value| {
             let sets = (&plan, frame.tile_clusters);
-            gather_set(senders, receivers, which, sets, settings, value, &mut stats)
+            gather_set(
+                (ctx, senders),
+                receivers,
+                which,
+                sets,
+                settings,
+                value,
+                &mut stats,
+            )
         });
     stats.interpolated = interpolated as u64;
     stats.interpolated_glossy = glossy as u64;
@@ -741,7 +753,7 @@ fn by_glossy_hit(r: &Receiver) -> bool {
 /// Gather receivers `which` into `value`: the irradiance of those whose value the plan keeps
 /// as irradiance ([`SparsePlan::by_irradiance`]), the outgoing radiance of the others.
 fn gather_set(
-    senders: &Senders,
+    (ctx, senders): (&Tracer, &Senders),
     receivers: &[Receiver],
     which: &[usize],
     (plan, tile_clusters): (&SparsePlan, usize),
@@ -761,7 +773,18 @@ fn gather_set(
     let mut gather_one = |gather: &mut ClusterGather, k: usize, stats: &mut GatherStats| {
         let r = &receivers[k];
         prepare_buffer(&mut mb, r, settings);
-        stats.receiver_cut += gather.fill(r.p, r.mesh, &mut mb, &mut stack);
+        // A hemispherical buffer's near field is traced ([`near_field`]); a two-sided
+        // receiver's (glass) sees its own surface curving round it, which its cut's rules
+        // for its own mesh's discs handle.
+        stats.receiver_cut += if mb.spherical {
+            gather.fill(r.p, r.mesh, &mut mb, &mut stack)
+        } else {
+            let near_rays = &mut stats.near_rays;
+            let mut trace = |mb: &mut Microbuffer, leaves: &[u32]| {
+                *near_rays += near_field::trace_near_field(ctx, senders, r, mb, leaves);
+            };
+            gather.fill_tracing_near(r.p, r.mesh, &mut mb, &mut stack, &mut trace)
+        };
         stats.pixels += mb.pixels.len() as u64;
         let bsdf = if plan.by_irradiance(k) {
             &white

@@ -24,10 +24,10 @@
 //!   bounce at 20 000 surfels, see docs/bounces.md): in a Cornell box the near field is most
 //!   of a surfel's splats.
 //! - Each member refines the near senders into its own buffer and composites the shared one
-//!   along its pixels' directions ([`member_buffer`]); senders that come near the members'
+//!   along its pixels' directions ([`composite_shared`]); senders that come near the members'
 //!   planes are left to the members, whose traversal opens them (see [`splat_cut`]).
 //!
-//! [`member_buffer`]: crate::gather::fpbgi::member_buffer
+//! [`composite_shared`]: crate::gather::fpbgi::composite_shared
 //! [`splat_cut`]: crate::gather::cut::splat_cut
 
 use crate::gather::fpbgi::Cluster;

@@ -295,12 +295,14 @@ pub fn print_summary(out: &FinalOutput) {
         s.clusters
     );
     detail!(
-        "  cut: {} nodes visited and {} splatted by receivers, {} and {} by clusters; {} near surfels split",
+        "  cut: {} nodes visited and {} splatted by receivers, {} and {} by clusters; {} near \
+         surfels, {} rays traced through near fields",
         s.receiver_cut.visited,
         s.receiver_cut.splats,
         s.cluster_cut.visited,
         s.cluster_cut.splats,
-        s.receiver_cut.split_leaves
+        s.receiver_cut.near_leaves,
+        s.near_rays
     );
     for (stage, secs) in &out.timings {
         say!("  {stage}: {secs:.2} s");
