@@ -29,16 +29,11 @@ use wpbgi::render::primary::Receiver;
 use wpbgi::scene::Scene;
 use wpbgi::spectrum::Rgb;
 
-/// A 2 × 2 square at y = 0 facing −y, lit from below.
-fn lit_square() -> String {
-    lit_square_and(&[])
-}
-
 /// A horizontal rectangle `[x0, x1] × [z0, z1]` at height `y`, facing −y.
 type Plate = (f32, [f32; 4]);
 
-/// [`lit_square`] with black (reflectance 0) `plates` below it: they shade the square above
-/// them and hide it from below.
+/// A 2 × 2 square at y = 0 facing −y, lit from below, with black (reflectance 0) `plates`
+/// below it: they shade the square above them and hide it from below.
 fn lit_square_and(plates: &[Plate]) -> String {
     let rects = std::iter::once((0.0, [-1.0, 1.0, -1.0, 1.0])).chain(plates.iter().copied());
     let (mut bin, mut views, mut accessors, mut meshes, mut nodes) =
@@ -124,16 +119,7 @@ fn irradiance_where(p: Vec3, n: Vec3, l: f64, seen: impl Fn(glam::DVec3) -> bool
 }
 
 fn senders() -> (Scene, Senders) {
-    let dir = common::Scratch::new("gather");
-    let gltf = dir.join("square.gltf");
-    std::fs::write(&gltf, lit_square()).unwrap();
-    let scene = Scene::load(&gltf).unwrap();
-    let settings = BakeSettings {
-        points: 8000,
-        light_samples: 4,
-        ..BakeSettings::preset(wpbgi::bake::Quality::Draft).direct_only()
-    };
-    let baked = bake(&scene, &settings, &|_, _| {}).unwrap();
+    let (scene, baked, senders) = square_senders(&[], "gather");
     // Every surfel reflects exactly ρE/π = 0.5 (a directional light has no noise).
     for r in &baked.radiance {
         match r {
@@ -143,8 +129,24 @@ fn senders() -> (Scene, Senders) {
             _ => panic!("diffuse surfels store RGB"),
         }
     }
-    let senders = cached_senders(&scene, &settings, &baked, &dir.join("square.wpc"));
     (scene, senders)
+}
+
+/// The lit square and its `plates` ([`lit_square_and`]) baked with 8 000 surfels, and their
+/// senders as a render reads them, in a scratch folder named `name`.
+fn square_senders(plates: &[Plate], name: &str) -> (Scene, Baked, Senders) {
+    let dir = common::Scratch::new(name);
+    let gltf = dir.join("square.gltf");
+    std::fs::write(&gltf, lit_square_and(plates)).unwrap();
+    let scene = Scene::load(&gltf).unwrap();
+    let settings = BakeSettings {
+        points: 8000,
+        light_samples: 4,
+        ..BakeSettings::preset(wpbgi::bake::Quality::Draft).direct_only()
+    };
+    let baked = bake(&scene, &settings, &|_, _| {}).unwrap();
+    let senders = cached_senders(&scene, &settings, &baked, &dir.join("square.wpc"));
+    (scene, baked, senders)
 }
 
 /// The senders of `baked` (of `scene` with `settings`) as a render reads them: written to a
@@ -287,17 +289,7 @@ fn a_traced_near_field_sees_a_gap_as_it_is() {
 /// near field traced and split.
 fn through_a_gap(h: f32, gap: f32, rim: f32) -> (f64, f64) {
     let plate: Plate = (-h + gap, [-rim, 1.5, -1.5, 1.5]);
-    let dir = common::Scratch::new("gather-gap");
-    let gltf = dir.join("gap.gltf");
-    std::fs::write(&gltf, lit_square_and(&[plate])).unwrap();
-    let scene = Scene::load(&gltf).unwrap();
-    let settings = BakeSettings {
-        points: 8000,
-        light_samples: 4,
-        ..BakeSettings::preset(wpbgi::bake::Quality::Draft).direct_only()
-    };
-    let baked = bake(&scene, &settings, &|_, _| {}).unwrap();
-    let senders = cached_senders(&scene, &settings, &baked, &dir.join("gap.wpc"));
+    let (scene, _, senders) = square_senders(&[plate], "gather-gap");
     let tracer = wpbgi::trace::Tracer::new(&scene);
     let p = Vec3::new(0.0, -h, 0.0);
     let frame = Frame::from_normal(Vec3::Y);
