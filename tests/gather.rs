@@ -5,7 +5,9 @@
 //! height h below it gathers E = ∫ L cos θ_r cos θ_s / r² dA, which the test integrates
 //! numerically (a 2000² midpoint rule in f64, error < 1e-6 relative) from the geometry alone.
 //! The gather goes through the whole chain: bake, cache file, senders, cut, microbuffer,
-//! convolution with a white diffuse BSDF (L_o = E/π).
+//! convolution with a white diffuse BSDF (L_o = E/π), each receiver with its near leaves split
+//! into pieces (the bake's way) and traced (the render's: `render::near_field`); and a receiver
+//! that sees the square only through a 1 cm gap under a black plate, where the two part.
 //!
 //! Tolerance 3 %: a 16² buffer's pixels span 9°, the surfels are 1/2000 of the square each,
 //! and the measured errors (0.3–2.7 %, printed per case) come from where the square's edge
