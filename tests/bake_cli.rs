@@ -933,21 +933,13 @@ fn a_kept_transport_is_reported_and_relight_re_solves_from_it() {
             .flat_map(|e| ["--set", e])
             .map(String::from)
             .collect();
-        for a in [
-            "bake",
-            &s,
-            "-o",
-            &path(out),
-            "--points",
-            "2000",
-            "--light-samples",
-            "16",
-            "--bounces",
-            "2",
-        ] {
-            args.push(a.to_string());
-        }
-        args.extend(extra.iter().map(|a| a.to_string()));
+        args.extend(["bake".to_string(), s.clone(), "-o".to_string(), path(out)]);
+        args.extend(
+            common::SMALL_BAKE
+                .iter()
+                .chain(extra)
+                .map(|a| a.to_string()),
+        );
         wpbgi(&args.iter().map(String::as_str).collect::<Vec<_>>())
     };
     let baked = bake_into(&[], &cache, &["--keep-transport", "--json"]);

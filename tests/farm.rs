@@ -56,18 +56,9 @@ fn assert_refused(out: &Output, needle: &str) {
 
 /// Bake `scene` small into `cache`.
 fn bake(scene: &Path, cache: &Path) {
-    let out = wpbgi(&[
-        "bake",
-        utf8(scene),
-        "-o",
-        utf8(cache),
-        "--points",
-        "2000",
-        "--light-samples",
-        "16",
-        "--bounces",
-        "2",
-    ]);
+    let mut args = vec!["bake", utf8(scene), "-o", utf8(cache)];
+    args.extend(common::SMALL_BAKE);
+    let out = wpbgi(&args);
     assert_ok(&out, "bake");
 }
 

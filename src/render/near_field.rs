@@ -33,9 +33,8 @@ use super::primary::Receiver;
 use crate::gather::lookup::Lookup;
 use crate::gather::microbuffer::Sender;
 use crate::gather::{Microbuffer, Senders};
-use crate::geometry::offset::offset_origin;
 use crate::trace::{intersect_within, Tracer};
-use glam::{Vec3, Vec3A};
+use glam::Vec3;
 
 /// Record in `mb` (its cut's senders recorded, not yet resolved) what receiver `r` sees
 /// within reach of the near leaves `leaves` (surfel indices), one ray per pixel. Returns the
@@ -80,13 +79,7 @@ pub fn trace_near_field(
         }
         traced += 1;
         let w = mb.frame.to_world(px.dir).normalize();
-        let o = offset_origin(
-            Vec3A::from(r.p),
-            Vec3A::from(r.err),
-            Vec3A::from(r.ng),
-            Vec3A::from(w),
-        );
-        let Some(hit) = intersect_within(ctx, Vec3::from(o), w, reach) else {
+        let Some(hit) = intersect_within(ctx, r.spawn(w), w, reach) else {
             continue;
         };
         let lookup = senders

@@ -36,11 +36,10 @@
 use super::primary::Receiver;
 use crate::bsdf::TransportMode;
 use crate::gather::Senders;
-use crate::geometry::offset::offset_origin;
 use crate::sampler::{sobol02, Sampler};
 use crate::spectrum::{max_component, Rgb};
 use crate::trace::{intersect, Tracer};
-use glam::{Vec3, Vec3A};
+use glam::Vec3;
 
 /// Where a path-traced gather's rays read the cache.
 #[derive(Clone, Copy, Debug)]
@@ -81,17 +80,11 @@ pub(crate) fn path_gather(
             continue;
         };
         let w = r.frame.to_world(sample.wo).normalize();
-        let origin = offset_origin(
-            Vec3A::from(r.p),
-            Vec3A::from(r.err),
-            Vec3A::from(r.ng),
-            Vec3A::from(w),
-        );
         sum += sample.weight
             * into_cache(
                 ctx,
                 senders,
-                (Vec3::from(origin), w),
+                (r.spawn(w), w),
                 r.mesh,
                 continuation,
                 &mut sampler,

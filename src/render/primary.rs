@@ -14,10 +14,11 @@ use crate::bsdf::fresnel::fresnel_dielectric;
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::emitters::shadowed;
 use crate::geometry::frame::Frame;
+use crate::geometry::offset::offset_origin;
 use crate::sampler::{mix64, permute, sobol02, Sampler, GOLDEN_GAMMA};
 use crate::spectrum::{max_component, Rgb};
 use crate::trace::{intersect, mis, SurfaceHit, Tracer};
-use glam::Vec3;
+use glam::{Vec3, Vec3A};
 
 /// A rough surface point that gathers indirect light from the cache.
 #[derive(Clone, Debug)]
@@ -49,6 +50,19 @@ pub struct Receiver {
     /// The quarter of its pixel whose gathering sample it came from (0–3, x first), or `None`
     /// for a pixel of one sample.
     pub quarter: Option<u8>,
+}
+
+impl Receiver {
+    /// The origin of a ray leaving the receiver along `w`, offset to the side `w` points to
+    /// by the rounding bound of its point (as [`crate::trace::SurfaceHit::spawn`]).
+    pub fn spawn(&self, w: Vec3) -> Vec3 {
+        Vec3::from(offset_origin(
+            Vec3A::from(self.p),
+            Vec3A::from(self.err),
+            Vec3A::from(self.ng),
+            Vec3A::from(w),
+        ))
+    }
 }
 
 /// The chain `chain` continued at mesh `mesh` by branch `branch` (see [`Receiver::chain`]):

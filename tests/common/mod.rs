@@ -10,6 +10,17 @@ pub use scratch::Scratch;
 use glam::Vec3;
 use wpbgi::scene::Mesh;
 
+/// The command line's arguments for a small bake that still runs the bounces (2 000 surfels,
+/// 16 light samples, two bounces): what the CLI tests bake with.
+pub const SMALL_BAKE: [&str; 6] = [
+    "--points",
+    "2000",
+    "--light-samples",
+    "16",
+    "--bounces",
+    "2",
+];
+
 /// Standard base64 (for data URIs).
 pub fn b64(data: &[u8]) -> String {
     const A: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
