@@ -56,6 +56,7 @@ pub mod compare;
 pub mod denoise;
 pub mod emitters;
 pub mod error;
+pub mod fast_hash;
 #[doc(hidden)]
 pub mod fuzzing;
 pub mod gather;

@@ -80,9 +80,9 @@
 
 use super::primary::Receiver;
 use crate::bsdf::Bsdf;
+use crate::fast_hash::FastHashMap;
 use crate::spectrum::{luminance, max_component, Rgb};
 use glam::Vec3;
-use std::collections::HashMap;
 
 /// Pixels between the anchors along a row or column in frames under 512 pixels on their
 /// shorter side ([`coarsest_cell`]).
@@ -162,7 +162,7 @@ pub(crate) struct SparsePlan {
     /// Per receiver: its value is its irradiance (see [`SparsePlan::by_irradiance`]).
     irradiance: Vec<bool>,
     /// Every eligible receiver by its place in the tile's layers.
-    at: HashMap<Key, u32>,
+    at: FastHashMap<Key, u32>,
     /// Whether edges' quarters and the finest cells' primary hits that fail take the light of
     /// the pixels beside them ([`borrows_light_beside`]).
     borrow: bool,
@@ -342,7 +342,7 @@ impl SparsePlan {
                 (x, y, (y * size.0 + x, r.chain, r.quarter))
             })
             .collect();
-        let mut count: HashMap<Key, u32> = HashMap::new();
+        let mut count: FastHashMap<Key, u32> = FastHashMap::default();
         if sparse {
             for &(_, _, key) in &cells {
                 *count.entry(key).or_default() += 1;
@@ -356,7 +356,7 @@ impl SparsePlan {
         // A geometric edge's quarters on one surface: the two farthest apart gather, and the
         // others take the nearer one's value if the two agree (see the module docs).
         let mut lender: Vec<Option<(u32, u32)>> = vec![None; receivers.len()];
-        let mut surfaces: HashMap<u32, Vec<Vec<usize>>> = HashMap::new();
+        let mut surfaces: FastHashMap<u32, Vec<Vec<usize>>> = FastHashMap::default();
         for (k, r) in receivers.iter().enumerate() {
             if !(sparse && on_geometric_edge(r)) {
                 continue;
@@ -383,7 +383,7 @@ impl SparsePlan {
             }
         }
         let borrow = sparse && borrows_light_beside(coarsest);
-        let mut at = HashMap::new();
+        let mut at = FastHashMap::default();
         let first = cells
             .iter()
             .zip(&eligible)

@@ -23,14 +23,13 @@ pub mod coding;
 pub mod radiance;
 pub mod tree;
 
+use crate::fast_hash::FastHashMap;
 use crate::geometry::offset::interpolate_with_error;
 use crate::geometry::warp::square_to_uniform_triangle;
 use crate::sampler::Sampler;
 use crate::scene::Scene;
 use glam::{IVec3, Vec2, Vec3, Vec3A};
 use rayon::prelude::*;
-use std::collections::HashMap;
-use std::hash::{BuildHasherDefault, Hasher};
 
 /// Candidates drawn per surfel kept (Yuksel's recommendation is 3–5).
 pub(crate) const CANDIDATES_PER_SURFEL: usize = 5;
@@ -191,28 +190,6 @@ fn candidate(
     }
 }
 
-/// A multiplicative hash for grid cells (the default SipHash is a third of the run time here,
-/// and the keys are not adversarial).
-#[derive(Default)]
-struct CellHasher(u64);
-
-impl Hasher for CellHasher {
-    fn finish(&self) -> u64 {
-        self.0
-    }
-    fn write(&mut self, bytes: &[u8]) {
-        for &b in bytes {
-            self.write_u64(b as u64);
-        }
-    }
-    fn write_i32(&mut self, i: i32) {
-        self.write_u64(i as u32 as u64);
-    }
-    fn write_u64(&mut self, i: u64) {
-        self.0 = (self.0.rotate_left(5) ^ i).wrapping_mul(0x51_7c_c1_b7_27_22_0a_95);
-    }
-}
-
 /// A uniform grid over the candidates, which it reorders so each cell is one contiguous slice
 /// and neighbouring cells lie close in memory (Morton order of the cells): elimination
 /// touches each candidate's neighbours thousands of times, and random order made it
@@ -251,7 +228,7 @@ impl Grid {
             let k = key(s.p);
             (morton(k), k.x, k.y, k.z)
         });
-        let mut index: HashMap<IVec3, u32, BuildHasherDefault<CellHasher>> = HashMap::default();
+        let mut index: FastHashMap<IVec3, u32> = FastHashMap::default();
         let mut keys = Vec::new();
         let mut ranges = Vec::new();
         let mut cell_of = vec![0u32; points.len()];
