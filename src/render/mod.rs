@@ -383,12 +383,6 @@ pub fn render_final_cancellable(
     }
     scene.check_renderable()?;
     let mut timings = Vec::new();
-    let t = Instant::now();
-    let ctx = Tracer::new(scene);
-    let senders = Senders::from_cache(cache).map_err(Error::Cache)?;
-    timings.push(("load", t.elapsed().as_secs_f64()));
-
-    let t = Instant::now();
     let primary_settings = PrimarySettings {
         max_depth: settings.max_depth,
         light_samples: settings.light_samples,
@@ -415,8 +409,23 @@ pub fn render_final_cancellable(
         (ty1 + border).min(h),
     ];
     check_fits((x1 - x0, y1 - y0), rect, tile)?;
-    let sampling = PixelSampling::new(&ctx, camera, &primary_settings, rect);
-    let mut primary_seconds = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let ctx = Tracer::new(scene);
+    // The centre rays are traced while the cache's senders are read: the reading is partly
+    // serial (the tree is rebuilt a level at a time, its sums bottom-up), and the rays fill
+    // the other cores meanwhile. "load" is the reading's own time, the rest of the step the
+    // primary pass's.
+    let (senders, sampling) = rayon::join(
+        || {
+            let t = Instant::now();
+            Senders::from_cache(cache).map(|s| (s, t.elapsed().as_secs_f64()))
+        },
+        || PixelSampling::new(&ctx, camera, &primary_settings, rect),
+    );
+    let (senders, load_seconds) = senders.map_err(Error::Cache)?;
+    let step = t.elapsed().as_secs_f64();
+    timings.push(("load", load_seconds.min(step)));
+    let mut primary_seconds = step - load_seconds.min(step);
     let mut gather_seconds = 0.0;
     // The tiles of the whole image that the crop touches.
     let tiles: Vec<(u32, u32)> = (y0 / tile..y1.div_ceil(tile))
@@ -752,6 +761,13 @@ fn by_glossy_hit(r: &Receiver) -> bool {
 
 /// Gather receivers `which` into `value`: the irradiance of those whose value the plan keeps
 /// as irradiance ([`SparsePlan::by_irradiance`]), the outgoing radiance of the others.
+///
+/// The receivers that gather alone and the clusters are independent of one another, so they
+/// are gathered in parallel, each task with buffers of its own: a tile's gather is the unit of
+/// the render's work, and the costliest tiles (a light's outline, contacts) take three times
+/// the mean, so a frame's last tiles left a core idle for up to a tenth of the render; their
+/// clusters now spread over every core. Each receiver's value comes from its own gather and
+/// the stats are integer sums, so neither depends on which thread took what.
 fn gather_set(
     (ctx, senders): (&Tracer, &Senders),
     receivers: &[Receiver],
@@ -767,23 +783,31 @@ fn gather_set(
     let (clustered, alone): (Vec<usize>, Vec<usize>) = which.iter().partition(|&&k| {
         settings.gather == GatherMode::Fpbgi && !is_glossy(&receivers[k], settings)
     });
-    // Receiver `k`'s buffer filled by `gather`, then shaded into `value[k]`.
-    let mut mb = Microbuffer::new(settings.mb_size, false, Frame::from_normal(Vec3::Z));
-    let mut stack = Vec::new();
-    let mut gather_one = |gather: &mut ClusterGather, k: usize, stats: &mut GatherStats| {
+    // A task's buffer and traversal stack.
+    let scratch = || {
+        (
+            Microbuffer::new(settings.mb_size, false, Frame::from_normal(Vec3::Z)),
+            Vec::new(),
+        )
+    };
+    // Receiver `k`'s buffer filled by `gather`, then shaded: its value.
+    let gather_one = |gather: &mut ClusterGather,
+                      (mb, stack): &mut (Microbuffer, Vec<u32>),
+                      k: usize,
+                      stats: &mut GatherStats| {
         let r = &receivers[k];
-        prepare_buffer(&mut mb, r, settings);
+        prepare_buffer(mb, r, settings);
         // A hemispherical buffer's near field is traced ([`near_field`]); a two-sided
         // receiver's (glass) sees its own surface curving round it, which its cut's rules
         // for its own mesh's discs handle.
         stats.receiver_cut += if mb.spherical {
-            gather.fill(r.p, r.mesh, &mut mb, &mut stack)
+            gather.fill(r.p, r.mesh, mb, stack)
         } else {
             let near_rays = &mut stats.near_rays;
             let mut trace = |mb: &mut Microbuffer, leaves: &[u32]| {
                 *near_rays += near_field::trace_near_field(ctx, senders, r, mb, leaves);
             };
-            gather.fill_tracing_near(r.p, r.mesh, &mut mb, &mut stack, &mut trace)
+            gather.fill_tracing_near(r.p, r.mesh, mb, stack, &mut trace)
         };
         stats.pixels += mb.pixels.len() as u64;
         let bsdf = if plan.by_irradiance(k) {
@@ -791,12 +815,33 @@ fn gather_set(
         } else {
             &r.bsdf
         };
-        value[k] = mb.convolve(bsdf, r.view);
+        mb.convolve(bsdf, r.view)
     };
-    let mut gather = ClusterGather::alone(senders).whole_straddling_beyond(STRADDLE_RADII);
-    for k in alone {
-        gather_one(&mut gather, k, stats);
-    }
+    // The values of a task's receivers and what their gathers cost.
+    type Done = (Vec<(usize, Rgb)>, GatherStats);
+    let gathered_alone: Vec<Done> = alone
+        .par_iter()
+        .map_init(
+            || {
+                let gather = ClusterGather::alone(senders).whole_straddling_beyond(STRADDLE_RADII);
+                (gather, scratch())
+            },
+            |(gather, scratch), &k| {
+                let mut s = GatherStats::default();
+                let v = gather_one(gather, scratch, k, &mut s);
+                (vec![(k, v)], s)
+            },
+        )
+        .collect();
+    let mut keep = |done: Vec<Done>, stats: &mut GatherStats| {
+        for (values, s) in done {
+            for (k, v) in values {
+                value[k] = v;
+            }
+            stats.add(&s);
+        }
+    };
+    keep(gathered_alone, stats);
     if clustered.is_empty() || senders.nodes.is_empty() {
         return;
     }
@@ -811,24 +856,37 @@ fn gather_set(
     let clusters = cluster(&points, count);
     stats.clustered += clustered.len() as u64;
     stats.clusters += clusters.len() as u64;
-    for c in &clusters {
-        let active = &receivers[clustered[c.active as usize]];
-        let cluster_receivers = ClusterReceivers::of(
-            c,
-            (active.p, active.mesh, active.frame),
-            active.bsdf.is_two_sided(),
-            false,
-        );
-        let mut gather = ClusterGather::shared(
-            senders,
-            &cluster_receivers,
-            settings.far_eps,
-            settings.mb_size,
-        )
-        .whole_straddling_beyond(STRADDLE_RADII);
-        stats.cluster_cut += gather.shared_stats();
-        for &m in &c.members {
-            gather_one(&mut gather, clustered[m as usize], stats);
-        }
-    }
+    let gathered_clusters: Vec<Done> = clusters
+        .par_iter()
+        .map_init(scratch, |scratch, c| {
+            let active = &receivers[clustered[c.active as usize]];
+            let cluster_receivers = ClusterReceivers::of(
+                c,
+                (active.p, active.mesh, active.frame),
+                active.bsdf.is_two_sided(),
+                false,
+            );
+            let mut gather = ClusterGather::shared(
+                senders,
+                &cluster_receivers,
+                settings.far_eps,
+                settings.mb_size,
+            )
+            .whole_straddling_beyond(STRADDLE_RADII);
+            let mut s = GatherStats {
+                cluster_cut: gather.shared_stats(),
+                ..Default::default()
+            };
+            let values = c
+                .members
+                .iter()
+                .map(|&m| {
+                    let k = clustered[m as usize];
+                    (k, gather_one(&mut gather, scratch, k, &mut s))
+                })
+                .collect();
+            (values, s)
+        })
+        .collect();
+    keep(gathered_clusters, stats);
 }
