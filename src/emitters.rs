@@ -88,6 +88,10 @@ struct EmissiveTriangle {
     normal: Vec3,
     /// [`EmitterSampler::selection_probability`] of this entry.
     selection: f32,
+    /// The mesh's material, and whether its emission is textured (only then does a sample
+    /// need its texture coordinates).
+    material: usize,
+    textured: bool,
 }
 
 /// Power-proportional emitter selection.
@@ -136,6 +140,8 @@ impl EmitterSampler {
                     vertices,
                     normal: Vec3::from((v1 - v0).cross(v2 - v0)).normalize(),
                     selection: 0.0,
+                    material: m.material,
+                    textured: e.texture.is_some(),
                 });
                 weights.push(
                     (area * luminance(e.radiance).max(1e-12) * sides * std::f32::consts::PI) as f64,
@@ -278,7 +284,6 @@ impl EmitterSampler {
             if sel <= 0.0 {
                 return None;
             }
-            let m = &scene.meshes[et.mesh as usize];
             let v = et.vertices;
             let spherical = by_solid_angle
                 .then(|| SphericalTriangle::new(p, v.map(Vec3::from)))
@@ -301,8 +306,12 @@ impl EmitterSampler {
             }
             let wi = d / dist;
             let cos_light = -wi.dot(ng);
-            let uv = m.uv_at(et.tri, b);
-            let le = scene.materials[m.material].emission_at(&scene.textures, uv, cos_light > 0.0);
+            let uv = if et.textured {
+                scene.meshes[et.mesh as usize].uv_at(et.tri, b)
+            } else {
+                Vec2::ZERO
+            };
+            let le = scene.materials[et.material].emission_at(&scene.textures, uv, cos_light > 0.0);
             if le == Rgb::ZERO || cos_light == 0.0 {
                 return None;
             }

@@ -5,7 +5,7 @@
 //! multiple-importance weight ([`mis`]). Neither path tracer knows
 //! the other; both build on this.
 
-use crate::accel::Accel;
+use crate::accel::{Accel, Hit};
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::emitters::EmitterSampler;
 use crate::geometry::frame::Frame;
@@ -166,12 +166,8 @@ pub fn intersect(ctx: &Tracer, o: Vec3, d: Vec3) -> Option<SurfaceHit> {
 
 /// [`intersect`], for hits nearer than `t_max` (in units of `d`'s length).
 pub fn intersect_within(ctx: &Tracer, o: Vec3, d: Vec3, t_max: f32) -> Option<SurfaceHit> {
-    let hit = ctx.accel.closest_hit(o, d, 0.0, t_max)?;
+    let GeometricHit { p, err, ng, hit } = intersect_geometry_within(ctx, o, d, t_max)?;
     let m = &ctx.scene.meshes[hit.mesh as usize];
-    let t = m.triangles[hit.triangle as usize];
-    let v = [t[0], t[1], t[2]].map(|k| Vec3A::from(m.positions[k as usize]));
-    let (p, err) = interpolate_with_error(v, hit.b);
-    let ng = Vec3::from((v[1] - v[0]).cross(v[2] - v[0])).normalize();
     let ns = m.normal_at(hit.triangle, hit.b).unwrap_or(ng);
     let uv = m.uv_at(hit.triangle, hit.b);
     let ns = match &ctx.scene.materials[m.material].normal_map {
@@ -179,14 +175,50 @@ pub fn intersect_within(ctx: &Tracer, o: Vec3, d: Vec3, t_max: f32) -> Option<Su
         None => ns,
     };
     Some(SurfaceHit {
-        p: Vec3::from(p),
-        err: Vec3::from(err),
+        p,
+        err,
         ng,
         frame: Frame::from_normal(ns),
         uv,
         mesh: hit.mesh,
         triangle: hit.triangle,
         t: hit.t,
+    })
+}
+
+/// Where a ray meets the scene, without what shading needs: the point, its rounding bound,
+/// the unit geometric normal and the tree's hit ([`intersect_geometry_within`]).
+pub struct GeometricHit {
+    /// The hit point (world space), as [`SurfaceHit::p`].
+    pub p: Vec3,
+    /// Rounding bound of `p`.
+    pub err: Vec3,
+    /// Unit geometric normal of the front face, as [`SurfaceHit::ng`].
+    pub ng: Vec3,
+    /// The mesh, triangle, barycentric weights and distance.
+    pub hit: Hit,
+}
+
+/// [`intersect_within`]'s point and geometric normal alone, for rays that read no surface
+/// (a render receiver's near field: `render::near_field`), skipping the shading normal,
+/// texture coordinates and normal map; the same values bit for bit.
+pub fn intersect_geometry_within(
+    ctx: &Tracer,
+    o: Vec3,
+    d: Vec3,
+    t_max: f32,
+) -> Option<GeometricHit> {
+    let hit = ctx.accel.closest_hit(o, d, 0.0, t_max)?;
+    let m = &ctx.scene.meshes[hit.mesh as usize];
+    let t = m.triangles[hit.triangle as usize];
+    let v = [t[0], t[1], t[2]].map(|k| Vec3A::from(m.positions[k as usize]));
+    let (p, err) = interpolate_with_error(v, hit.b);
+    let ng = Vec3::from((v[1] - v[0]).cross(v[2] - v[0])).normalize();
+    Some(GeometricHit {
+        p: Vec3::from(p),
+        err: Vec3::from(err),
+        ng,
+        hit,
     })
 }
 

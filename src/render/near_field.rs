@@ -33,7 +33,7 @@ use super::primary::Receiver;
 use crate::gather::lookup::Lookup;
 use crate::gather::microbuffer::Sender;
 use crate::gather::{Microbuffer, Senders};
-use crate::trace::{intersect_within, Tracer};
+use crate::trace::{intersect_geometry_within, Tracer};
 use glam::Vec3;
 
 /// Record in `mb` (its cut's senders recorded, not yet resolved) what receiver `r` sees
@@ -79,18 +79,19 @@ pub fn trace_near_field(
         }
         traced += 1;
         let w = mb.frame.to_world(px.dir).normalize();
-        let Some(hit) = intersect_within(ctx, r.spawn(w), w, reach) else {
+        let Some(found_at) = intersect_geometry_within(ctx, r.spawn(w), w, reach) else {
             continue;
         };
+        let (p, ng, hit) = (found_at.p, found_at.ng, found_at.hit);
         let lookup = senders
-            .lookup_at(hit.p, hit.mesh, hit.ng, -w, r.mesh)
+            .lookup_at(p, hit.mesh, ng, -w, r.mesh)
             .unwrap_or(Lookup::Nothing);
         let sender = Sender {
-            offset: hit.p - r.p,
+            offset: p - r.p,
             // The pixel's footprint there: what holds its depth together with the senders
             // of the same surface in the neighbouring pixels.
             radius: hit.t * px.solid_angle.sqrt(),
-            normal: hit.ng,
+            normal: ng,
             radiance: senders.evaluated(lookup),
             lookup,
         };
