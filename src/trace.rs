@@ -10,7 +10,7 @@ use crate::bsdf::{Bsdf, TransportMode};
 use crate::emitters::EmitterSampler;
 use crate::geometry::frame::Frame;
 use crate::geometry::offset::{interpolate_with_error, offset_origin};
-use crate::scene::Scene;
+use crate::scene::{Mesh, Scene};
 use crate::spectrum::Rgb;
 use glam::{Vec2, Vec3, Vec3A};
 use std::sync::OnceLock;
@@ -209,11 +209,9 @@ pub fn intersect_geometry_within(
     t_max: f32,
 ) -> Option<GeometricHit> {
     let hit = ctx.accel.closest_hit(o, d, 0.0, t_max)?;
-    let m = &ctx.scene.meshes[hit.mesh as usize];
-    let t = m.triangles[hit.triangle as usize];
-    let v = [t[0], t[1], t[2]].map(|k| Vec3A::from(m.positions[k as usize]));
+    let v = ctx.scene.meshes[hit.mesh as usize].corners(hit.triangle);
     let (p, err) = interpolate_with_error(v, hit.b);
-    let ng = Vec3::from((v[1] - v[0]).cross(v[2] - v[0])).normalize();
+    let ng = Mesh::geometric_normal(v);
     Some(GeometricHit {
         p: Vec3::from(p),
         err: Vec3::from(err),

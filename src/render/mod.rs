@@ -424,8 +424,9 @@ pub fn render_final_cancellable(
     );
     let (senders, load_seconds) = senders.map_err(Error::Cache)?;
     let step = t.elapsed().as_secs_f64();
-    timings.push(("load", load_seconds.min(step)));
-    let mut primary_seconds = step - load_seconds.min(step);
+    let load_seconds = load_seconds.min(step);
+    timings.push(("load", load_seconds));
+    let mut primary_seconds = step - load_seconds;
     let mut gather_seconds = 0.0;
     // The tiles of the whole image that the crop touches.
     let tiles: Vec<(u32, u32)> = (y0 / tile..y1.div_ceil(tile))
@@ -765,9 +766,10 @@ fn by_glossy_hit(r: &Receiver) -> bool {
 /// The receivers that gather alone and the clusters are independent of one another, so they
 /// are gathered in parallel, each task with buffers of its own: a tile's gather is the unit of
 /// the render's work, and the costliest tiles (a light's outline, contacts) take three to
-/// four times the mean, so a frame's last tiles left a core idle for 3–7 % of the band's time
-/// (cbox-diffuse at 512²); their clusters now spread over every core. Each receiver's value comes from its own gather and
-/// the stats are integer sums, so neither depends on which thread took what.
+/// four times the mean, so a frame's last tiles left a core idle for 3–7 % of the band's
+/// time (cbox-diffuse at 512²); their clusters now spread over every core. Each receiver's
+/// value comes from its own gather and the stats are integer sums, so neither depends on
+/// which thread took what.
 fn gather_set(
     (ctx, senders): (&Tracer, &Senders),
     receivers: &[Receiver],
@@ -817,9 +819,8 @@ fn gather_set(
         };
         mb.convolve(bsdf, r.view)
     };
-    // The values of a task's receivers and what their gathers cost.
-    type Done = (Vec<(usize, Rgb)>, GatherStats);
-    let gathered_alone: Vec<Done> = alone
+    // Each lone receiver's value and what its gather cost.
+    let gathered_alone: Vec<(Rgb, GatherStats)> = alone
         .par_iter()
         .map_init(
             || {
@@ -828,20 +829,14 @@ fn gather_set(
             },
             |(gather, scratch), &k| {
                 let mut s = GatherStats::default();
-                let v = gather_one(gather, scratch, k, &mut s);
-                (vec![(k, v)], s)
+                (gather_one(gather, scratch, k, &mut s), s)
             },
         )
         .collect();
-    let mut keep = |done: Vec<Done>, stats: &mut GatherStats| {
-        for (values, s) in done {
-            for (k, v) in values {
-                value[k] = v;
-            }
-            stats.add(&s);
-        }
-    };
-    keep(gathered_alone, stats);
+    for (&k, (v, s)) in alone.iter().zip(gathered_alone) {
+        value[k] = v;
+        stats.add(&s);
+    }
     if clustered.is_empty() || senders.nodes.is_empty() {
         return;
     }
@@ -856,7 +851,8 @@ fn gather_set(
     let clusters = cluster(&points, count);
     stats.clustered += clustered.len() as u64;
     stats.clusters += clusters.len() as u64;
-    let gathered_clusters: Vec<Done> = clusters
+    // Each cluster's members' values and what its gathers cost.
+    let gathered_clusters: Vec<(Vec<(usize, Rgb)>, GatherStats)> = clusters
         .par_iter()
         .map_init(scratch, |scratch, c| {
             let active = &receivers[clustered[c.active as usize]];
@@ -888,5 +884,10 @@ fn gather_set(
             (values, s)
         })
         .collect();
-    keep(gathered_clusters, stats);
+    for (values, s) in gathered_clusters {
+        for (k, v) in values {
+            value[k] = v;
+        }
+        stats.add(&s);
+    }
 }

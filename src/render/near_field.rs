@@ -33,7 +33,7 @@ use super::primary::Receiver;
 use crate::gather::lookup::Lookup;
 use crate::gather::microbuffer::Sender;
 use crate::gather::{Microbuffer, Senders};
-use crate::trace::{intersect_geometry_within, Tracer};
+use crate::trace::{intersect_geometry_within, GeometricHit, Tracer};
 use glam::Vec3;
 
 /// Record in `mb` (its cut's senders recorded, not yet resolved) what receiver `r` sees
@@ -79,10 +79,11 @@ pub fn trace_near_field(
         }
         traced += 1;
         let w = mb.frame.to_world(px.dir).normalize();
-        let Some(found_at) = intersect_geometry_within(ctx, r.spawn(w), w, reach) else {
+        let Some(GeometricHit { p, ng, hit, .. }) =
+            intersect_geometry_within(ctx, r.spawn(w), w, reach)
+        else {
             continue;
         };
-        let (p, ng, hit) = (found_at.p, found_at.ng, found_at.hit);
         let lookup = senders
             .lookup_at(p, hit.mesh, ng, -w, r.mesh)
             .unwrap_or(Lookup::Nothing);

@@ -1,7 +1,7 @@
 //! The scene's triangle meshes: world-space positions, optional normals and texture
 //! coordinates, and the queries every stage makes of them.
 
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec3A};
 
 /// A triangle mesh in world space.
 #[derive(Clone, Debug)]
@@ -58,6 +58,17 @@ impl Mesh {
             }
         }
         !edges.is_empty() && edges.values().all(|&c| c == (1, 1))
+    }
+
+    /// The corners of triangle `tri`, as the ray tests and the hit-point bounds take them.
+    pub(crate) fn corners(&self, tri: u32) -> [Vec3A; 3] {
+        self.triangles[tri as usize].map(|k| Vec3A::from(self.positions[k as usize]))
+    }
+
+    /// The unit geometric normal of the front face (counter-clockwise winding) of the
+    /// triangle with corners `v`, as a hit and an emitter sample report it.
+    pub(crate) fn geometric_normal(v: [Vec3A; 3]) -> Vec3 {
+        Vec3::from((v[1] - v[0]).cross(v[2] - v[0])).normalize()
     }
 
     /// The texture coordinate at barycentric weights `b` of triangle `tri` ((0, 0) without UVs).

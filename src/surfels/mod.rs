@@ -61,9 +61,7 @@ impl Surfel {
     /// Its position on its triangle of `scene` and the bound on that position's rounding
     /// error, from which rays leave it (see [`crate::geometry::offset::offset_origin`]).
     pub(crate) fn position_with_error(&self, scene: &Scene) -> (Vec3A, Vec3A) {
-        let m = &scene.meshes[self.mesh as usize];
-        let t = m.triangles[self.triangle as usize];
-        let v = t.map(|k| Vec3A::from(m.positions[k as usize]));
+        let v = scene.meshes[self.mesh as usize].corners(self.triangle);
         interpolate_with_error(v, [1.0 - self.b.x - self.b.y, self.b.x, self.b.y])
     }
 }
