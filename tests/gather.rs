@@ -382,10 +382,9 @@ fn a_solid_reaches_only_its_own_solid_as_leaves() {
     for j in (0..senders.nodes.len()).rev() {
         let node = &senders.nodes[j];
         below[j] = if node.is_leaf() {
-            vec![senders.surfels[node.surfel as usize].mesh]
+            vec![senders.surfels[node.surfel() as usize].mesh]
         } else {
             let mut m: Vec<u32> = node
-                .node
                 .children
                 .iter()
                 .filter(|&&c| (c as usize) < below.len())

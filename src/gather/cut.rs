@@ -119,8 +119,8 @@ pub fn splat_cut_beyond(
     while let Some(j) = stack.pop() {
         stats.visited += 1;
         let sender = &senders.nodes[j as usize];
-        let v = sender.node.center - p;
-        if !mb.spherical && n.dot(v) < -sender.node.radius {
+        let v = sender.center - p;
+        if !mb.spherical && n.dot(v) < -sender.radius {
             continue;
         }
         let d2 = v.length_squared();
@@ -140,7 +140,7 @@ pub fn splat_cut_beyond(
             let dir = v / d;
             // A leaf's projected area is exact and cheap; its radiance is looked up only if it
             // is splatted whole (split leaves look up each piece's).
-            let s = &senders.surfels[sender.surfel as usize];
+            let s = &senders.surfels[sender.surfel() as usize];
             let omega = s.area * Vec3::from(s.n).dot(dir).abs() / d2;
             let disc = (s.area / std::f32::consts::PI).sqrt();
             let at = mb.locate(dir);
@@ -157,9 +157,9 @@ pub fn splat_cut_beyond(
                 stats.near_leaves += 1;
                 match near {
                     NearLeaves::Split => {
-                        stats.splats += split_leaf(senders, sender.surfel, (p, mesh), pixel, mb);
+                        stats.splats += split_leaf(senders, sender.surfel(), (p, mesh), pixel, mb);
                     }
-                    NearLeaves::Aside(leaves) => leaves.push(sender.surfel),
+                    NearLeaves::Aside(leaves) => leaves.push(sender.surfel()),
                 }
             }
             continue;
@@ -174,29 +174,32 @@ pub fn splat_cut_beyond(
         let dir = v / d;
         // Where `dir` falls in the buffer, looked up at most once.
         let mut located = None;
-        if !mb.spherical && n.dot(v).abs() < sender.node.radius {
-            if sender.holds_plane_of(p, n) {
+        if !mb.spherical && n.dot(v).abs() < sender.radius {
+            if senders.holds_plane_of(j, p, n) {
                 continue;
             }
             // A BSDF-refined buffer opens far ones too, except in the directions its lobe
             // hardly weighs (faint pixels), which take them as a uniform buffer does.
-            let far = d2 > (straddle_radii * sender.node.radius).powi(2);
+            let far = d2 > (straddle_radii * sender.radius).powi(2);
             let open = !far
                 || (mb.is_refined()
                     && !(*located.get_or_insert_with(|| mb.locate(dir)))
                         .is_some_and(|at| mb.is_faint_at(&at)));
             if open {
-                stack.extend(sender.node.children.into_iter().filter(|&c| c != NO_NODE));
+                stack.extend(sender.children.into_iter().filter(|&c| c != NO_NODE));
                 continue;
             }
         }
         // Against the largest pixel first: it rejects most nodes near the root without a
         // pixel lookup.
         let base = mb.pixel_solid_angle();
-        let accepted = if !senders.needs_leaves(j, mesh) && fits_pixel(senders, j, d2, dir, base) {
+        let mut projected = None;
+        let accepted = if !senders.needs_leaves(j, mesh)
+            && fits_pixel(senders, j, d2, dir, base, &mut projected)
+        {
             located.unwrap_or_else(|| mb.locate(dir)).filter(|at| {
                 let pixel = mb.solid_angle_at(at);
-                pixel == base || fits_pixel(senders, j, d2, dir, pixel)
+                pixel == base || fits_pixel(senders, j, d2, dir, pixel, &mut projected)
             })
         } else {
             None
@@ -206,7 +209,7 @@ pub fn splat_cut_beyond(
             let sender = senders.sender(j, v, seen);
             stats.splats += u64::from(mb.splat_at(&sender, d, at, seen.projected / d2));
         } else {
-            for c in sender.node.children {
+            for c in sender.children {
                 if c != NO_NODE {
                     stack.push(c);
                 }
@@ -219,12 +222,20 @@ pub fn splat_cut_beyond(
 /// Whether inner node `j`, at squared distance `d2` along unit direction `dir` from the
 /// receiver, may be splatted into a pixel of solid angle `pixel`: it is at least two radii
 /// away, its bounding sphere is not wider than four pixels, and the solid angle it covers,
-/// P/d², is no larger than the pixel.
-pub(crate) fn fits_pixel(senders: &Senders, j: u32, d2: f32, dir: Vec3, pixel: f32) -> bool {
-    let r = senders.nodes[j as usize].node.radius;
+/// P/d², is no larger than the pixel. `projected` keeps P along `dir` once it is known, for
+/// the test against another pixel.
+pub(crate) fn fits_pixel(
+    senders: &Senders,
+    j: u32,
+    d2: f32,
+    dir: Vec3,
+    pixel: f32,
+    projected: &mut Option<f32>,
+) -> bool {
+    let r = senders.nodes[j as usize].radius;
     d2 > 4.0 * r * r
         && std::f32::consts::PI * r * r / d2 <= 4.0 * pixel
-        && senders.projected_area(j, -dir) / d2 <= pixel
+        && *projected.get_or_insert_with(|| senders.projected_area(j, -dir)) / d2 <= pixel
 }
 
 /// The most a piece of the unit square reaches on a unit disc under the concentric map,

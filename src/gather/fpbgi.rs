@@ -22,7 +22,7 @@
 
 use super::cut::{fits_pixel, splat_cut_beyond, CutStats, NearLeaves};
 use super::microbuffer::Microbuffer;
-use super::senders::Senders;
+use super::senders::{node_flags, Senders};
 use crate::cache::store::NO_NODE;
 use crate::geometry::frame::Frame;
 use glam::Vec3;
@@ -373,13 +373,13 @@ pub fn cluster_cut(
     while let Some(j) = stack.pop() {
         stats.visited += 1;
         let sender = &senders.nodes[j as usize];
-        let v = sender.node.center - p;
+        let v = sender.center - p;
         let d2 = v.length_squared();
         let d = d2.sqrt();
         // Near: the cluster is not small as seen from the node. A node made mostly of
         // directional (glossy) surfels, whose radiance changes fast with the direction it is
         // seen from, must be farther to be shared.
-        let eps = if sender.directional > 0.5 {
+        let eps = if sender.has(node_flags::MOSTLY_DIRECTIONAL) {
             far_eps * DIRECTIONAL_FAR
         } else {
             far_eps
@@ -393,12 +393,12 @@ pub fn cluster_cut(
         // Members' planes turn at most `slope` from the active's, about points within
         // `radius` of it: a member sees the node's centre that much higher or lower.
         let straddles = plane_slope
-            .is_some_and(|slope| frame.n.dot(v).abs() < sender.node.radius + slope * (d + radius));
+            .is_some_and(|slope| frame.n.dot(v).abs() < sender.radius + slope * (d + radius));
         if straddles {
             if sender.is_leaf() {
                 near.push(j);
-            } else if !sender.holds_plane_of(p, frame.n) {
-                stack.extend(sender.node.children.into_iter().filter(|&c| c != NO_NODE));
+            } else if !senders.holds_plane_of(j, p, frame.n) {
+                stack.extend(sender.children.into_iter().filter(|&c| c != NO_NODE));
             }
             continue;
         }
@@ -409,7 +409,7 @@ pub fn cluster_cut(
         }
         let dir = v / d;
         let pixel = buffer.pixels[buffer.pixel_of(dir).unwrap_or(0)].solid_angle;
-        let small = sender.is_leaf() || fits_pixel(senders, j, d2, dir, pixel);
+        let small = sender.is_leaf() || fits_pixel(senders, j, d2, dir, pixel, &mut None);
         if small {
             let seen = senders.seen(j, -dir, mesh, back_hidden);
             let omega = seen.projected / d2;
@@ -419,7 +419,7 @@ pub fn cluster_cut(
             }
             stats.splats += u64::from(buffer.splat(&senders.sender(j, v, seen), omega));
         } else {
-            for c in sender.node.children {
+            for c in sender.children {
                 if c != NO_NODE {
                     stack.push(c);
                 }

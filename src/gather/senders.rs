@@ -20,6 +20,7 @@ use crate::cache::store::{
     BakedCache, NodeRecord, SurfelRecord, BACK_SIDED, CLOSED, NO_MAP, SOLID,
 };
 use crate::cache::CacheError;
+use crate::haar::point_map::texel_index;
 use crate::haar::sphere_map::MAX_TABLE_LEVELS;
 use crate::haar::{
     direction_to_square, square_to_direction, texel_at, texel_directions, Coefficient, Haar2d,
@@ -37,55 +38,128 @@ use std::sync::OnceLock;
 /// have a plane, which tells the surface they lie on from occluders (30°).
 pub(crate) const FLAT_CONE: f32 = std::f32::consts::FRAC_PI_6;
 
-/// One node of the tree, as traversal needs it: the cache's node, and what the gather sums
-/// from the surfels below it.
+/// One node of the tree as a traversal tests it, in one cache line: its bounds, normal cone
+/// and children, what it sums from the surfels below that every visit reads, and where its
+/// projected-area map lies. A cut visits about a thousand nodes of a tree of 10⁵, nearly every
+/// one a cache miss: with the whole record (136 bytes, three lines) and its projected-area map
+/// behind two more pointers, the first load of a node and of its map were a third of the
+/// traversal's own time (perf, cbox-diffuse at 512²). What a splat reads once is in
+/// [`NodeDetail`].
 #[derive(Clone, Copy, Debug)]
+#[repr(C, align(64))]
 pub struct SenderNode {
-    /// The node as the tree built it (bounds, normal cone, children).
-    pub node: Node,
-    /// The surfel of a leaf ([`NONE`] for inner nodes).
-    pub surfel: u32,
+    /// Centre of the bounding sphere.
+    pub center: Vec3,
+    /// Radius of a sphere enclosing every surfel disc below.
+    pub radius: f32,
+    /// The normal cone's axis (the tree's `Node::axis`).
+    pub axis: Vec3,
     /// sin(cone_angle), or above 1 for cones wider than a hemisphere.
     pub sin_cone: f32,
     /// Σ A n over the surfels below: for directions where every normal below faces the same
     /// way, the projected area is exactly |N·ω|.
     pub area_normal: Vec3,
-    /// The fraction of the area below whose radiance is directional (non-diffuse).
-    pub directional: f32,
-    /// Per colour channel, Σ A L n over the (diffuse) surfels below, L their reflected
-    /// radiance: where every surfel below faces ω, the node's radiance along ω is exactly
-    /// (S·ω)/(N·ω), without the intensity map's texels (see [`Senders::seen`]).
-    pub radiance_normal: [Vec3; 3],
-    /// Whether surfels of a solid (see [`SOLID`]) lie below: their inward light is not in
-    /// the node's maps, so a receiver on a solid must reach them as leaves.
-    pub solid: bool,
-    /// Whether surfels below send light from their back into the maps ([`BACK_SIDED`]).
-    pub back_sided: bool,
     /// The closed mesh ([`CLOSED`]) every surfel below lies on, or [`NONE`].
     pub closed_mesh: u32,
-    /// For a node whose normals agree to [`PLANAR_CONE`]: the range of `axis · x` over its
-    /// surfels' centres (a slab that may be a little wider than they are); otherwise
-    /// unbounded. A thin slab is a plane (see [`SenderNode::holds_plane_of`]).
-    pub slab: [f32; 2],
+    /// `[left, right]`, or `[NONE, NONE]` for a leaf.
+    pub children: [u32; 2],
+    /// A leaf's surfel; an inner node's projected-area map in [`Senders`] (the first of its
+    /// texels, or with [`node_flags::PROJECTED_APART`] its index among those kept apart).
+    item: u32,
+    /// [`node_flags`].
+    flags: u8,
+    /// log2 of the side of the projected-area map's texels (see [`PointMap::Texels`]).
+    projected_depth: u8,
+    /// The projected-area map's resolution (log2 of its side, [`SparseHaar::levels`]).
+    projected_levels: u8,
+}
+
+/// What [`SenderNode::flags`] records, each bit computed once from what the node's record
+/// and surfels say (so every test that reads it decides as the value would).
+pub mod node_flags {
+    /// Surfels of a solid ([`super::SOLID`]) lie below: their inward light is not in the
+    /// node's maps, so a receiver on a solid must reach them as leaves.
+    pub const SOLID: u8 = 1;
+    /// Surfels below send light from their back into the maps ([`super::BACK_SIDED`]).
+    pub const BACK_SIDED: u8 = 1 << 1;
+    /// The normal cone is within [`super::PLANAR_CONE`]: the node may be a plane.
+    pub const PLANAR: u8 = 1 << 2;
+    /// The normal cone is narrower than a hemisphere.
+    pub const NARROW: u8 = 1 << 3;
+    /// The normal cone is within [`super::FLAT_CONE`]: the node has a plane.
+    pub const FLAT: u8 = 1 << 4;
+    /// No surfel below has directional radiance (all are diffuse).
+    pub const DIFFUSE: u8 = 1 << 5;
+    /// More than half the area below has directional (glossy) radiance.
+    pub const MOSTLY_DIRECTIONAL: u8 = 1 << 6;
+    /// The projected-area map is kept apart (as a tree, where its texels would take more
+    /// memory), not among the texels.
+    pub const PROJECTED_APART: u8 = 1 << 7;
 }
 
 impl SenderNode {
     /// Whether the node is a leaf (its surfel alone).
     pub fn is_leaf(&self) -> bool {
-        self.node.is_leaf()
+        self.children[0] == NONE
     }
 
-    /// Whether every surfel below lies in the plane through `p` with normal `n`, facing its
-    /// way, to within [`PLANAR_SLAB`] of the node's radius: a receiver at `p` on that plane
-    /// sees the node edge-on (it sends nothing there and hides nothing).
-    pub fn holds_plane_of(&self, p: Vec3, n: Vec3) -> bool {
-        let tolerance = PLANAR_SLAB * self.node.radius;
-        let h = self.node.axis.dot(p);
-        self.node.cone_angle <= PLANAR_CONE
-            && self.node.axis.dot(n) > 0.0
-            && self.slab[1] - self.slab[0] <= tolerance
-            && h >= self.slab[0] - tolerance
-            && h <= self.slab[1] + tolerance
+    /// The surfel of a leaf ([`NONE`] for inner nodes).
+    pub fn surfel(&self) -> u32 {
+        if self.is_leaf() {
+            self.item
+        } else {
+            NONE
+        }
+    }
+
+    /// Whether flag `f` ([`node_flags`]) is set.
+    pub fn has(&self, f: u8) -> bool {
+        self.flags & f != 0
+    }
+}
+
+/// What a node sums from the surfels below that only a splat or a plane test reads (see
+/// [`SenderNode`]).
+#[derive(Clone, Copy, Debug)]
+pub struct NodeDetail {
+    /// Per colour channel, Σ A L n over the (diffuse) surfels below, L their reflected
+    /// radiance: where every surfel below faces ω, the node's radiance along ω is exactly
+    /// (S·ω)/(N·ω), without the intensity map's texels (see [`Senders::seen`]).
+    pub radiance_normal: [Vec3; 3],
+    /// For a node whose normals agree to [`PLANAR_CONE`]: the range of `axis · x` over its
+    /// surfels' centres (a slab that may be a little wider than they are); otherwise
+    /// unbounded. A thin slab is a plane (see [`Senders::holds_plane_of`]).
+    pub slab: [f32; 2],
+}
+
+/// A node as the tree's records and the surfels below give it, while [`Senders`] is built.
+#[derive(Clone, Copy, Debug)]
+struct NodeSummary {
+    /// The node as the tree built it (bounds, normal cone, children).
+    node: Node,
+    /// The surfel of a leaf ([`NONE`] for inner nodes).
+    surfel: u32,
+    /// sin(cone_angle), or above 1 for cones wider than a hemisphere.
+    sin_cone: f32,
+    /// Σ A n over the surfels below.
+    area_normal: Vec3,
+    /// The fraction of the area below whose radiance is directional (non-diffuse).
+    directional: f32,
+    /// See [`NodeDetail::radiance_normal`].
+    radiance_normal: [Vec3; 3],
+    /// See [`node_flags::SOLID`].
+    solid: bool,
+    /// See [`node_flags::BACK_SIDED`].
+    back_sided: bool,
+    /// See [`SenderNode::closed_mesh`].
+    closed_mesh: u32,
+    /// See [`NodeDetail::slab`].
+    slab: [f32; 2],
+}
+
+impl NodeSummary {
+    fn is_leaf(&self) -> bool {
+        self.node.is_leaf()
     }
 }
 
@@ -100,15 +174,21 @@ pub const PLANAR_SLAB: f32 = 1e-3;
 pub struct Senders {
     /// The tree's nodes, breadth-first from the root.
     pub nodes: Vec<SenderNode>,
+    /// Per node, what a splat reads of it.
+    details: Vec<NodeDetail>,
     /// Per mesh: whether it bounds a solid.
     solid_meshes: Vec<bool>,
     /// Per closed mesh: the bounds of its surfels' discs.
     closed_boxes: Vec<Option<[Vec3; 2]>>,
     /// The surfels, as the cache records them.
     pub surfels: Vec<SurfelRecord>,
-    /// Per inner node: G of the radiant intensity and of the projected area (leaves: empty).
+    /// Per inner node: G of the radiant intensity (leaves: empty).
     intensity: Vec<PointMap<Rgb>>,
-    projected: Vec<PointMap<f32>>,
+    /// The inner nodes' G of the projected area kept as texels ([`PointMap::Texels`]), one
+    /// node's after another, found from the node ([`SenderNode`]): one load, not three.
+    projected_texels: Vec<f32>,
+    /// The rest of the inner nodes' projected-area maps ([`node_flags::PROJECTED_APART`]).
+    projected_apart: Vec<PointMap<f32>>,
     /// Per node with emitting surfels below: their emitted intensity.
     emitted: Vec<Option<PointMap<Rgb>>>,
     /// Per surfel with a directional map: the map (outgoing radiance over the sphere).
@@ -160,7 +240,7 @@ impl Default for Below {
 
 impl Below {
     /// A leaf's surfel `s` (`leaf` its node).
-    fn of_surfel(s: &SurfelRecord, leaf: SenderNode) -> Below {
+    fn of_surfel(s: &SurfelRecord, leaf: NodeSummary) -> Below {
         let area_normal = Vec3::from(s.n) * s.area;
         let reflected = (Vec3::from(s.rgb) - Vec3::from(s.emitted)).max(Vec3::ZERO);
         let h = leaf.node.axis.dot(Vec3::from(s.p));
@@ -178,7 +258,7 @@ impl Below {
     /// Child `ch` (whose directional area is `directional_area`) as its `parent` sums it: its
     /// slab along the parent's axis is its own, widened by how far its axis turns from the
     /// parent's over its radius.
-    fn of_child(ch: &SenderNode, directional_area: f32, parent: SenderNode) -> Below {
+    fn of_child(ch: &NodeSummary, directional_area: f32, parent: NodeSummary) -> Below {
         let shift = parent.node.axis.dot(ch.node.center) - ch.node.axis.dot(ch.node.center);
         let widen = (parent.node.axis - ch.node.axis).length() * ch.node.radius;
         Below {
@@ -279,7 +359,7 @@ impl Senders {
 
     /// The senders of `nodes` (see [`sender_nodes`]) with their maps.
     fn assemble(
-        mut nodes: Vec<SenderNode>,
+        mut nodes: Vec<NodeSummary>,
         records: &[NodeRecord],
         surfels: Vec<SurfelRecord>,
         (intensity, projected): (Vec<SparseHaar<Rgb>>, Vec<SparseHaar<f32>>),
@@ -348,13 +428,17 @@ impl Senders {
                 0.0
             };
         }
+        let (hot, details, projected_texels, projected_apart) =
+            split_nodes(&nodes, point_maps(projected));
         Senders {
             solid_meshes,
             closed_boxes,
-            nodes,
+            nodes: hot,
+            details,
             surfels,
             intensity: point_maps(intensity),
-            projected: point_maps(projected),
+            projected_texels,
+            projected_apart,
             emitted: optional_point_maps(emitted),
             maps: optional_point_maps(maps),
             evaluates: true,
@@ -385,13 +469,13 @@ impl Senders {
     ) -> (Lookup, f32) {
         let sender = &self.nodes[j as usize];
         if sender.is_leaf() {
-            let s = &self.surfels[sender.surfel as usize];
+            let s = &self.surfels[sender.item as usize];
             let cos = Vec3::from(s.n).dot(w);
             if back_hidden && cos < 0.0 {
                 return (Lookup::Nothing, 0.0);
             }
             return (
-                self.surfel_lookup(sender.surfel, w, cos, receiver_mesh),
+                self.surfel_lookup(sender.item, w, cos, receiver_mesh),
                 s.area * cos.abs(),
             );
         }
@@ -399,7 +483,7 @@ impl Senders {
         // maps' texels (25° wide at 8²) straddle a wall's edge-on band there and took up to
         // 8 % of a closed room's light (tests/furnace.rs).
         let facing = sender.area_normal.dot(w);
-        if sender.directional == 0.0 && facing > 0.0 && sender.node.axis.dot(w) > sender.sin_cone {
+        if sender.has(node_flags::DIFFUSE) && facing > 0.0 && sender.axis.dot(w) > sender.sin_cone {
             return (
                 Lookup::NodeNormal {
                     node: j,
@@ -408,11 +492,11 @@ impl Senders {
                 facing,
             );
         }
-        let levels = self.projected[j as usize].levels();
+        let levels = u32::from(sender.projected_levels);
         let p = direction_to_square(w);
         let projected = self
             .exact_projected(sender, w)
-            .unwrap_or_else(|| self.projected[j as usize].eval(p.x, p.y).max(0.0));
+            .unwrap_or_else(|| self.projected_at(sender, p).max(0.0));
         let n_dot = sender.area_normal.dot(w);
         let (front, back) = (0.5 * (projected + n_dot), 0.5 * (projected - n_dot));
         // I's cosine and P are sampled at the centres of P's texels (see `intensity_map`);
@@ -424,13 +508,13 @@ impl Senders {
         };
         let area_at = |p: Vec2, centre: Vec3| {
             self.exact_projected(sender, centre)
-                .unwrap_or_else(|| self.projected[j as usize].eval(p.x, p.y).max(0.0))
+                .unwrap_or_else(|| self.projected_at(sender, p).max(0.0))
         };
         if back_hidden && !(front > 0.0) {
             return (Lookup::Nothing, 0.0);
         }
         let centre = texel_centre(p, levels);
-        if !sender.back_sided && (front >= back || back_hidden) {
+        if !sender.has(node_flags::BACK_SIDED) && (front >= back || back_hidden) {
             // Surfels that send light from their front only (all but thin sheets): the
             // radiance is I over the front projected area P⁺ = (P + N·ω)/2 (cos⁺ = (|cos| +
             // cos)/2) at the texel's centre, where I was sampled (I/P lost up to 8 % where
@@ -439,8 +523,8 @@ impl Senders {
             // whose centre lies behind it), the texel tilted towards the front is read.
             let front_at = |p: Vec2, c: Vec3| 0.5 * (area_at(p, c) + sender.area_normal.dot(c));
             let mut texel = (p, front_at(p, centre));
-            if !(texel.1 >= 0.5 * front) && sender.node.axis.dot(w) > 0.0 && sender.sin_cone < 1.0 {
-                let (q, c) = texel_on_side(w, sender.node.axis, sender.sin_cone, levels);
+            if !(texel.1 >= 0.5 * front) && sender.axis.dot(w) > 0.0 && sender.sin_cone < 1.0 {
+                let (q, c) = texel_on_side(w, sender.axis, sender.sin_cone, levels);
                 texel = (q, front_at(q, c));
             }
             let (q, front_texel) = texel;
@@ -500,7 +584,7 @@ impl Senders {
                 })
             }
             Lookup::NodeNormal { node, u } => {
-                let [r, g, b] = self.nodes[node as usize].radiance_normal;
+                let [r, g, b] = self.details[node as usize].radiance_normal;
                 Vec3::new(r.dot(u), g.dot(u), b.dot(u)).max(Rgb::ZERO)
             }
             Lookup::NodeMap { node, point, scale } => {
@@ -521,7 +605,7 @@ impl Senders {
     pub fn back_hidden(&self, j: u32, p: Vec3, margin: f32, mesh: u32) -> bool {
         let sender = &self.nodes[j as usize];
         let m = sender.closed_mesh;
-        if m == NONE || m == mesh || sender.back_sided {
+        if m == NONE || m == mesh || sender.has(node_flags::BACK_SIDED) {
             return false;
         }
         self.closed_boxes
@@ -539,12 +623,12 @@ impl Senders {
     /// n·(x − p) ≥ (a·v) cos θ − |a × v| sin θ − r with v = centre − p.
     pub fn faces_away(&self, j: u32, p: Vec3, margin: f32) -> bool {
         let sender = &self.nodes[j as usize];
-        let v = sender.node.center - p;
+        let v = sender.center - p;
         // cos θ from sin θ: the cone is narrower than a hemisphere there.
-        sender.node.cone_angle < std::f32::consts::FRAC_PI_2
-            && sender.node.axis.dot(v) * (1.0 - sender.sin_cone * sender.sin_cone).max(0.0).sqrt()
-                - sender.node.axis.cross(v).length() * sender.sin_cone
-                > sender.node.radius + margin
+        sender.has(node_flags::NARROW)
+            && sender.axis.dot(v) * (1.0 - sender.sin_cone * sender.sin_cone).max(0.0).sqrt()
+                - sender.axis.cross(v).length() * sender.sin_cone
+                > sender.radius + margin
     }
 
     /// Whether a receiver on `mesh` must reach the surfels of a solid below node `j` one by
@@ -555,7 +639,7 @@ impl Senders {
     /// reach each other's every surfel).
     pub fn needs_leaves(&self, j: u32, mesh: u32) -> bool {
         let sender = &self.nodes[j as usize];
-        sender.solid
+        sender.has(node_flags::SOLID)
             && self.solid_meshes.get(mesh as usize) == Some(&true)
             && (sender.closed_mesh == NONE || sender.closed_mesh == mesh)
     }
@@ -590,12 +674,12 @@ impl Senders {
     pub fn sender(&self, j: u32, offset: Vec3, seen: Seen) -> Sender {
         let sender = &self.nodes[j as usize];
         let (radius, normal) = if sender.is_leaf() {
-            let s = &self.surfels[sender.surfel as usize];
+            let s = &self.surfels[sender.item as usize];
             ((s.area / std::f32::consts::PI).sqrt(), Vec3::from(s.n))
-        } else if sender.node.cone_angle < FLAT_CONE {
-            (sender.node.radius, sender.node.axis)
+        } else if sender.has(node_flags::FLAT) {
+            (sender.radius, sender.axis)
         } else {
-            (sender.node.radius, Vec3::ZERO)
+            (sender.radius, Vec3::ZERO)
         };
         Sender {
             offset,
@@ -610,17 +694,43 @@ impl Senders {
     /// traversal tests it before it needs the radiance).
     pub(crate) fn projected_area(&self, j: u32, w: Vec3) -> f32 {
         let sender = &self.nodes[j as usize];
-        self.exact_projected(sender, w).unwrap_or_else(|| {
-            let p = direction_to_square(w);
-            self.projected[j as usize].eval(p.x, p.y).max(0.0)
-        })
+        self.exact_projected(sender, w)
+            .unwrap_or_else(|| self.projected_at(sender, direction_to_square(w)).max(0.0))
+    }
+
+    /// G of inner node `sender`'s projected area at the point `p` of the unit square (zero
+    /// for a leaf, whose map is empty).
+    #[inline]
+    fn projected_at(&self, sender: &SenderNode, p: Vec2) -> f32 {
+        if sender.is_leaf() {
+            0.0
+        } else if sender.has(node_flags::PROJECTED_APART) {
+            self.projected_apart[sender.item as usize].eval(p.x, p.y)
+        } else {
+            let at = texel_index(u32::from(sender.projected_depth), p.x, p.y);
+            self.projected_texels[sender.item as usize + at]
+        }
+    }
+
+    /// Whether every surfel below node `j` lies in the plane through `p` with normal `n`,
+    /// facing its way, to within [`PLANAR_SLAB`] of the node's radius: a receiver at `p` on
+    /// that plane sees the node edge-on (it sends nothing there and hides nothing).
+    pub fn holds_plane_of(&self, j: u32, p: Vec3, n: Vec3) -> bool {
+        let sender = &self.nodes[j as usize];
+        if !sender.has(node_flags::PLANAR) || !(sender.axis.dot(n) > 0.0) {
+            return false;
+        }
+        let slab = self.details[j as usize].slab;
+        let tolerance = PLANAR_SLAB * sender.radius;
+        let h = sender.axis.dot(p);
+        slab[1] - slab[0] <= tolerance && h >= slab[0] - tolerance && h <= slab[1] + tolerance
     }
 
     /// Σ A |n·ω| = |N·ω| when every normal below lies on one side of the plane ⊥ ω, i.e.
     /// when ω is more than the cone's angle away from the plane ⊥ the axis. The 8 × 8 map's
     /// texels (25° wide) would otherwise bias the coverage by a few percent.
     fn exact_projected(&self, sender: &SenderNode, w: Vec3) -> Option<f32> {
-        (sender.node.axis.dot(w).abs() > sender.sin_cone).then(|| sender.area_normal.dot(w).abs())
+        (sender.axis.dot(w).abs() > sender.sin_cone).then(|| sender.area_normal.dot(w).abs())
     }
 
     /// Emitted radiance leaving node `j` along `w` (front faces only): a leaf's surfel's
@@ -628,7 +738,7 @@ impl Senders {
     pub(crate) fn emitted_radiance(&self, j: u32, w: Vec3) -> Rgb {
         let sender = &self.nodes[j as usize];
         if sender.is_leaf() {
-            let s = &self.surfels[sender.surfel as usize];
+            let s = &self.surfels[sender.item as usize];
             return if Vec3::from(s.n).dot(w) > 0.0 {
                 Vec3::from(s.emitted)
             } else {
@@ -726,10 +836,10 @@ fn sender_nodes(
     records: &[NodeRecord],
     surfels: &[SurfelRecord],
     order: &[u32],
-) -> Result<Vec<SenderNode>, CacheError> {
-    let nodes: Vec<SenderNode> = records
+) -> Result<Vec<NodeSummary>, CacheError> {
+    let nodes: Vec<NodeSummary> = records
         .iter()
-        .map(|r| SenderNode {
+        .map(|r| NodeSummary {
             node: r.node,
             surfel: if r.node.is_leaf() {
                 order.get(r.node.first as usize).copied().unwrap_or(NONE)
@@ -760,6 +870,79 @@ fn sender_nodes(
         });
     }
     Ok(nodes)
+}
+
+/// The nodes as traversal reads them ([`SenderNode`]) and what a splat reads ([`NodeDetail`]),
+/// with the inner nodes' projected-area maps (`projected`, per node) laid out for them: those
+/// kept as texels one after another, the rest apart.
+fn split_nodes(
+    nodes: &[NodeSummary],
+    projected: Vec<PointMap<f32>>,
+) -> (
+    Vec<SenderNode>,
+    Vec<NodeDetail>,
+    Vec<f32>,
+    Vec<PointMap<f32>>,
+) {
+    use node_flags as f;
+    let mut texels = Vec::new();
+    let mut apart = Vec::new();
+    let hot = nodes
+        .iter()
+        .zip(projected)
+        .map(|(n, map)| {
+            let cone = n.node.cone_angle;
+            let mut flags = [
+                (n.solid, f::SOLID),
+                (n.back_sided, f::BACK_SIDED),
+                (cone <= PLANAR_CONE, f::PLANAR),
+                (cone < std::f32::consts::FRAC_PI_2, f::NARROW),
+                (cone < FLAT_CONE, f::FLAT),
+                (n.directional == 0.0, f::DIFFUSE),
+                (n.directional > 0.5, f::MOSTLY_DIRECTIONAL),
+            ]
+            .into_iter()
+            .filter(|&(on, _)| on)
+            .fold(0, |flags, (_, bit)| flags | bit);
+            let levels = map.levels() as u8;
+            let (item, depth) = match map {
+                _ if n.is_leaf() => (n.surfel, 0),
+                PointMap::Texels {
+                    depth, texels: t, ..
+                } if u32::try_from(texels.len() + t.len()).is_ok() => {
+                    let first = texels.len() as u32;
+                    texels.extend_from_slice(&t);
+                    (first, depth as u8)
+                }
+                map => {
+                    flags |= f::PROJECTED_APART;
+                    apart.push(map);
+                    (apart.len() as u32 - 1, 0)
+                }
+            };
+            SenderNode {
+                center: n.node.center,
+                radius: n.node.radius,
+                axis: n.node.axis,
+                sin_cone: n.sin_cone,
+                area_normal: n.area_normal,
+                closed_mesh: n.closed_mesh,
+                children: n.node.children,
+                item,
+                flags,
+                projected_depth: depth,
+                projected_levels: levels,
+            }
+        })
+        .collect();
+    let details = nodes
+        .iter()
+        .map(|n| NodeDetail {
+            radiance_normal: n.radiance_normal,
+            slab: n.slab,
+        })
+        .collect();
+    (hot, details, texels, apart)
 }
 
 /// `maps` laid out for the gather's point lookups ([`PointMap`]).
@@ -847,7 +1030,7 @@ fn rebuild<T: Coefficient + Send + Sync>(
 /// resolution, summed up the tree (at the finest below each node), at the tree's resolution.
 fn emitted_intensities(
     records: &[NodeRecord],
-    nodes: &[SenderNode],
+    nodes: &[NodeSummary],
     surfels: &[SurfelRecord],
     maps: &[Option<SparseHaar<Rgb>>],
     levels: u32,
@@ -897,3 +1080,6 @@ fn emitted_intensities(
         })
         .collect()
 }
+
+// The traversal's record fills one cache line (see [`SenderNode`]).
+const _: () = assert!(std::mem::size_of::<SenderNode>() == 64);

@@ -54,19 +54,24 @@ impl<T: Coefficient> From<SparseHaar<T>> for PointMap<T> {
     }
 }
 
+/// The index, in row-major texels of `2^depth` a side, of the texel holding the point
+/// `(x, y)` of the unit square, as [`PointMap::eval`] reads it.
+#[inline]
+pub fn texel_index(depth: u32, x: f32, y: f32) -> usize {
+    // The tree's walk picks, at level l, the half-cell floor(x · 2^(l+1)) (capped at the
+    // last): the top l + 1 bits of floor(x · 2^depth), which is this.
+    let side = 1u32 << depth;
+    let at = |v: f32| ((v * side as f32) as u32).min(side - 1);
+    (at(y) * side + at(x)) as usize
+}
+
 impl<T: Coefficient> PointMap<T> {
     /// f at the point `(x, y)` of the unit square: [`SparseHaar::eval`] of the map it was made
     /// from, bit for bit.
     #[inline]
     pub fn eval(&self, x: f32, y: f32) -> T {
         match self {
-            PointMap::Texels { depth, texels, .. } => {
-                // The tree's walk picks, at level l, the half-cell floor(x · 2^(l+1)) (capped
-                // at the last): the top l + 1 bits of floor(x · 2^depth), which is this.
-                let side = 1u32 << depth;
-                let at = |v: f32| ((v * side as f32) as u32).min(side - 1);
-                texels[(at(y) * side + at(x)) as usize]
-            }
+            PointMap::Texels { depth, texels, .. } => texels[texel_index(*depth, x, y)],
             PointMap::Tree(map) => map.eval(x, y),
         }
     }

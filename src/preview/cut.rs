@@ -10,7 +10,7 @@
 
 use super::view::View;
 use crate::cache::store::NO_NODE;
-use crate::gather::senders::{Senders, FLAT_CONE};
+use crate::gather::senders::{node_flags, Senders};
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use rayon::prelude::*;
@@ -79,16 +79,14 @@ pub(crate) fn view_cut(senders: &Senders, view: &View, max_pixels: f32) -> Vec<u
         let sender = &senders.nodes[j as usize];
         // A footprint lies within twice its node's radius (see `SPLAT_RIM`: a leaf's radius
         // is its disc's, an inner node's at least its surfels').
-        if view.culls(sender.node.center, 2.0 * sender.node.radius) {
+        if view.culls(sender.center, 2.0 * sender.radius) {
             continue;
         }
-        if sender.is_leaf()
-            || view.pixels_across(sender.node.center, sender.node.radius) <= max_pixels
-        {
+        if sender.is_leaf() || view.pixels_across(sender.center, sender.radius) <= max_pixels {
             cut.push(j);
             continue;
         }
-        let [a, b] = sender.node.children;
+        let [a, b] = sender.children;
         stack.extend([b, a].into_iter().filter(|&c| c != NO_NODE));
     }
     cut
@@ -107,7 +105,7 @@ pub fn splats(
     cut.par_iter()
         .map(|&j| {
             let sender = &senders.nodes[j as usize];
-            let w = view.towards_eye(sender.node.center);
+            let w = view.towards_eye(sender.center);
             let radiance = match colouring {
                 Colouring::Reflected => senders.seen(j, w, EYE_MESH, false).radiance,
                 Colouring::Outgoing => {
@@ -117,26 +115,29 @@ pub fn splats(
                 Colouring::NodeId => node_colour(j),
             };
             let (mut normal, flat) = if sender.is_leaf() {
-                (Vec3::from(senders.surfels[sender.surfel as usize].n), true)
+                (
+                    Vec3::from(senders.surfels[sender.surfel() as usize].n),
+                    true,
+                )
             } else {
-                (sender.node.axis, sender.node.cone_angle < FLAT_CONE)
+                (sender.axis, sender.has(node_flags::FLAT))
             };
             let sides = if !flat {
                 0.0
-            } else if sender.back_sided {
+            } else if sender.has(node_flags::BACK_SIDED) {
                 2.0
             } else {
                 1.0
             };
             let radius = match footprint {
-                Footprint::Splat => sender.node.radius + SPLAT_RIM * disc_radius[j as usize],
-                Footprint::Disc => sender.node.radius,
+                Footprint::Splat => sender.radius + SPLAT_RIM * disc_radius[j as usize],
+                Footprint::Disc => sender.radius,
             };
             if footprint == Footprint::Disc && !flat {
                 normal = w;
             }
             Splat {
-                sphere: sender.node.center.extend(radius).to_array(),
+                sphere: sender.center.extend(radius).to_array(),
                 normal: normal.extend(sides).to_array(),
                 radiance: radiance.max(Vec3::ZERO).extend(0.0).to_array(),
             }

@@ -15,7 +15,8 @@ pub const NONE: u32 = u32::MAX;
 
 /// One node of the tree: the one node record from the tree's build through the cache (where
 /// [`crate::cache::store::NodeRecord`] adds where its maps are) to the gather (where
-/// `gather::senders::SenderNode` adds what it sums from the surfels below). Plain 4-byte
+/// `gather::senders::SenderNode` keeps what a traversal tests of it beside what it sums from
+/// the surfels below, in one cache line). Plain 4-byte
 /// fields, so that the cache stores it as it is.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, Pod, Zeroable)]

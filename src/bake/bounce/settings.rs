@@ -4,7 +4,7 @@
 use super::transport::Slots;
 use crate::cache::store::{NodeRecord, SurfelRecord};
 use crate::error::{Error, Result};
-use crate::gather::senders::SenderNode;
+use crate::gather::senders::{NodeDetail, SenderNode};
 use crate::validate::{in_range, require};
 
 /// The default [`BounceSettings::receiver_stride`] (see docs/bounces.md for its measure).
@@ -44,11 +44,12 @@ pub fn default_transport_budget() -> u64 {
 
 /// The least memory (bytes) the bounces of a bake of `points` surfels, whose tree's maps have
 /// `levels`, hold besides the bake itself, with no transport kept: the tree as senders (a
-/// node record and a sender node per node, a surfel record per surfel, two nodes per surfel)
+/// node record, a sender node and its detail per node, a surfel record per surfel, two nodes per surfel)
 /// and the bitmap of the transport's slots.
 pub(crate) fn memory_floor(points: u64, levels: u32) -> u64 {
     let nodes = 2 * points;
-    let senders = nodes * (size_of::<NodeRecord>() + size_of::<SenderNode>()) as u64
+    let senders = nodes
+        * (size_of::<NodeRecord>() + size_of::<SenderNode>() + size_of::<NodeDetail>()) as u64
         + points * size_of::<SurfelRecord>() as u64;
     senders + Slots::fewest(points, levels) / 8
 }
