@@ -74,8 +74,9 @@ pub struct SenderNode {
     projected_levels: u8,
 }
 
-/// What [`SenderNode::flags`] records, each bit computed once from what the node's record
-/// and surfels say (so every test that reads it decides as the value would).
+/// The bits of a [`SenderNode`]'s flags ([`SenderNode::has`]), each computed once from what
+/// the node's record and surfels say (so every test that reads one decides as the value
+/// would).
 pub mod node_flags {
     /// Surfels of a solid ([`super::SOLID`]) lie below: their inward light is not in the
     /// node's maps, so a receiver on a solid must reach them as leaves.
@@ -86,7 +87,7 @@ pub mod node_flags {
     pub const PLANAR: u8 = 1 << 2;
     /// The normal cone is narrower than a hemisphere.
     pub const NARROW: u8 = 1 << 3;
-    /// The normal cone is within [`super::FLAT_CONE`]: the node has a plane.
+    /// The normal cone is within 30° (the gather's flat cone): the node has a plane.
     pub const FLAT: u8 = 1 << 4;
     /// No surfel below has directional radiance (all are diffuse).
     pub const DIFFUSE: u8 = 1 << 5;
