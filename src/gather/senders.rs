@@ -142,20 +142,9 @@ struct NodeSummary {
     surfel: u32,
     /// sin(cone_angle), or above 1 for cones wider than a hemisphere.
     sin_cone: f32,
-    /// Σ A n over the surfels below.
-    area_normal: Vec3,
-    /// The fraction of the area below whose radiance is directional (non-diffuse).
-    directional: f32,
-    /// See [`NodeDetail::radiance_normal`].
-    radiance_normal: [Vec3; 3],
-    /// See [`node_flags::SOLID`].
-    solid: bool,
-    /// See [`node_flags::BACK_SIDED`].
-    back_sided: bool,
-    /// See [`SenderNode::closed_mesh`].
-    closed_mesh: u32,
-    /// See [`NodeDetail::slab`].
-    slab: [f32; 2],
+    /// What it sums from the surfels below; its slab is unbounded unless its normals agree
+    /// to [`PLANAR_CONE`] (see [`NodeDetail::slab`]).
+    below: Below,
 }
 
 impl NodeSummary {
@@ -214,7 +203,7 @@ pub struct Seen {
 }
 
 /// What a node keeps of the surfels below it, summed bottom-up (see [`SenderNode`]).
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, Debug)]
 struct Below {
     area_normal: Vec3,
     directional_area: f32,
@@ -256,20 +245,15 @@ impl Below {
         }
     }
 
-    /// Child `ch` (whose directional area is `directional_area`) as its `parent` sums it: its
-    /// slab along the parent's axis is its own, widened by how far its axis turns from the
-    /// parent's over its radius.
-    fn of_child(ch: &NodeSummary, directional_area: f32, parent: NodeSummary) -> Below {
+    /// Child `ch` as its `parent` sums it: its slab along the parent's axis is its own,
+    /// widened by how far its axis turns from the parent's over its radius.
+    fn of_child(ch: &NodeSummary, parent: NodeSummary) -> Below {
         let shift = parent.node.axis.dot(ch.node.center) - ch.node.axis.dot(ch.node.center);
         let widen = (parent.node.axis - ch.node.axis).length() * ch.node.radius;
+        let slab = ch.below.slab;
         Below {
-            area_normal: ch.area_normal,
-            directional_area,
-            radiance_normal: ch.radiance_normal,
-            solid: ch.solid,
-            back_sided: ch.back_sided,
-            closed_mesh: ch.closed_mesh,
-            slab: [ch.slab[0] + shift - widen, ch.slab[1] + shift + widen],
+            slab: [slab[0] + shift - widen, slab[1] + shift + widen],
+            ..ch.below
         }
     }
 
@@ -320,7 +304,6 @@ impl Senders {
         let emitted = emitted_intensities(records, &nodes, &cache.surfels, &maps, levels);
         Ok(Senders::assemble(
             nodes,
-            records,
             cache.surfels.clone(),
             (intensity, projected),
             emitted,
@@ -348,7 +331,6 @@ impl Senders {
         let none = SparseHaar::compress(&Haar2d::forward(&[Rgb::ZERO], 1), 0.0);
         let mut senders = Senders::assemble(
             nodes,
-            records,
             surfels,
             (vec![none; records.len()], projected),
             vec![None; records.len()],
@@ -361,15 +343,13 @@ impl Senders {
     /// The senders of `nodes` (see [`sender_nodes`]) with their maps.
     fn assemble(
         mut nodes: Vec<NodeSummary>,
-        records: &[NodeRecord],
         surfels: Vec<SurfelRecord>,
         (intensity, projected): (Vec<SparseHaar<Rgb>>, Vec<SparseHaar<f32>>),
         emitted: Vec<Option<SparseHaar<Rgb>>>,
         maps: Vec<Option<SparseHaar<Rgb>>>,
     ) -> Senders {
         // Children come after their parents: what a node keeps of the surfels below is summed
-        // bottom-up (the directional area as an area, turned into a fraction further down).
-        let mut directional_area = vec![0.0f32; nodes.len()];
+        // bottom-up.
         for j in (0..nodes.len()).rev() {
             let sender = nodes[j];
             let below = if sender.is_leaf() {
@@ -380,30 +360,16 @@ impl Senders {
                     .children
                     .iter()
                     .filter(|&&c| (c as usize) < nodes.len() && c as usize > j)
-                    .map(|&c| {
-                        Below::of_child(&nodes[c as usize], directional_area[c as usize], sender)
-                    })
+                    .map(|&c| Below::of_child(&nodes[c as usize], sender))
                     .reduce(Below::join)
                     .unwrap_or_default()
             };
-            let n = &mut nodes[j];
-            (
-                n.area_normal,
-                n.radiance_normal,
-                n.solid,
-                n.back_sided,
-                n.closed_mesh,
-            ) = (
-                below.area_normal,
-                below.radiance_normal,
-                below.solid,
-                below.back_sided,
-                below.closed_mesh,
-            );
-            if sender.node.cone_angle <= PLANAR_CONE {
-                n.slab = below.slab;
-            }
-            directional_area[j] = below.directional_area;
+            let slab = if sender.node.cone_angle <= PLANAR_CONE {
+                below.slab
+            } else {
+                sender.below.slab
+            };
+            nodes[j].below = Below { slab, ..below };
         }
         let mut solid_meshes = Vec::new();
         let mut closed_boxes: Vec<Option<[Vec3; 2]>> = Vec::new();
@@ -421,13 +387,6 @@ impl Senders {
                 let [lo, hi] = closed_boxes[m].unwrap_or([p, p]);
                 closed_boxes[m] = Some([lo.min(p - r), hi.max(p + r)]);
             }
-        }
-        for (n, (d, r)) in nodes.iter_mut().zip(directional_area.iter().zip(records)) {
-            n.directional = if r.node.area > 0.0 {
-                (d / r.node.area).min(1.0)
-            } else {
-                0.0
-            };
         }
         let (hot, details, projected_texels, projected_apart) =
             split_nodes(&nodes, point_maps(projected));
@@ -852,13 +811,10 @@ fn sender_nodes(
             } else {
                 2.0
             },
-            area_normal: Vec3::ZERO,
-            directional: 0.0,
-            radiance_normal: [Vec3::ZERO; 3],
-            solid: false,
-            back_sided: false,
-            closed_mesh: NONE,
-            slab: [f32::NEG_INFINITY, f32::INFINITY],
+            below: Below {
+                slab: [f32::NEG_INFINITY, f32::INFINITY],
+                ..Below::default()
+            },
         })
         .collect();
     if nodes
@@ -892,15 +848,21 @@ fn split_nodes(
         .iter()
         .zip(projected)
         .map(|(n, map)| {
-            let cone = n.node.cone_angle;
+            let (cone, below) = (n.node.cone_angle, &n.below);
+            // The fraction of the area below whose radiance is directional (non-diffuse).
+            let directional = if n.node.area > 0.0 {
+                (below.directional_area / n.node.area).min(1.0)
+            } else {
+                0.0
+            };
             let mut flags = [
-                (n.solid, f::SOLID),
-                (n.back_sided, f::BACK_SIDED),
+                (below.solid, f::SOLID),
+                (below.back_sided, f::BACK_SIDED),
                 (cone <= PLANAR_CONE, f::PLANAR),
                 (cone < std::f32::consts::FRAC_PI_2, f::NARROW),
                 (cone < FLAT_CONE, f::FLAT),
-                (n.directional == 0.0, f::DIFFUSE),
-                (n.directional > 0.5, f::MOSTLY_DIRECTIONAL),
+                (directional == 0.0, f::DIFFUSE),
+                (directional > 0.5, f::MOSTLY_DIRECTIONAL),
             ]
             .into_iter()
             .filter(|&(on, _)| on)
@@ -926,8 +888,8 @@ fn split_nodes(
                 radius: n.node.radius,
                 axis: n.node.axis,
                 sin_cone: n.sin_cone,
-                area_normal: n.area_normal,
-                closed_mesh: n.closed_mesh,
+                area_normal: below.area_normal,
+                closed_mesh: below.closed_mesh,
                 children: n.node.children,
                 item,
                 flags,
@@ -939,8 +901,8 @@ fn split_nodes(
     let details = nodes
         .iter()
         .map(|n| NodeDetail {
-            radiance_normal: n.radiance_normal,
-            slab: n.slab,
+            radiance_normal: n.below.radiance_normal,
+            slab: n.below.slab,
         })
         .collect();
     (hot, details, texels, apart)
