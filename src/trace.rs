@@ -209,9 +209,8 @@ pub fn intersect_geometry_within(
     t_max: f32,
 ) -> Option<GeometricHit> {
     let hit = ctx.accel.closest_hit(o, d, 0.0, t_max)?;
-    let v = ctx.scene.meshes[hit.mesh as usize].corners(hit.triangle);
-    let (p, err) = interpolate_with_error(v, hit.b);
-    let ng = Mesh::geometric_normal(v);
+    let (p, err) = interpolate_with_error(hit.corners, hit.b);
+    let ng = Mesh::geometric_normal(hit.corners);
     Some(GeometricHit {
         p: Vec3::from(p),
         err: Vec3::from(err),

@@ -34,6 +34,9 @@ pub struct Hit {
     pub triangle: u32,
     /// Weights of the triangle's three vertices.
     pub b: [f32; 3],
+    /// The triangle's vertices, as tested ([`Mesh::corners`] bit for bit), so that the hit
+    /// point is interpolated without fetching them again from the mesh.
+    pub corners: [Vec3A; 3],
 }
 
 /// The unit direction of `dir` and the factor that converts t along it back to t along `dir`
@@ -65,8 +68,8 @@ pub struct Segment {
 /// The acceleration structure over every triangle of a scene.
 pub struct Accel {
     bvh: Bvh8,
-    /// `(mesh, triangle within mesh)` of each triangle, by the packets' `id`.
-    ids: Vec<(u32, u32)>,
+    /// How many triangles the tree holds.
+    triangles: usize,
     /// Per mesh, its alpha cut-out where its material has one that varies (empty where no
     /// mesh has one): a hit in a hole is no hit.
     masks: Vec<Option<Mask>>,
@@ -145,46 +148,46 @@ impl Accel {
         accel
     }
 
-    /// Whether the hit `h` on entry `id` is on the surface (not in a cut-out's hole).
+    /// Whether the hit `h` on lane `lane` of `packet` is on the surface (not in a cut-out's
+    /// hole).
     #[inline]
-    fn solid(&self, id: usize, h: &TriangleHit) -> bool {
+    fn solid(&self, packet: &Packet, lane: usize, h: &TriangleHit) -> bool {
         if self.masks.is_empty() {
             return true;
         }
-        let (mesh, triangle) = self.ids[id];
-        self.masks[mesh as usize]
+        self.masks[packet.mesh[lane] as usize]
             .as_ref()
-            .is_none_or(|m| m.keeps(triangle, h.b))
+            .is_none_or(|m| m.keeps(packet.triangle[lane], h.b))
     }
 
     fn from_triangles(tris: Vec<Triangle>, ids: Vec<(u32, u32)>) -> Accel {
         let bvh = if tris.is_empty() {
-            Bvh8::from_bvh2(&Default::default(), &[])
+            Bvh8::from_bvh2(&Default::default(), &[], &[])
         } else {
             let bvh2 = build_bvh2(&tris, BUILD, &mut Duration::default());
             let vertices: Vec<[Vec3A; 3]> = tris.iter().map(|t| [t.v0, t.v1, t.v2]).collect();
-            Bvh8::from_bvh2(&bvh2, &vertices)
+            Bvh8::from_bvh2(&bvh2, &vertices, &ids)
         };
         Accel {
             bvh,
-            ids,
+            triangles: tris.len(),
             masks: Vec::new(),
         }
     }
 
     /// Number of triangles.
     pub fn len(&self) -> usize {
-        self.ids.len()
+        self.triangles
     }
 
     /// Whether the scene has no triangles.
     pub fn is_empty(&self) -> bool {
-        self.ids.is_empty()
+        self.triangles == 0
     }
 
     /// The traversal set-up shared by every query, or `None` when nothing can be hit.
     fn query(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<Query> {
-        if self.ids.is_empty() {
+        if self.is_empty() {
             return None;
         }
         let (d, len) = unit(dir)?;
@@ -206,7 +209,7 @@ impl Accel {
         q: &'a Query,
         packet: &'a Packet,
         tmax: f32,
-    ) -> impl Iterator<Item = (u32, TriangleHit)> + 'a {
+    ) -> impl Iterator<Item = (usize, TriangleHit)> + 'a {
         let found = q.wt.intersect4(&packet.v, q.tmin, tmax);
         let used = packet.used();
         let (hit, undecided) = (found.hit & used, found.undecided & used);
@@ -224,43 +227,43 @@ impl Accel {
                         None => continue,
                     }
                 };
-                let id = packet.id[lane];
-                if self.solid(id as usize, &h) {
-                    return Some((id, h));
+                if self.solid(packet, lane, &h) {
+                    return Some((lane, h));
                 }
             }
             None
         })
     }
 
-    fn hit(&self, q: &Query, id: u32, h: TriangleHit) -> Hit {
-        let (mesh, triangle) = self.ids[id as usize];
+    /// The hit `h` of lane `lane` of `packet`, its distance along the query's own direction.
+    fn hit(q: &Query, packet: &Packet, lane: usize, h: TriangleHit) -> Hit {
         Hit {
             t: h.t / q.len,
-            mesh,
-            triangle,
+            mesh: packet.mesh[lane],
+            triangle: packet.triangle[lane],
             b: h.b,
+            corners: packet.triangle(lane),
         }
     }
 
     /// Closest intersection in `(tmin, tmax)` along `origin + t·dir` (`dir` need not be unit).
     pub fn closest_hit(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<Hit> {
         let q = self.query(origin, dir, tmin, tmax)?;
-        let mut best: Option<(u32, TriangleHit)> = None;
+        let mut best: Option<(&Packet, usize, TriangleHit)> = None;
         let mut closest = q.tmax;
         self.bvh.traverse(&q.boxes, q.tmax, true, |packets| {
             for packet in packets {
                 // The first of equally close hits wins, as in lane-by-lane order.
-                for (id, h) in self.packet_hits(&q, packet, closest) {
+                for (lane, h) in self.packet_hits(&q, packet, closest) {
                     if h.t < closest {
-                        best = Some((id, h));
+                        best = Some((packet, lane, h));
                         closest = h.t;
                     }
                 }
             }
             Visit::Bound(rounded_up(closest))
         });
-        best.map(|(id, h)| self.hit(&q, id, h))
+        best.map(|(packet, lane, h)| Self::hit(&q, packet, lane, h))
     }
 
     /// True when anything lies in `(tmin, tmax)` along the ray.
@@ -327,7 +330,7 @@ impl Accel {
             for packet in packets {
                 out.extend(
                     self.packet_hits(&q, packet, q.tmax)
-                        .map(|(id, h)| self.hit(&q, id, h)),
+                        .map(|(lane, h)| Self::hit(&q, packet, lane, h)),
                 );
             }
             Visit::Bound(q.tmax)

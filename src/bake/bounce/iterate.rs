@@ -517,8 +517,7 @@ pub(crate) fn pixel_hits(
             let w = mb.frame.to_world(px.dir);
             let origin = Vec3::from(offset_origin(p, err, ng, Vec3A::from(w)));
             accel.closest_hit(origin, w, 0.0, f32::INFINITY).map(|h| {
-                let hm = &scene.meshes[h.mesh as usize];
-                let [a, b, c] = hm.triangles[h.triangle as usize].map(|k| hm.positions[k as usize]);
+                let [a, b, c] = h.corners.map(Vec3::from);
                 PixelHit {
                     point: origin + w * h.t,
                     mesh: h.mesh,
