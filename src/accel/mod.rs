@@ -185,9 +185,12 @@ impl Accel {
         self.triangles == 0
     }
 
-    /// The traversal set-up shared by every query, or `None` when nothing can be hit.
+    /// The traversal set-up shared by every query, or `None` when nothing can be hit: an
+    /// empty tree, a direction of no length or not finite, or an origin not finite (its slab
+    /// distances would be NaN, so the node test would enter every box, and no triangle test
+    /// can hit).
     fn query(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<Query> {
-        if self.is_empty() {
+        if self.is_empty() || !origin.is_finite() {
             return None;
         }
         let (d, len) = unit(dir)?;
