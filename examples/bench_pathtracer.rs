@@ -8,8 +8,11 @@
 //! `WPBGI_PREVIOUS=/path/to/an/older/wpbgi`, that version's `wpbgi reference` at the same
 //! settings (its own seconds, from its `--json`), and our time over its.
 //!
-//! `cargo run --release --example bench_pathtracer [-- SPP]` (default 256). Mitsuba renders
-//! only that count (the anchor script's AOVs and denoiser run too, outside the timing).
+//! `cargo run --release --example bench_pathtracer [-- SPP [ROUNDS]]` (default 256 spp, one
+//! round). Mitsuba renders only that count (the anchor script's AOVs and denoiser run too,
+//! outside the timing). With several rounds, each runs ours, the previous version and
+//! Mitsuba one after the other, and each keeps its fastest: on a shared machine a single run
+//! of either can be 10 % slow.
 
 use std::path::Path;
 use std::process::Command;
@@ -23,15 +26,20 @@ mod common;
 const SIZE: u32 = 256;
 
 fn main() -> common::Result<()> {
-    let spp: u32 = match std::env::args().nth(1) {
+    let mut args = std::env::args().skip(1);
+    let spp: u32 = match args.next() {
         Some(s) => s.parse()?,
         None => 256,
+    };
+    let rounds: u32 = match args.next() {
+        Some(s) => s.parse::<u32>()?.max(1),
+        None => 1,
     };
     let python = std::env::var_os("WPBGI_ANCHOR_PYTHON");
     let previous = std::env::var_os("WPBGI_PREVIOUS");
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/mitsuba");
     println!(
-        "{SIZE}², max_depth 8, {spp} spp, {} threads",
+        "{SIZE}², max_depth 8, {spp} spp, {} threads, best of {rounds} round(s) each",
         rayon::current_num_threads()
     );
     println!(
@@ -49,43 +57,34 @@ fn main() -> common::Result<()> {
             max_depth: 8,
             ..Default::default()
         };
-        let t = Instant::now();
-        render(&scene, &camera, &settings, &|_| {})?;
-        let ours = t.elapsed().as_secs_f64();
-        let before = match &previous {
-            Some(bin) => {
-                let out = std::env::temp_dir().join(format!("wpbgi-bench-pt-{name}.exr"));
-                let run = common::run_ok(
-                    "the previous version's reference",
-                    Command::new(bin)
-                        .arg("-q")
-                        .arg("reference")
-                        .arg(&scene_path)
-                        .arg("-o")
-                        .arg(&out)
-                        .args(["--size", &format!("{SIZE}x{SIZE}")])
-                        .args(["--spp", &spp.to_string(), "--max-depth", "8", "--json"]),
-                )?;
-                let json: serde_json::Value = serde_json::from_slice(&run.stdout)?;
-                json["frames"][0]["seconds"].as_f64()
+        // Each round runs the three one after the other, so that the machine's drift falls on
+        // all of them; each keeps its fastest round.
+        let (mut ours, mut before, mut mitsuba) = (f64::INFINITY, None::<f64>, None::<f64>);
+        for _ in 0..rounds {
+            let t = Instant::now();
+            render(&scene, &camera, &settings, &|_| {})?;
+            ours = ours.min(t.elapsed().as_secs_f64());
+            if let Some(bin) = &previous {
+                let b = previous_seconds(Path::new(bin), &scene_path, name, spp)?;
+                before = Some(before.map_or(b, |x| x.min(b)));
             }
-            None => None,
-        };
+            if let Some(py) = &python {
+                let m = common::mitsuba_anchor(
+                    Path::new(py),
+                    &scene_path,
+                    &dir.join(format!("{name}_d8_ref.exr")),
+                    &[spp],
+                )?
+                .into_iter()
+                .find(|(s, _)| *s == spp)
+                .and_then(|(_, v)| v["pt_s"].as_f64())
+                .ok_or("the Mitsuba anchor printed no time")?;
+                mitsuba = Some(mitsuba.map_or(m, |x| x.min(m)));
+            }
+        }
         let before = match before {
             Some(b) => format!("{b:.2} | {:.2}", ours / b),
             None => "not run (`WPBGI_PREVIOUS`) |".to_string(),
-        };
-        let mitsuba = match &python {
-            Some(py) => common::mitsuba_anchor(
-                Path::new(py),
-                &scene_path,
-                &dir.join(format!("{name}_d8_ref.exr")),
-                &[spp],
-            )?
-            .into_iter()
-            .find(|(s, _)| *s == spp)
-            .and_then(|(_, v)| v["pt_s"].as_f64()),
-            _ => None,
         };
         let rate = |s: f64| samples / s / 1e6;
         match mitsuba {
@@ -102,4 +101,24 @@ fn main() -> common::Result<()> {
         }
     }
     Ok(())
+}
+
+/// The previous version's own seconds for the same render (`wpbgi reference --json`).
+fn previous_seconds(bin: &Path, scene: &Path, name: &str, spp: u32) -> common::Result<f64> {
+    let out = std::env::temp_dir().join(format!("wpbgi-bench-pt-{name}.exr"));
+    let run = common::run_ok(
+        "the previous version's reference",
+        Command::new(bin)
+            .arg("-q")
+            .arg("reference")
+            .arg(scene)
+            .arg("-o")
+            .arg(&out)
+            .args(["--size", &format!("{SIZE}x{SIZE}")])
+            .args(["--spp", &spp.to_string(), "--max-depth", "8", "--json"]),
+    )?;
+    let json: serde_json::Value = serde_json::from_slice(&run.stdout)?;
+    Ok(json["frames"][0]["seconds"]
+        .as_f64()
+        .ok_or("the previous version's --json has no frames[0].seconds")?)
 }
