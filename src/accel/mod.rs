@@ -34,7 +34,7 @@ pub struct Hit {
     pub triangle: u32,
     /// Weights of the triangle's three vertices.
     pub b: [f32; 3],
-    /// The triangle's vertices, as tested ([`Mesh::corners`] bit for bit), so that the hit
+    /// The triangle's vertices, as tested (the mesh's positions bit for bit), so that the hit
     /// point is interpolated without fetching them again from the mesh.
     pub corners: [Vec3A; 3],
 }
