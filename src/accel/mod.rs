@@ -436,10 +436,43 @@ mod tests {
                         "ray {o} {d} tmax {tmax}"
                     );
                     assert_eq!(accel.occluded(o, d, 0.0, tmax), expected.is_some());
+                    // The hit's corners are the triangle's own vertices, bit for bit.
+                    if let Some(h) = got {
+                        let t = &tris[h.triangle as usize];
+                        assert_eq!(h.corners, [t.v0, t.v1, t.v2], "ray {o} {d}");
+                    }
                     hits += usize::from(expected.is_some());
                 }
             }
             assert!(hits > 1000, "{hits} hits: the test must exercise hits");
+        }
+    }
+
+    /// A ray from an origin that is not finite meets nothing, even pointed straight at the
+    /// triangles (and a finite one from nearby does, so the rays are aimed right).
+    #[test]
+    fn rays_from_non_finite_origins_meet_nothing() {
+        let mut s = Sampler::new(3, 0, 0);
+        let mut point = |scale: f32| random_point(&mut s, scale);
+        let tris = random_triangles(&mut point);
+        let accel = accel_over(&tris, true);
+        let target = Vec3::from((tris[0].v0 + tris[0].v1 + tris[0].v2) / 3.0);
+        let from = Vec3::new(0.0, 0.0, -20.0);
+        assert!(accel
+            .closest_hit(from, target - from, 0.0, f32::INFINITY)
+            .is_some());
+        for bad in [f32::NAN, f32::INFINITY, f32::NEG_INFINITY] {
+            for axis in 0..3 {
+                let mut o = from;
+                o[axis] = bad;
+                let d = target - from;
+                assert_eq!(
+                    accel.closest_hit(o, d, 0.0, f32::INFINITY),
+                    None,
+                    "origin {o}"
+                );
+                assert!(!accel.occluded(o, d, 0.0, f32::INFINITY), "origin {o}");
+            }
         }
     }
 

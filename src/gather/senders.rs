@@ -87,7 +87,7 @@ pub mod node_flags {
     pub const PLANAR: u8 = 1 << 2;
     /// The normal cone is narrower than a hemisphere.
     pub const NARROW: u8 = 1 << 3;
-    /// The normal cone is within 30° (the gather's flat cone): the node has a plane.
+    /// The normal cone is within the gather's flat cone (`FLAT_CONE`): the node has a plane.
     pub const FLAT: u8 = 1 << 4;
     /// No surfel below has directional radiance (all are diffuse).
     pub const DIFFUSE: u8 = 1 << 5;
