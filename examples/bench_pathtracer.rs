@@ -60,8 +60,7 @@ fn main() -> common::Result<()> {
         // Each round runs the three one after the other, so that the machine's drift falls on
         // all of them; each keeps its fastest round. Odd rounds run them in the reverse order:
         // here the same binary timed twice in a fixed order read 6 % apart by its place.
-        let (mut ours, mut before, mut mitsuba) = (f64::INFINITY, None::<f64>, None::<f64>);
-        let keep = |best: &mut Option<f64>, s: f64| *best = Some(best.map_or(s, |b| b.min(s)));
+        let (mut ours, mut before, mut mitsuba) = (f64::INFINITY, f64::INFINITY, f64::INFINITY);
         for round in 0..rounds {
             let mut order = [Run::Ours, Run::Previous, Run::Mitsuba];
             if round % 2 == 1 {
@@ -77,7 +76,7 @@ fn main() -> common::Result<()> {
                     Run::Previous => {
                         if let Some(bin) = &previous {
                             let b = previous_seconds(Path::new(bin), &scene_path, name, spp)?;
-                            keep(&mut before, b);
+                            before = before.min(b);
                         }
                     }
                     Run::Mitsuba => {
@@ -92,23 +91,23 @@ fn main() -> common::Result<()> {
                             .find(|(s, _)| *s == spp)
                             .and_then(|(_, v)| v["pt_s"].as_f64())
                             .ok_or("the Mitsuba anchor printed no time")?;
-                            keep(&mut mitsuba, m);
+                            mitsuba = mitsuba.min(m);
                         }
                     }
                 }
             }
         }
-        let before = match before {
-            Some(b) => format!("{b:.2} | {:.2}", ours / b),
+        let before = match previous {
+            Some(_) => format!("{before:.2} | {:.2}", ours / before),
             None => "not run (`WPBGI_PREVIOUS`) |".to_string(),
         };
         let rate = |s: f64| samples / s / 1e6;
-        match mitsuba {
-            Some(m) => println!(
-                "| {name} | {ours:.2} | {:.2} | {before} | {m:.2} | {:.2} | {:.2} |",
+        match python {
+            Some(_) => println!(
+                "| {name} | {ours:.2} | {:.2} | {before} | {mitsuba:.2} | {:.2} | {:.2} |",
                 rate(ours),
-                rate(m),
-                m / ours
+                rate(mitsuba),
+                mitsuba / ours
             ),
             None => println!(
                 "| {name} | {ours:.2} | {:.2} | {before} | not run (`WPBGI_ANCHOR_PYTHON`) | | |",
