@@ -383,6 +383,19 @@ fn the_command_relights_and_refuses() {
     );
     let report: serde_json::Value = serde_json::from_slice(&ok.stdout).expect("json");
     assert_eq!(report["how"], "rescaled");
+    // The stages' seconds are the run's, within its total.
+    let stages = report["stage_seconds"].as_object().expect("stage_seconds");
+    assert_eq!(
+        stages.keys().collect::<Vec<_>>(),
+        ["rescale and write"],
+        "{report}"
+    );
+    let total = report["seconds"].as_f64().expect("seconds");
+    let stage_sum: f64 = stages.values().map(|v| v.as_f64().expect("a number")).sum();
+    assert!(
+        stage_sum > 0.0 && stage_sum <= total,
+        "stages {stage_sum} s of {total} s"
+    );
     let image = dir.join("frame.exr");
     let image = image.to_str().expect("path");
     let render = |edits: &[&str]| {

@@ -97,6 +97,9 @@ pub struct Relit {
     pub scene: Scene,
     /// Wall seconds.
     pub seconds: f64,
+    /// Wall seconds by stage, in order: reading the kept transport and the bake's own stages
+    /// where the cache was re-solved or baked again, then writing the new cache.
+    pub timings: Vec<(&'static str, f64)>,
 }
 
 /// Relight `cache`, a fresh bake of `original`, for `original` with `edits` applied, and
@@ -113,6 +116,7 @@ pub fn relight(
     cache.check_scene(original)?;
     let scene = original.edited(edits)?;
     let lightcuts = cache.plan["plan"]["lightcuts"].as_bool().unwrap_or(true);
+    let mut timings = Vec::new();
     let how = match emission_factor(original, &scene, lightcuts) {
         Ok(factor) => {
             let hash = bake_hash(&scene, cache.settings());
@@ -122,7 +126,9 @@ pub fn relight(
                 "edits": edits.iter().map(|e| e.to_string()).collect::<Vec<_>>(),
                 "factor": factor.to_array(),
             });
+            let t = Instant::now();
             write_scaled(output, hash, cache, factor, &plan)?;
+            timings.push(("rescale and write", t.elapsed().as_secs_f64()));
             Relighting::Rescaled { factor }
         }
         Err(why) => {
@@ -138,14 +144,19 @@ pub fn relight(
             let mut unused = None;
             let present = transport.exists();
             if present {
+                let t = Instant::now();
                 match KeptTransport::read(&transport) {
                     Ok(t) => handoff.reuse = Some(t),
                     Err(reason) => unused = Some(reason),
                 }
+                timings.push(("read transport", t.elapsed().as_secs_f64()));
             }
             let baked: Baked =
                 bake_with_transport(&scene, &settings, progress, cancel, &mut handoff)?;
+            timings.extend(&baked.timings);
+            let t = Instant::now();
             save(output, &scene, &baked)?;
+            timings.push(("write", t.elapsed().as_secs_f64()));
             let unused = unused.or(handoff.refused);
             if handoff.replayed {
                 keep_beside(&transport, &beside(output));
@@ -174,6 +185,7 @@ pub fn relight(
         how,
         scene,
         seconds: start.elapsed().as_secs_f64(),
+        timings,
     })
 }
 

@@ -62,7 +62,17 @@ pub fn relight_command(a: RelightArgs) -> Result<()> {
     if a.json {
         println!(
             "{}",
-            json!({"output": a.output, "how": how, "detail": detail, "seconds": relit.seconds})
+            json!({
+                "output": a.output,
+                "how": how,
+                "detail": detail,
+                "seconds": relit.seconds,
+                "stage_seconds": relit
+                    .timings
+                    .iter()
+                    .map(|(k, v)| (k.to_string(), json!(v)))
+                    .collect::<serde_json::Map<_, _>>(),
+            })
         );
     } else {
         say!(
@@ -71,6 +81,9 @@ pub fn relight_command(a: RelightArgs) -> Result<()> {
             relit.seconds,
             relit.how
         );
+        for (stage, secs) in &relit.timings {
+            say!("  {stage}: {secs:.2} s");
+        }
     }
     Ok(())
 }
