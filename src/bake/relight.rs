@@ -126,9 +126,9 @@ pub fn relight(
                 "edits": edits.iter().map(|e| e.to_string()).collect::<Vec<_>>(),
                 "factor": factor.to_array(),
             });
-            let t = Instant::now();
+            let writing = Instant::now();
             write_scaled(output, hash, cache, factor, &plan)?;
-            timings.push(("rescale and write", t.elapsed().as_secs_f64()));
+            timings.push(("rescale and write", writing.elapsed().as_secs_f64()));
             Relighting::Rescaled { factor }
         }
         Err(why) => {
@@ -144,19 +144,19 @@ pub fn relight(
             let mut unused = None;
             let present = transport.exists();
             if present {
-                let t = Instant::now();
+                let reading = Instant::now();
                 match KeptTransport::read(&transport) {
                     Ok(t) => handoff.reuse = Some(t),
                     Err(reason) => unused = Some(reason),
                 }
-                timings.push(("read transport", t.elapsed().as_secs_f64()));
+                timings.push(("read transport", reading.elapsed().as_secs_f64()));
             }
             let baked: Baked =
                 bake_with_transport(&scene, &settings, progress, cancel, &mut handoff)?;
             timings.extend(&baked.timings);
-            let t = Instant::now();
+            let writing = Instant::now();
             save(output, &scene, &baked)?;
-            timings.push(("write", t.elapsed().as_secs_f64()));
+            timings.push(("write", writing.elapsed().as_secs_f64()));
             let unused = unused.or(handoff.refused);
             if handoff.replayed {
                 keep_beside(&transport, &beside(output));

@@ -269,12 +269,7 @@ pub fn bake_command(a: BakeArgs) -> Result<()> {
     // The cache holds what the inputs determine; times and memory are reported here.
     let mut stats = wpbgi::bake::store::cache_stats(&baked);
     let bytes = std::fs::metadata(&a.output).map(|m| m.len()).unwrap_or(0);
-    stats["seconds"] = baked
-        .timings
-        .iter()
-        .map(|(k, v)| (k.to_string(), json!(v)))
-        .collect::<serde_json::Map<_, _>>()
-        .into();
+    stats["seconds"] = crate::stage_seconds_json(&baked.timings);
     stats["seconds"]["write"] = json!(t.elapsed().as_secs_f64());
     if let Some(r) = &baked.bounces {
         stats["bounces"] = r.to_json();
@@ -316,9 +311,7 @@ pub fn bake_command(a: BakeArgs) -> Result<()> {
             total,
             peak.map_or(String::new(), |b| format!(", peak memory {} MB", b / 1_000_000)),
         );
-        for (stage, secs) in &baked.timings {
-            say!("  {stage}: {secs:.2} s");
-        }
+        crate::say_stages(&baked.timings);
         if !baked.operators.is_empty() {
             say!(
                 "  BSDF operators: {} (one per glossy BSDF without its tints, a textured \

@@ -277,6 +277,22 @@ fn parse_vec3(s: &str) -> Result<Vec3, String> {
     Ok(Vec3::from_slice(&v))
 }
 
+/// A command's seconds by stage (`bake`, `render`, `relight`) as one JSON object.
+pub(crate) fn stage_seconds_json(timings: &[(&str, f64)]) -> serde_json::Value {
+    timings
+        .iter()
+        .map(|(k, v)| (k.to_string(), serde_json::json!(v)))
+        .collect::<serde_json::Map<_, _>>()
+        .into()
+}
+
+/// A command's seconds by stage, a line each, in order.
+pub(crate) fn say_stages(timings: &[(&str, f64)]) {
+    for (stage, secs) in timings {
+        say!("  {stage}: {secs:.2} s");
+    }
+}
+
 pub(crate) fn progress_bar(what: &str) -> ProgressBar {
     if verbosity::quiet() {
         return ProgressBar::hidden();

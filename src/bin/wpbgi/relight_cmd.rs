@@ -67,11 +67,7 @@ pub fn relight_command(a: RelightArgs) -> Result<()> {
                 "how": how,
                 "detail": detail,
                 "seconds": relit.seconds,
-                "stage_seconds": relit
-                    .timings
-                    .iter()
-                    .map(|(k, v)| (k.to_string(), json!(v)))
-                    .collect::<serde_json::Map<_, _>>(),
+                "stage_seconds": crate::stage_seconds_json(&relit.timings),
             })
         );
     } else {
@@ -81,9 +77,7 @@ pub fn relight_command(a: RelightArgs) -> Result<()> {
             relit.seconds,
             relit.how
         );
-        for (stage, secs) in &relit.timings {
-            say!("  {stage}: {secs:.2} s");
-        }
+        crate::say_stages(&relit.timings);
     }
     Ok(())
 }

@@ -304,9 +304,7 @@ pub fn print_summary(out: &FinalOutput) {
         s.receiver_cut.near_leaves,
         s.near_rays
     );
-    for (stage, secs) in &out.timings {
-        say!("  {stage}: {secs:.2} s");
-    }
+    crate::say_stages(&out.timings);
     if let Some(b) = wpbgi::compare::memory::peak() {
         say!("  peak memory {} MB", b / 1_000_000);
     }
@@ -477,11 +475,7 @@ fn render_frame(
         "size": [camera.width, camera.height],
         "origin": [out.origin.0, out.origin.1],
         "seconds": start.elapsed().as_secs_f64(),
-        "timings": out
-            .timings
-            .iter()
-            .map(|(k, v)| (k.to_string(), serde_json::json!(v)))
-            .collect::<serde_json::Map<_, _>>(),
+        "timings": crate::stage_seconds_json(&out.timings),
         "camera_samples": out.samples,
         "receivers": s.receivers,
         "interpolated": s.interpolated,
