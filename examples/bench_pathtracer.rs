@@ -13,17 +13,37 @@
 //! outside the timing). With several rounds, each runs ours, the previous version and
 //! Mitsuba one after the other (odd rounds in the reverse order), and each keeps its fastest:
 //! on a shared machine a single run of either can be 10 % slow, and one in a fixed place 6 %.
+//!
+//! Then the ray queries alone, on each scene's triangles: [`RAYS`] rays from uniform points of
+//! the scene's bounds (2 % in from each side) in uniform directions, closest hits, and
+//! occlusion segments from the same points to other uniform points; our `Accel` on all threads
+//! beside Mitsuba's (Embree's) `ray_intersect_preliminary` and `ray_test` on the same rays
+//! (`scripts/anchor/mitsuba_rays.py`, its arrays made before the timing), fastest of `ROUNDS`
+//! (at least three), with both sides' hit counts as a check that they answer the same queries.
+//! A path's time is mostly these queries and its shading: the two tables together say which
+//! of them holds the gap.
 
+use glam::Vec3;
+use rayon::prelude::*;
 use std::path::Path;
 use std::process::Command;
 use std::time::Instant;
+use wpbgi::accel::Accel;
+use wpbgi::geometry::warp::square_to_uniform_sphere;
 use wpbgi::reference::{render, RenderSettings};
+use wpbgi::sampler::Sampler;
 use wpbgi::scene::Scene;
 
 #[allow(dead_code)] // the benchmarks' shared helpers, of which this one uses three
 mod common;
 
 const SIZE: u32 = 256;
+
+/// Rays per scene in the ray-query table.
+const RAYS: usize = 1 << 22;
+
+/// The scenes, in the order both tables list them.
+const SCENES: [&str; 4] = ["cbox-diffuse", "cbox-rough", "cbox-glossy", "cbox-mirror"];
 
 fn main() -> common::Result<()> {
     let mut args = std::env::args().skip(1);
@@ -48,7 +68,7 @@ fn main() -> common::Result<()> {
     );
     println!("|---|---:|---:|---:|---:|---:|---:|---:|");
     let samples = f64::from(SIZE * SIZE) * f64::from(spp);
-    for name in ["cbox-diffuse", "cbox-rough", "cbox-glossy", "cbox-mirror"] {
+    for name in SCENES {
         let scene_path = dir.join(format!("{name}.gltf"));
         let scene = Scene::load(&scene_path)?;
         let camera = scene.default_camera(SIZE, SIZE)?;
@@ -115,7 +135,139 @@ fn main() -> common::Result<()> {
             ),
         }
     }
+    ray_queries(&dir, python.as_deref().map(Path::new), rounds.max(3))
+}
+
+/// The ray-query table (see the module docs).
+fn ray_queries(dir: &Path, python: Option<&Path>, rounds: u32) -> common::Result<()> {
+    println!();
+    println!(
+        "ray queries alone: {RAYS} rays a scene, {} threads, fastest of {rounds} rounds",
+        rayon::current_num_threads()
+    );
+    println!(
+        "| scene | ours closest Mrays/s | Mitsuba (Embree) closest Mrays/s | ours / Embree | \
+         ours occlusion Mrays/s | Embree occlusion Mrays/s | ours / Embree | hits ours / Embree | \
+         occluded ours / Embree |"
+    );
+    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|");
+    for name in SCENES {
+        let scene_path = dir.join(format!("{name}.gltf"));
+        let scene = Scene::load(&scene_path)?;
+        let accel = Accel::build(&scene);
+        let rays = random_rays(&scene);
+        let fastest = |query: &(dyn Fn(&Ray) -> bool + Sync)| {
+            let mut best = f64::INFINITY;
+            let mut count = 0;
+            for _ in 0..rounds {
+                let t = Instant::now();
+                count = rays
+                    .par_iter()
+                    .with_min_len(4096)
+                    .filter(|r| query(r))
+                    .count();
+                best = best.min(t.elapsed().as_secs_f64());
+            }
+            (RAYS as f64 / best / 1e6, count)
+        };
+        let (closest, hits) = fastest(&|r| {
+            accel
+                .closest_hit(r.origin, r.dir, 0.0, f32::INFINITY)
+                .is_some()
+        });
+        let (occlusion, occluded) =
+            fastest(&|r| accel.occluded(r.origin, r.to_other, 0.0, r.length * 0.999));
+        let Some(python) = python else {
+            println!(
+                "| {name} | {closest:.2} | not run (`WPBGI_ANCHOR_PYTHON`) | | {occlusion:.2} | | | \
+                 {hits} | {occluded} |"
+            );
+            continue;
+        };
+        let m = mitsuba_rays(python, &scene_path, &rays, rounds)?;
+        let field = |k: &str| {
+            m[k].as_f64()
+                .ok_or(format!("mitsuba_rays.py printed no {k}"))
+        };
+        let (m_closest, m_occlusion) = (
+            RAYS as f64 / field("closest_s")? / 1e6,
+            RAYS as f64 / field("occluded_s")? / 1e6,
+        );
+        println!(
+            "| {name} | {closest:.2} | {m_closest:.2} | {:.2} | {occlusion:.2} | {m_occlusion:.2} | \
+             {:.2} | {hits} / {} | {occluded} / {} |",
+            closest / m_closest,
+            occlusion / m_occlusion,
+            field("hits")?,
+            field("occluded")?
+        );
+    }
     Ok(())
+}
+
+/// One query of the ray table: a closest-hit ray along `dir`, and an occlusion segment from
+/// the same origin along the unit `to_other`, `length` long.
+struct Ray {
+    origin: Vec3,
+    dir: Vec3,
+    to_other: Vec3,
+    length: f32,
+}
+
+/// [`RAYS`] rays of `scene` (see the module docs), the same every run.
+fn random_rays(scene: &Scene) -> Vec<Ray> {
+    let (lo, hi) = scene.bounds();
+    let inside = |u: Vec3| lo + (hi - lo) * (Vec3::splat(0.02) + 0.96 * u);
+    (0..RAYS)
+        .map(|i| {
+            let mut s = Sampler::new(7, i as u64, 0);
+            let origin = inside(Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()));
+            let other = inside(Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()));
+            let dir = square_to_uniform_sphere(s.next_2d());
+            let length = (other - origin).length();
+            Ray {
+                origin,
+                dir,
+                to_other: (other - origin) / length,
+                length,
+            }
+        })
+        .collect()
+}
+
+/// Mitsuba's times and counts for `rays` (`scripts/anchor/mitsuba_rays.py`'s JSON line).
+fn mitsuba_rays(
+    python: &Path,
+    scene: &Path,
+    rays: &[Ray],
+    rounds: u32,
+) -> common::Result<serde_json::Value> {
+    let file = std::env::temp_dir().join("wpbgi-bench-rays.f32");
+    let mut bytes = Vec::with_capacity(rays.len() * 40);
+    for r in rays {
+        for v in [r.origin, r.dir, r.to_other] {
+            for c in v.to_array() {
+                bytes.extend_from_slice(&c.to_le_bytes());
+            }
+        }
+        bytes.extend_from_slice(&r.length.to_le_bytes());
+    }
+    std::fs::write(&file, bytes)?;
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/anchor/mitsuba_rays.py");
+    let run = common::run_ok(
+        "the Mitsuba ray anchor",
+        Command::new(python)
+            .arg(script)
+            .arg(scene)
+            .arg(&file)
+            .arg(rounds.to_string()),
+    );
+    std::fs::remove_file(&file)?;
+    let json = String::from_utf8_lossy(&run?.stdout)
+        .lines()
+        .find_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
+        .ok_or("mitsuba_rays.py printed no JSON line")?;
+    Ok(json)
 }
 
 /// The three timed in a round.

@@ -48,8 +48,9 @@ impl Packet {
     /// The triangle in lane `lane`.
     #[inline]
     pub fn triangle(&self, lane: usize) -> [Vec3A; 3] {
+        // Through arrays: glam's `Vec4` indexing is a `match`, a jump table.
         self.v
-            .map(|c| Vec3A::new(c[0][lane], c[1][lane], c[2][lane]))
+            .map(|c| Vec3A::from_array(c.map(|axis| axis.as_ref()[lane])))
     }
 
     /// Bit `i` set for each used lane.
@@ -410,15 +411,19 @@ impl Bvh8 {
         if self.root == Child::EMPTY {
             return true;
         }
-        // One call of `traverse_with`, so that `visit` is inlined into it.
-        self.with_stack(|stack: &mut [MaybeUninit<Entry>]| {
-            #[cfg(target_arch = "x86_64")]
-            if self.avx {
-                // SAFETY: `avx` is set only where the CPU has AVX.
-                return unsafe { self.traverse_avx(stack, ray, tmax, ordered, visit) };
-            }
-            self.traverse_with::<false>(stack, ray, tmax, ordered, visit)
-        })
+        // One call of `traverse_with`, so that `visit` is inlined into it (the closures
+        // `#[inline(always)]`: see the module docs of `accel`).
+        self.with_stack(
+            #[inline(always)]
+            |stack: &mut [MaybeUninit<Entry>]| {
+                #[cfg(target_arch = "x86_64")]
+                if self.avx {
+                    // SAFETY: `avx` is set only where the CPU has AVX.
+                    return unsafe { self.traverse_avx(stack, ray, tmax, ordered, visit) };
+                }
+                self.traverse_with::<false>(stack, ray, tmax, ordered, visit)
+            },
+        )
     }
 
     /// Run `f` with a traversal stack of `stack_size` entries: on the call stack where it
@@ -454,14 +459,17 @@ impl Bvh8 {
         if self.root == Child::EMPTY || open == 0 {
             return 0;
         }
-        self.with_stack(|stack: &mut [MaybeUninit<SetEntry>]| {
-            #[cfg(target_arch = "x86_64")]
-            if self.avx {
-                // SAFETY: `avx` is set only where the CPU has AVX.
-                return unsafe { self.traverse_set_avx(stack, (rays, tmax, open), visit) };
-            }
-            self.traverse_set_with::<false>(stack, (rays, tmax, open), visit)
-        })
+        self.with_stack(
+            #[inline(always)]
+            |stack: &mut [MaybeUninit<SetEntry>]| {
+                #[cfg(target_arch = "x86_64")]
+                if self.avx {
+                    // SAFETY: `avx` is set only where the CPU has AVX.
+                    return unsafe { self.traverse_set_avx(stack, (rays, tmax, open), visit) };
+                }
+                self.traverse_set_with::<false>(stack, (rays, tmax, open), visit)
+            },
+        )
     }
 
     /// [`Bvh8::traverse_set_with`] compiled with AVX.

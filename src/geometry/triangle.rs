@@ -19,6 +19,8 @@ pub(crate) struct WatertightRay {
     kx: usize,
     ky: usize,
     kz: usize,
+    /// The origin's coordinates along `kx`, `ky` and `kz`.
+    o: [f32; 3],
     sx: f32,
     sy: f32,
     sz: f32,
@@ -57,9 +59,10 @@ impl Hits4 {
     /// Lane `lane`'s hit.
     #[inline]
     pub fn lane(&self, lane: usize) -> TriangleHit {
+        // Through arrays: glam's `Vec4` indexing is a `match`, a jump table.
         TriangleHit {
-            t: self.t[lane],
-            b: [self.b[0][lane], self.b[1][lane], self.b[2][lane]],
+            t: self.t.as_ref()[lane],
+            b: self.b.map(|b| b.as_ref()[lane]),
         }
     }
 }
@@ -67,33 +70,30 @@ impl Hits4 {
 impl WatertightRay {
     /// The constants of the ray from `origin` along `dir`.
     pub fn new(origin: Vec3A, dir: Vec3A) -> Self {
+        // The axis of the largest |component| (x where it exceeds both others, else y where
+        // it exceeds z, else z) and the swap that keeps the winding (so the sign of the
+        // determinant still tells the face), chosen without branches: both are as random as
+        // the ray. Arrays rather than glam's indexing, which is a `match`.
         let a = dir.abs();
-        let kz = if a.x > a.y {
-            if a.x > a.z {
-                0
-            } else {
-                2
-            }
-        } else if a.y > a.z {
-            1
-        } else {
-            2
-        };
-        let mut kx = (kz + 1) % 3;
-        let mut ky = (kx + 1) % 3;
-        // Swap to keep the winding, so the sign of the determinant still tells the face.
-        if dir[kz] < 0.0 {
-            std::mem::swap(&mut kx, &mut ky);
-        }
+        let x_over_y = usize::from(a.x > a.y);
+        let kz = x_over_y * (2 - 2 * usize::from(a.x > a.z))
+            + (1 - x_over_y) * (2 - usize::from(a.y > a.z));
+        let d = dir.to_array();
+        let o = origin.to_array();
+        let swap = 0usize.wrapping_sub(usize::from(d[kz] < 0.0));
+        let (next, after) = ((kz + 1) % 3, (kz + 2) % 3);
+        let kx = next ^ (swap & (next ^ after));
+        let ky = after ^ (swap & (next ^ after));
         WatertightRay {
             origin,
             dir,
             kx,
             ky,
             kz,
-            sx: dir[kx] / dir[kz],
-            sy: dir[ky] / dir[kz],
-            sz: 1.0 / dir[kz],
+            o: [o[kx], o[ky], o[kz]],
+            sx: d[kx] / d[kz],
+            sy: d[ky] / d[kz],
+            sz: 1.0 / d[kz],
         }
     }
 
@@ -108,9 +108,9 @@ impl WatertightRay {
         tmax: f32,
     ) -> Option<TriangleHit> {
         let (kx, ky, kz) = (self.kx, self.ky, self.kz);
-        let a = p0 - self.origin;
-        let b = p1 - self.origin;
-        let c = p2 - self.origin;
+        let a = (p0 - self.origin).to_array();
+        let b = (p1 - self.origin).to_array();
+        let c = (p2 - self.origin).to_array();
         let ax = a[kx] - self.sx * a[kz];
         let ay = a[ky] - self.sy * a[kz];
         let bx = b[kx] - self.sx * b[kz];
@@ -193,9 +193,9 @@ impl WatertightRay {
     pub fn intersect4(&self, v: &[[Vec4; 3]; 3], tmin: f32, tmax: f32) -> Hits4 {
         let (kx, ky, kz) = (self.kx, self.ky, self.kz);
         let (ox, oy, oz) = (
-            Vec4::splat(self.origin[kx]),
-            Vec4::splat(self.origin[ky]),
-            Vec4::splat(self.origin[kz]),
+            Vec4::splat(self.o[0]),
+            Vec4::splat(self.o[1]),
+            Vec4::splat(self.o[2]),
         );
         let (sx, sy, sz) = (
             Vec4::splat(self.sx),
