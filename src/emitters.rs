@@ -4,7 +4,7 @@
 //! the scene does not have cost nothing. Where the emitters are a few triangles of constant
 //! radiance, their unshadowed irradiance also in closed form ([`ClosedFormLight`]).
 
-use crate::accel::{Accel, Segment};
+use crate::accel::{Accel, Segment, TriangleId};
 use crate::geometry::offset::{interpolate_with_error, offset_origin, SHADOW_EPSILON};
 use crate::geometry::polygon_irradiance::projected_solid_angle;
 use crate::geometry::spherical_triangle::SphericalTriangle;
@@ -39,11 +39,20 @@ pub struct EmitterSample {
 }
 
 impl EmitterSample {
-    /// Whether nothing blocks the segment from `origin` (already offset off its surface) to
-    /// the sampled point, whose own end is offset off the emitter the same way.
-    pub(crate) fn visible_from(&self, accel: &Accel, origin: Vec3) -> bool {
+    /// Whether nothing blocks the segment from `origin` (already offset off its surface,
+    /// triangle `leaving` where the caller knows it) to the sampled point, whose own end is
+    /// offset off the emitter the same way.
+    pub(crate) fn visible_from(
+        &self,
+        accel: &Accel,
+        leaving: Option<TriangleId>,
+        origin: Vec3,
+    ) -> bool {
         let s = self.shadow_segment(origin);
-        !accel.occluded(s.origin, s.dir, s.tmin, s.tmax)
+        !match leaving {
+            Some(from) => accel.occluded_leaving(from, s.origin, s.dir, s.tmin, s.tmax),
+            None => accel.occluded(s.origin, s.dir, s.tmin, s.tmax),
+        }
     }
 
     /// The segment [`EmitterSample::visible_from`] tests: to the sampled point, its end offset

@@ -5,7 +5,7 @@
 //! multiple-importance weight ([`mis`]). Neither path tracer knows
 //! the other; both build on this.
 
-use crate::accel::{Accel, Hit};
+use crate::accel::{Accel, Hit, TriangleId};
 use crate::bsdf::{Bsdf, TransportMode};
 use crate::emitters::EmitterSampler;
 use crate::geometry::frame::Frame;
@@ -72,7 +72,7 @@ impl<'a> Tracer<'a> {
         };
         let wo = hit.frame.to_local(es.wi);
         let f = bsdf.eval(view, wo, TransportMode::Radiance);
-        if f == Rgb::ZERO || !es.visible_from(&self.accel, hit.spawn(es.wi)) {
+        if f == Rgb::ZERO || !es.visible_from(&self.accel, Some(hit.id()), hit.spawn(es.wi)) {
             return Rgb::ZERO;
         }
         let w = if es.delta {
@@ -148,7 +148,13 @@ pub struct SurfaceHit {
 }
 
 impl SurfaceHit {
-    /// A ray leaving this point along `w`, offset to the side `w` points to.
+    /// The triangle hit.
+    pub fn id(&self) -> TriangleId {
+        (self.mesh, self.triangle)
+    }
+
+    /// A ray leaving this point along `w`, offset to the side `w` points to (off the plane
+    /// of triangle [`SurfaceHit::id`]).
     pub fn spawn(&self, w: Vec3) -> Vec3 {
         Vec3::from(offset_origin(
             Vec3A::from(self.p),
@@ -164,9 +170,36 @@ pub fn intersect(ctx: &Tracer, o: Vec3, d: Vec3) -> Option<SurfaceHit> {
     intersect_within(ctx, o, d, f32::INFINITY)
 }
 
+/// [`intersect`] for a ray spawned off triangle `leaving` ([`SurfaceHit::spawn`]; `None`
+/// where it was not, as a camera ray): the same hit, found without deciding in double
+/// precision that the ray does not meet the triangle it leaves
+/// ([`Accel::closest_hit_leaving`]).
+pub fn intersect_leaving(
+    ctx: &Tracer,
+    leaving: Option<TriangleId>,
+    o: Vec3,
+    d: Vec3,
+) -> Option<SurfaceHit> {
+    let hit = match leaving {
+        Some(from) => ctx
+            .accel
+            .closest_hit_leaving(from, o, d, 0.0, f32::INFINITY),
+        None => ctx.accel.closest_hit(o, d, 0.0, f32::INFINITY),
+    }?;
+    Some(surface_hit(ctx, geometric_hit(hit)))
+}
+
 /// [`intersect`], for hits nearer than `t_max` (in units of `d`'s length).
 pub fn intersect_within(ctx: &Tracer, o: Vec3, d: Vec3, t_max: f32) -> Option<SurfaceHit> {
-    let GeometricHit { p, err, ng, hit } = intersect_geometry_within(ctx, o, d, t_max)?;
+    Some(surface_hit(
+        ctx,
+        intersect_geometry_within(ctx, o, d, t_max)?,
+    ))
+}
+
+/// What shading needs of the closest hit `g`.
+fn surface_hit(ctx: &Tracer, g: GeometricHit) -> SurfaceHit {
+    let GeometricHit { p, err, ng, hit } = g;
     let m = &ctx.scene.meshes[hit.mesh as usize];
     let ns = m.normal_at(hit.triangle, hit.b).unwrap_or(ng);
     let uv = m.uv_at(hit.triangle, hit.b);
@@ -174,7 +207,7 @@ pub fn intersect_within(ctx: &Tracer, o: Vec3, d: Vec3, t_max: f32) -> Option<Su
         Some(map) => map.shading_normal(&ctx.scene.textures, m, hit.triangle, uv, ns),
         None => ns,
     };
-    Some(SurfaceHit {
+    SurfaceHit {
         p,
         err,
         ng,
@@ -183,7 +216,7 @@ pub fn intersect_within(ctx: &Tracer, o: Vec3, d: Vec3, t_max: f32) -> Option<Su
         mesh: hit.mesh,
         triangle: hit.triangle,
         t: hit.t,
-    })
+    }
 }
 
 /// Where a ray meets the scene, without what shading needs: the point, its rounding bound,
@@ -208,15 +241,19 @@ pub fn intersect_geometry_within(
     d: Vec3,
     t_max: f32,
 ) -> Option<GeometricHit> {
-    let hit = ctx.accel.closest_hit(o, d, 0.0, t_max)?;
+    Some(geometric_hit(ctx.accel.closest_hit(o, d, 0.0, t_max)?))
+}
+
+/// The point and geometric normal of the tree's hit.
+fn geometric_hit(hit: Hit) -> GeometricHit {
     let (p, err) = interpolate_with_error(hit.corners, hit.b);
     let ng = Mesh::geometric_normal(hit.corners);
-    Some(GeometricHit {
+    GeometricHit {
         p: Vec3::from(p),
         err: Vec3::from(err),
         ng,
         hit,
-    })
+    }
 }
 
 /// Power heuristic with exponent 2.

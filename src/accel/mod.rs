@@ -62,6 +62,9 @@ fn unit(dir: Vec3) -> Option<(Vec3A, f32)> {
     (len > 0.0 && len.is_finite()).then(|| (Vec3A::from(dir / len), len))
 }
 
+/// A triangle of the scene: its mesh and its index within the mesh.
+pub type TriangleId = (u32, u32);
+
 /// How many segments [`Accel::occluded_set`] takes at once.
 pub const OCCLUSION_SET: usize = SET;
 
@@ -215,7 +218,24 @@ impl Accel {
             len,
             tmin: tmin * len,
             tmax: tmax * len,
+            leaving: None,
         })
+    }
+
+    /// [`Accel::query`] for a ray spawned off triangle `leaving`
+    /// ([`offset_origin`](crate::geometry::offset::offset_origin)), which therefore cannot
+    /// meet it again.
+    fn query_leaving(
+        &self,
+        leaving: TriangleId,
+        origin: Vec3,
+        dir: Vec3,
+        tmin: f32,
+        tmax: f32,
+    ) -> Option<Query> {
+        let mut q = self.query(origin, dir, tmin, tmax)?;
+        q.leaving = Some(leaving);
+        Some(q)
     }
 
     /// The lanes of `packet` that `q` hits in `(q.tmin, tmax)`, in lane order, with their hits:
@@ -240,6 +260,13 @@ impl Accel {
                     let h = if hit & (1 << lane) != 0 {
                         found.lane(lane)
                     } else {
+                        // An undecided lane is mostly the triangle the ray leaves, its
+                        // distance within rounding of zero, which the decision in double
+                        // precision would reject: the origin lies off its plane on the
+                        // ray's side.
+                        if q.leaving == Some((packet.mesh[lane], packet.triangle[lane])) {
+                            continue;
+                        }
                         let [p0, p1, p2] = packet.triangle(lane);
                         match q.wt.intersect(p0, p1, p2, q.tmin, tmax) {
                             Some(h) => h,
@@ -268,7 +295,25 @@ impl Accel {
 
     /// Closest intersection in `(tmin, tmax)` along `origin + t·dir` (`dir` need not be unit).
     pub fn closest_hit(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<Hit> {
-        let q = self.query(origin, dir, tmin, tmax)?;
+        self.closest_hit_of(&self.query(origin, dir, tmin, tmax)?)
+    }
+
+    /// [`Accel::closest_hit`] of a ray spawned off triangle `leaving` (its origin offset off
+    /// the triangle's plane towards `dir`): the same hit, without deciding in double
+    /// precision that the ray does not meet the triangle it leaves (a closest hit's most
+    /// common undecided lane).
+    pub fn closest_hit_leaving(
+        &self,
+        leaving: TriangleId,
+        origin: Vec3,
+        dir: Vec3,
+        tmin: f32,
+        tmax: f32,
+    ) -> Option<Hit> {
+        self.closest_hit_of(&self.query_leaving(leaving, origin, dir, tmin, tmax)?)
+    }
+
+    fn closest_hit_of(&self, q: &Query) -> Option<Hit> {
         let mut best: Option<(&Packet, usize, TriangleHit)> = None;
         let mut closest = q.tmax;
         self.bvh.traverse(
@@ -279,7 +324,7 @@ impl Accel {
             |packets| {
                 for packet in packets {
                     // The first of equally close hits wins, as in lane-by-lane order.
-                    for (lane, h) in self.packet_hits(&q, packet, closest) {
+                    for (lane, h) in self.packet_hits(q, packet, closest) {
                         if h.t < closest {
                             best = Some((packet, lane, h));
                             closest = h.t;
@@ -289,14 +334,30 @@ impl Accel {
                 Visit::Bound(rounded_up(closest))
             },
         );
-        best.map(|(packet, lane, h)| Self::hit(&q, packet, lane, h))
+        best.map(|(packet, lane, h)| Self::hit(q, packet, lane, h))
     }
 
     /// True when anything lies in `(tmin, tmax)` along the ray.
     pub fn occluded(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> bool {
-        let Some(q) = self.query(origin, dir, tmin, tmax) else {
-            return false;
-        };
+        self.query(origin, dir, tmin, tmax)
+            .is_some_and(|q| self.occluded_of(&q))
+    }
+
+    /// [`Accel::occluded`] for a ray spawned off triangle `leaving`, as
+    /// [`Accel::closest_hit_leaving`].
+    pub fn occluded_leaving(
+        &self,
+        leaving: TriangleId,
+        origin: Vec3,
+        dir: Vec3,
+        tmin: f32,
+        tmax: f32,
+    ) -> bool {
+        self.query_leaving(leaving, origin, dir, tmin, tmax)
+            .is_some_and(|q| self.occluded_of(&q))
+    }
+
+    fn occluded_of(&self, q: &Query) -> bool {
         !self.bvh.traverse(
             &q.boxes,
             q.tmax,
@@ -304,7 +365,7 @@ impl Accel {
             #[inline(always)]
             |packets| {
                 for packet in packets {
-                    if self.packet_hits(&q, packet, q.tmax).next().is_some() {
+                    if self.packet_hits(q, packet, q.tmax).next().is_some() {
                         return Visit::Stop;
                     }
                 }
@@ -391,6 +452,8 @@ struct Query {
     len: f32,
     tmin: f32,
     tmax: f32,
+    /// The triangle the ray is spawned off, where the caller knows it.
+    leaving: Option<TriangleId>,
 }
 
 /// A hit distance rounded up, as the far bound of the boxes still to visit: a box whose entry
@@ -481,6 +544,109 @@ mod tests {
             }
             assert!(hits > 1000, "{hits} hits: the test must exercise hits");
         }
+    }
+
+    /// A ray spawned off a triangle (a uniform point of it, offset towards a uniform
+    /// direction as the path tracer offsets its rays) never meets that triangle again, and
+    /// the queries told which triangle it leaves give the very hits and answers of those not
+    /// told: skipping its undecided lane drops nothing. Half the rays leave the walls of a
+    /// closed box around the triangles from next to an edge, most of them a corner, where
+    /// the adjacent wall's lane is undecided too and must still be decided: skipping every
+    /// undecided lane lets some of those rays through the adjacent wall.
+    #[test]
+    fn rays_leaving_a_triangle_find_what_they_would_otherwise() {
+        use crate::geometry::offset::{interpolate_with_error, offset_origin};
+        use crate::geometry::warp::{square_to_uniform_sphere, square_to_uniform_triangle};
+        let mut s = Sampler::new(9, 0, 0);
+        let mut point = |scale: f32| random_point(&mut s, scale);
+        let mut tris = random_triangles(&mut point);
+        let walls = tris.len();
+        for axis in 0..3 {
+            for side in [-12.0, 12.0] {
+                let corner = |a: f32, b: f32| {
+                    let mut c = [0.0; 3];
+                    c[axis] = side;
+                    c[(axis + 1) % 3] = a;
+                    c[(axis + 2) % 3] = b;
+                    Vec3A::from_array(c)
+                };
+                let (p, q, r, t) = (
+                    corner(-12.0, -12.0),
+                    corner(12.0, -12.0),
+                    corner(12.0, 12.0),
+                    corner(-12.0, 12.0),
+                );
+                tris.push(Triangle {
+                    v0: p,
+                    v1: q,
+                    v2: r,
+                });
+                tris.push(Triangle {
+                    v0: p,
+                    v1: r,
+                    v2: t,
+                });
+            }
+        }
+        let accel = accel_over(&tris, true);
+        let mut s = Sampler::new(10, 0, 0);
+        let (mut hits, mut occluded) = (0, 0);
+        for k in 0..20_000 {
+            let i = if k % 2 == 0 {
+                walls + ((s.next_1d() * 12.0) as usize).min(11)
+            } else {
+                ((s.next_1d() * walls as f32) as usize).min(walls - 1)
+            };
+            let t = &tris[i];
+            // A wall's rays start within a ten-thousandth of one of its triangle's edges, two
+            // in three of them a corner of the box.
+            let bary = if i >= walls {
+                let (e, eps, v) = (
+                    (s.next_1d() * 3.0) as usize % 3,
+                    1e-4 * s.next_1d(),
+                    s.next_1d(),
+                );
+                let mut bary = [0.0; 3];
+                bary[e] = eps;
+                bary[(e + 1) % 3] = (1.0 - eps) * v;
+                bary[(e + 2) % 3] = (1.0 - eps) * (1.0 - v);
+                bary
+            } else {
+                let b = square_to_uniform_triangle(s.next_2d());
+                [1.0 - b.x - b.y, b.x, b.y]
+            };
+            let (p, err) = interpolate_with_error([t.v0, t.v1, t.v2], bary);
+            let ng = (t.v1 - t.v0).cross(t.v2 - t.v0).normalize();
+            let mut w = Vec3A::from(square_to_uniform_sphere(s.next_2d()));
+            // From a wall, into the box.
+            if i >= walls {
+                let f = i - walls;
+                let side = if (f / 2) % 2 == 0 { -1.0 } else { 1.0 };
+                if w[f / 4] * side > 0.0 {
+                    w = -w;
+                }
+            }
+            let o = Vec3::from(offset_origin(p, err, ng, w));
+            let w = Vec3::from(w);
+            let leaving = (0, i as u32);
+            let plain = accel.closest_hit(o, w, 0.0, f32::INFINITY);
+            assert!(
+                plain.is_none_or(|h| h.triangle as usize != i),
+                "ray {o} {w} met its own triangle"
+            );
+            assert_eq!(
+                accel.closest_hit_leaving(leaving, o, w, 0.0, f32::INFINITY),
+                plain
+            );
+            let blocked = accel.occluded(o, w, 0.0, 3.0);
+            assert_eq!(accel.occluded_leaving(leaving, o, w, 0.0, 3.0), blocked);
+            hits += usize::from(plain.is_some());
+            occluded += usize::from(blocked);
+        }
+        assert!(
+            hits > 2000 && occluded > 1000,
+            "{hits} hits, {occluded} occluded: the test must exercise both"
+        );
     }
 
     /// A ray from an origin that is not finite meets nothing, even pointed straight at the

@@ -91,10 +91,11 @@ impl DirectLight<'_> {
                     sobol02(i, scramble),
                 )?;
                 let origin = Vec3::from(offset_origin(p, err, ng, Vec3A::from(es.wi)));
-                es.visible_from(self.accel, origin).then_some(Arrival {
-                    wi: es.wi,
-                    value: es.value / k as f32,
-                })
+                es.visible_from(self.accel, None, origin)
+                    .then_some(Arrival {
+                        wi: es.wi,
+                        value: es.value / k as f32,
+                    })
             })
             .collect();
         if let Some(tree) = self.light_tree {

@@ -3,7 +3,7 @@
 use crate::bsdf::TransportMode;
 use crate::sampler::Sampler;
 use crate::spectrum::{max_component, Rgb};
-use crate::trace::{intersect, Tracer};
+use crate::trace::{intersect_leaving, Tracer};
 use glam::Vec3;
 
 /// Which paths the path tracer sums.
@@ -49,10 +49,12 @@ pub fn radiance(ctx: &RenderContext, mut o: Vec3, mut d: Vec3, sampler: &mut Sam
     // The BSDF density of the direction that led here, for MIS at emitter hits (`None` for
     // the camera ray and after a chain vertex, whose emitters count fully).
     let mut from: Option<f32> = None;
+    // The triangle the ray leaves (`None` for the camera ray).
+    let mut leaving = None;
     // For `Transport::CacheOneBounce`: rough vertices and chain vertices so far.
     let (mut rough, mut chain) = (0u32, 0u32);
     loop {
-        let Some(si) = intersect(&ctx.tracer, o, d) else {
+        let Some(si) = intersect_leaving(&ctx.tracer, leaving, o, d) else {
             // Escaped: the environment, weighted as emission is.
             result += ctx.tracer.environment_hit(d, from, throughput);
             break;
@@ -106,6 +108,7 @@ pub fn radiance(ctx: &RenderContext, mut o: Vec3, mut d: Vec3, sampler: &mut Sam
         eta *= bs.eta;
         from = nee.then_some(bs.pdf);
         o = si.spawn(wo_world);
+        leaving = Some(si.id());
         d = wo_world.normalize();
         depth += 1;
         // Russian roulette.
