@@ -222,22 +222,6 @@ impl Accel {
         })
     }
 
-    /// [`Accel::query`] for a ray spawned off triangle `leaving`
-    /// ([`offset_origin`](crate::geometry::offset::offset_origin)), which therefore cannot
-    /// meet it again.
-    fn query_leaving(
-        &self,
-        leaving: TriangleId,
-        origin: Vec3,
-        dir: Vec3,
-        tmin: f32,
-        tmax: f32,
-    ) -> Option<Query> {
-        let mut q = self.query(origin, dir, tmin, tmax)?;
-        q.leaving = Some(leaving);
-        Some(q)
-    }
-
     /// The lanes of `packet` that `q` hits in `(q.tmin, tmax)`, in lane order, with their hits:
     /// the four lanes tested at once, the few the SIMD test leaves undecided one by one.
     #[inline(always)]
@@ -310,7 +294,11 @@ impl Accel {
         tmin: f32,
         tmax: f32,
     ) -> Option<Hit> {
-        self.closest_hit_of(&self.query_leaving(leaving, origin, dir, tmin, tmax)?)
+        let q = self.query(origin, dir, tmin, tmax)?;
+        self.closest_hit_of(&Query {
+            leaving: Some(leaving),
+            ..q
+        })
     }
 
     fn closest_hit_of(&self, q: &Query) -> Option<Hit> {
@@ -353,8 +341,12 @@ impl Accel {
         tmin: f32,
         tmax: f32,
     ) -> bool {
-        self.query_leaving(leaving, origin, dir, tmin, tmax)
-            .is_some_and(|q| self.occluded_of(&q))
+        self.query(origin, dir, tmin, tmax).is_some_and(|q| {
+            self.occluded_of(&Query {
+                leaving: Some(leaving),
+                ..q
+            })
+        })
     }
 
     fn occluded_of(&self, q: &Query) -> bool {
@@ -452,7 +444,9 @@ struct Query {
     len: f32,
     tmin: f32,
     tmax: f32,
-    /// The triangle the ray is spawned off, where the caller knows it.
+    /// The triangle the ray is spawned off
+    /// ([`offset_origin`](crate::geometry::offset::offset_origin)), where the caller knows
+    /// it: the ray cannot meet it again.
     leaving: Option<TriangleId>,
 }
 
