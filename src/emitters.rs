@@ -49,10 +49,7 @@ impl EmitterSample {
         origin: Vec3,
     ) -> bool {
         let s = self.shadow_segment(origin);
-        !match leaving {
-            Some(from) => accel.occluded_leaving(from, s.origin, s.dir, s.tmin, s.tmax),
-            None => accel.occluded(s.origin, s.dir, s.tmin, s.tmax),
-        }
+        !accel.occluded_leaving(leaving, s.origin, s.dir, s.tmin, s.tmax)
     }
 
     /// The segment [`EmitterSample::visible_from`] tests: to the sampled point, its end offset

@@ -180,12 +180,9 @@ pub fn intersect_leaving(
     o: Vec3,
     d: Vec3,
 ) -> Option<SurfaceHit> {
-    let hit = match leaving {
-        Some(from) => ctx
-            .accel
-            .closest_hit_leaving(from, o, d, 0.0, f32::INFINITY),
-        None => ctx.accel.closest_hit(o, d, 0.0, f32::INFINITY),
-    }?;
+    let hit = ctx
+        .accel
+        .closest_hit_leaving(leaving, o, d, 0.0, f32::INFINITY)?;
     Some(surface_hit(ctx, geometric_hit(hit)))
 }
 

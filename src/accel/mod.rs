@@ -205,8 +205,15 @@ impl Accel {
     /// The traversal set-up shared by every query, or `None` when nothing can be hit: an
     /// empty tree, a direction of no length or not finite, or an origin not finite (its slab
     /// distances would be NaN, so the node test would enter every box, and no triangle test
-    /// can hit).
-    fn query(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<Query> {
+    /// can hit). `leaving`: the triangle the ray is spawned off, where the caller knows it.
+    fn query(
+        &self,
+        leaving: Option<TriangleId>,
+        origin: Vec3,
+        dir: Vec3,
+        tmin: f32,
+        tmax: f32,
+    ) -> Option<Query> {
         if self.is_empty() || !origin.is_finite() {
             return None;
         }
@@ -218,7 +225,7 @@ impl Accel {
             len,
             tmin: tmin * len,
             tmax: tmax * len,
-            leaving: None,
+            leaving,
         })
     }
 
@@ -279,26 +286,22 @@ impl Accel {
 
     /// Closest intersection in `(tmin, tmax)` along `origin + t·dir` (`dir` need not be unit).
     pub fn closest_hit(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<Hit> {
-        self.closest_hit_of(&self.query(origin, dir, tmin, tmax)?)
+        self.closest_hit_of(&self.query(None, origin, dir, tmin, tmax)?)
     }
 
-    /// [`Accel::closest_hit`] of a ray spawned off triangle `leaving` (its origin offset off
-    /// the triangle's plane towards `dir`): the same hit, without deciding in double
-    /// precision that the ray does not meet the triangle it leaves (a closest hit's most
-    /// common undecided lane).
+    /// [`Accel::closest_hit`] of a ray spawned off triangle `leaving` where it is `Some` (its
+    /// origin offset off the triangle's plane towards `dir`): the same hit, without deciding
+    /// in double precision that the ray does not meet the triangle it leaves (a closest
+    /// hit's most common undecided lane).
     pub fn closest_hit_leaving(
         &self,
-        leaving: TriangleId,
+        leaving: Option<TriangleId>,
         origin: Vec3,
         dir: Vec3,
         tmin: f32,
         tmax: f32,
     ) -> Option<Hit> {
-        let q = self.query(origin, dir, tmin, tmax)?;
-        self.closest_hit_of(&Query {
-            leaving: Some(leaving),
-            ..q
-        })
+        self.closest_hit_of(&self.query(leaving, origin, dir, tmin, tmax)?)
     }
 
     fn closest_hit_of(&self, q: &Query) -> Option<Hit> {
@@ -327,26 +330,22 @@ impl Accel {
 
     /// True when anything lies in `(tmin, tmax)` along the ray.
     pub fn occluded(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> bool {
-        self.query(origin, dir, tmin, tmax)
+        self.query(None, origin, dir, tmin, tmax)
             .is_some_and(|q| self.occluded_of(&q))
     }
 
-    /// [`Accel::occluded`] for a ray spawned off triangle `leaving`, as
+    /// [`Accel::occluded`] for a ray spawned off triangle `leaving` where it is `Some`, as
     /// [`Accel::closest_hit_leaving`].
     pub fn occluded_leaving(
         &self,
-        leaving: TriangleId,
+        leaving: Option<TriangleId>,
         origin: Vec3,
         dir: Vec3,
         tmin: f32,
         tmax: f32,
     ) -> bool {
-        self.query(origin, dir, tmin, tmax).is_some_and(|q| {
-            self.occluded_of(&Query {
-                leaving: Some(leaving),
-                ..q
-            })
-        })
+        self.query(leaving, origin, dir, tmin, tmax)
+            .is_some_and(|q| self.occluded_of(&q))
     }
 
     fn occluded_of(&self, q: &Query) -> bool {
@@ -374,7 +373,7 @@ impl Accel {
         debug_assert!(segments.len() <= OCCLUSION_SET);
         let queries: [Option<Query>; SET] = std::array::from_fn(|i| {
             let s = segments.get(i)?;
-            self.query(s.origin, s.dir, s.tmin, s.tmax)
+            self.query(None, s.origin, s.dir, s.tmin, s.tmax)
         });
         let unused = BoxRay::new(Vec3A::ZERO, Vec3A::X, 0.0);
         let boxes = queries
@@ -414,7 +413,7 @@ impl Accel {
     /// Every intersection along the ray in `(tmin, tmax)`, unsorted (for tests and diagnostics).
     pub fn all_hits(&self, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Vec<Hit> {
         let mut out = Vec::new();
-        let Some(q) = self.query(origin, dir, tmin, tmax) else {
+        let Some(q) = self.query(None, origin, dir, tmin, tmax) else {
             return out;
         };
         self.bvh.traverse(&q.boxes, q.tmax, false, |packets| {
@@ -622,7 +621,7 @@ mod tests {
             }
             let o = Vec3::from(offset_origin(p, err, ng, w));
             let w = Vec3::from(w);
-            let leaving = (0, i as u32);
+            let leaving = Some((0, i as u32));
             let plain = accel.closest_hit(o, w, 0.0, f32::INFINITY);
             assert!(
                 plain.is_none_or(|h| h.triangle as usize != i),
