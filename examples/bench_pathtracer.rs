@@ -4,7 +4,10 @@
 //! threads). Mitsuba's: `llvm_ad_rgb`'s `path` integrator through
 //! `scripts/anchor/mitsuba_oidn.py` (wall seconds after an untimed JIT warm-up of the same
 //! count) when `WPBGI_ANCHOR_PYTHON` names a Python with mitsuba, numpy and pyoidn (see
-//! `bench_bounces`); then the ratio of our samples per second to Mitsuba's. With
+//! `bench_bounces`); then the ratio of our samples per second to Mitsuba's, and the same for
+//! Mitsuba with Embree's robust intersections (`embree_use_robust_intersections`, off by
+//! default: Embree's watertight triangle test and rounding-safe box test, the kind of query
+//! ours always is, so the like-for-like figure). With
 //! `WPBGI_PREVIOUS=/path/to/an/older/wpbgi`, that version's `wpbgi reference` at the same
 //! settings (its own seconds, from its `--json`), and our time over its.
 //!
@@ -18,8 +21,9 @@
 //! the scene's bounds (2 % in from each side) in uniform directions, closest hits, and
 //! occlusion segments from the same points to other uniform points; our `Accel` on all threads
 //! beside Mitsuba's (Embree's) `ray_intersect_preliminary` and `ray_test` on the same rays
-//! (`scripts/anchor/mitsuba_rays.py`, its arrays made before the timing), fastest of `ROUNDS`
-//! (at least three), with both sides' hit counts as a check that they answer the same queries.
+//! (`scripts/anchor/mitsuba_rays.py`, its arrays made before the timing), by default and with
+//! robust intersections, fastest of `ROUNDS` (at least three), with every side's hit counts as
+//! a check that they answer the same queries.
 //! A path's time is mostly these queries and its shading: the two tables together say which
 //! of them holds the gap.
 
@@ -64,9 +68,10 @@ fn main() -> common::Result<()> {
     );
     println!(
         "| scene | ours s | ours Msamples/s | previous s | ours / previous: time | Mitsuba s | \
-         Mitsuba Msamples/s | ours / Mitsuba: samples/s |"
+         Mitsuba Msamples/s | ours / Mitsuba: samples/s | Mitsuba robust Msamples/s | \
+         ours / Mitsuba robust |"
     );
-    println!("|---|---:|---:|---:|---:|---:|---:|---:|");
+    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     let samples = f64::from(SIZE * SIZE) * f64::from(spp);
     for name in SCENES {
         let scene_path = dir.join(format!("{name}.gltf"));
@@ -80,9 +85,15 @@ fn main() -> common::Result<()> {
         // Each round runs the three one after the other, so that the machine's drift falls on
         // all of them; each keeps its fastest round. Odd rounds run them in the reverse order:
         // here the same binary timed twice in a fixed order read 6 % apart by its place.
-        let (mut ours, mut before, mut mitsuba) = (f64::INFINITY, f64::INFINITY, f64::INFINITY);
+        let (mut ours, mut before) = (f64::INFINITY, f64::INFINITY);
+        let (mut mitsuba, mut robust) = (f64::INFINITY, f64::INFINITY);
         for round in 0..rounds {
-            let mut order = [Run::Ours, Run::Previous, Run::Mitsuba];
+            let mut order = [
+                Run::Ours,
+                Run::Previous,
+                Run::Mitsuba { robust: false },
+                Run::Mitsuba { robust: true },
+            ];
             if round % 2 == 1 {
                 order.reverse();
             }
@@ -99,19 +110,25 @@ fn main() -> common::Result<()> {
                             before = before.min(b);
                         }
                     }
-                    Run::Mitsuba => {
+                    Run::Mitsuba { robust: watertight } => {
                         if let Some(py) = &python {
-                            let m = common::mitsuba_anchor(
+                            let m = common::mitsuba_anchor_with(
                                 Path::new(py),
                                 &scene_path,
                                 &dir.join(format!("{name}_d8_ref.exr")),
                                 &[spp],
+                                watertight,
                             )?
                             .into_iter()
                             .find(|(s, _)| *s == spp)
                             .and_then(|(_, v)| v["pt_s"].as_f64())
                             .ok_or("the Mitsuba anchor printed no time")?;
-                            mitsuba = mitsuba.min(m);
+                            let best = if watertight {
+                                &mut robust
+                            } else {
+                                &mut mitsuba
+                            };
+                            *best = best.min(m);
                         }
                     }
                 }
@@ -124,13 +141,16 @@ fn main() -> common::Result<()> {
         let rate = |s: f64| samples / s / 1e6;
         match python {
             Some(_) => println!(
-                "| {name} | {ours:.2} | {:.2} | {before} | {mitsuba:.2} | {:.2} | {:.2} |",
+                "| {name} | {ours:.2} | {:.2} | {before} | {mitsuba:.2} | {:.2} | {:.2} | {:.2} | \
+                 {:.2} |",
                 rate(ours),
                 rate(mitsuba),
-                mitsuba / ours
+                mitsuba / ours,
+                rate(robust),
+                robust / ours
             ),
             None => println!(
-                "| {name} | {ours:.2} | {:.2} | {before} | not run (`WPBGI_ANCHOR_PYTHON`) | | |",
+                "| {name} | {ours:.2} | {:.2} | {before} | not run (`WPBGI_ANCHOR_PYTHON`) | | | | |",
                 rate(ours)
             ),
         }
@@ -147,10 +167,11 @@ fn ray_queries(dir: &Path, python: Option<&Path>, rounds: u32) -> common::Result
     );
     println!(
         "| scene | ours closest Mrays/s | Mitsuba (Embree) closest Mrays/s | ours / Embree | \
-         ours occlusion Mrays/s | Embree occlusion Mrays/s | ours / Embree | hits ours / Embree | \
-         occluded ours / Embree |"
+         Embree robust closest Mrays/s | ours / robust | ours occlusion Mrays/s | Embree \
+         occlusion Mrays/s | ours / Embree | Embree robust occlusion Mrays/s | ours / robust | \
+         hits ours / Embree / robust | occluded ours / Embree / robust |"
     );
-    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|");
+    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     for name in SCENES {
         let scene_path = dir.join(format!("{name}.gltf"));
         let scene = Scene::load(&scene_path)?;
@@ -179,8 +200,8 @@ fn ray_queries(dir: &Path, python: Option<&Path>, rounds: u32) -> common::Result
             fastest(&|r| accel.occluded(r.origin, r.to_other, 0.0, r.length * 0.999));
         let Some(python) = python else {
             println!(
-                "| {name} | {closest:.2} | not run (`WPBGI_ANCHOR_PYTHON`) | | {occlusion:.2} | | | \
-                 {hits} | {occluded} |"
+                "| {name} | {closest:.2} | not run (`WPBGI_ANCHOR_PYTHON`) | | | | {occlusion:.2} | \
+                 | | | | {hits} | {occluded} |"
             );
             continue;
         };
@@ -189,17 +210,21 @@ fn ray_queries(dir: &Path, python: Option<&Path>, rounds: u32) -> common::Result
             m[k].as_f64()
                 .ok_or(format!("mitsuba_rays.py printed no {k}"))
         };
-        let (m_closest, m_occlusion) = (
-            RAYS as f64 / field("closest_s")? / 1e6,
-            RAYS as f64 / field("occluded_s")? / 1e6,
-        );
+        let rate = |k: &str| Ok::<_, String>(RAYS as f64 / field(k)? / 1e6);
+        let (m_closest, m_occlusion) = (rate("closest_s")?, rate("occluded_s")?);
+        let (r_closest, r_occlusion) = (rate("closest_robust_s")?, rate("occluded_robust_s")?);
         println!(
-            "| {name} | {closest:.2} | {m_closest:.2} | {:.2} | {occlusion:.2} | {m_occlusion:.2} | \
-             {:.2} | {hits} / {} | {occluded} / {} |",
+            "| {name} | {closest:.2} | {m_closest:.2} | {:.2} | {r_closest:.2} | {:.2} | \
+             {occlusion:.2} | {m_occlusion:.2} | {:.2} | {r_occlusion:.2} | {:.2} | \
+             {hits} / {} / {} | {occluded} / {} / {} |",
             closest / m_closest,
+            closest / r_closest,
             occlusion / m_occlusion,
+            occlusion / r_occlusion,
             field("hits")?,
-            field("occluded")?
+            field("hits_robust")?,
+            field("occluded")?,
+            field("occluded_robust")?
         );
     }
     Ok(())
@@ -275,7 +300,10 @@ fn mitsuba_rays(
 enum Run {
     Ours,
     Previous,
-    Mitsuba,
+    /// With Embree's robust intersections where `robust`.
+    Mitsuba {
+        robust: bool,
+    },
 }
 
 /// The previous version's own seconds for the same render (`wpbgi reference --json`).

@@ -87,10 +87,23 @@ pub fn mitsuba_anchor(
     reference: &Path,
     spps: &[u32],
 ) -> Result<Vec<(u32, Value)>> {
+    mitsuba_anchor_with(python, scene, reference, spps, false)
+}
+
+/// [`mitsuba_anchor`], with Embree's robust intersections where `robust` (its watertight
+/// triangle test, as our accel's; Mitsuba's default is off).
+pub fn mitsuba_anchor_with(
+    python: &Path,
+    scene: &Path,
+    reference: &Path,
+    spps: &[u32],
+    robust: bool,
+) -> Result<Vec<(u32, Value)>> {
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/anchor/mitsuba_oidn.py");
     let run = run_ok(
         "the Mitsuba anchor",
         Command::new(python)
+            .env("EMBREE_ROBUST", if robust { "1" } else { "0" })
             .arg(script)
             .arg(scene)
             .arg(reference)

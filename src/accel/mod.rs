@@ -16,7 +16,11 @@
 //! costs weigh as much as its tests. Every closure a query hands the traversal (the leaf
 //! visit, the packet's lane iterator, the stack's set-up) is `#[inline(always)]`: LLVM kept
 //! them as calls of their own, each saving and restoring registers (a query that meets nothing
-//! in a one-triangle scene: about 100 ns with the calls, 87 without). And nothing a query
+//! in a one-triangle scene: about 100 ns with the calls, 87 without). So is the set-up of the
+//! query's rays (`Accel::query`): the binary of `wpbgi` inlined it, but in a crate that used
+//! this one (a scratch benchmark) LLVM kept it as a call whose 160-byte result was copied by
+//! `memcpy` before every traversal, and closest hits on random rays ran at 0.8 of the speed.
+//! And nothing a query
 //! decides from its ray alone is a branch or a jump table: the triangle test's dominant axis
 //! and the swap that keeps the winding are computed, the origin's coordinates along them
 //! kept, and lanes and axes read through arrays (glam's `Vec3A` and `Vec4` indexing is a
@@ -206,6 +210,7 @@ impl Accel {
     /// empty tree, a direction of no length or not finite, or an origin not finite (its slab
     /// distances would be NaN, so the node test would enter every box, and no triangle test
     /// can hit). `leaving`: the triangle the ray is spawned off, where the caller knows it.
+    #[inline(always)]
     fn query(
         &self,
         leaving: Option<TriangleId>,
