@@ -82,11 +82,11 @@ fn main() -> common::Result<()> {
             max_depth: 8,
             ..Default::default()
         };
-        // Each round runs the three one after the other, so that the machine's drift falls on
+        // Each round runs the four one after the other, so that the machine's drift falls on
         // all of them; each keeps its fastest round. Odd rounds run them in the reverse order:
         // here the same binary timed twice in a fixed order read 6 % apart by its place.
         let (mut ours, mut before) = (f64::INFINITY, f64::INFINITY);
-        let (mut mitsuba, mut robust) = (f64::INFINITY, f64::INFINITY);
+        let (mut mitsuba, mut mitsuba_robust) = (f64::INFINITY, f64::INFINITY);
         for round in 0..rounds {
             let mut order = [
                 Run::Ours,
@@ -110,21 +110,21 @@ fn main() -> common::Result<()> {
                             before = before.min(b);
                         }
                     }
-                    Run::Mitsuba { robust: watertight } => {
+                    Run::Mitsuba { robust } => {
                         if let Some(py) = &python {
                             let m = common::mitsuba_anchor_with(
                                 Path::new(py),
                                 &scene_path,
                                 &dir.join(format!("{name}_d8_ref.exr")),
                                 &[spp],
-                                watertight,
+                                robust,
                             )?
                             .into_iter()
                             .find(|(s, _)| *s == spp)
                             .and_then(|(_, v)| v["pt_s"].as_f64())
                             .ok_or("the Mitsuba anchor printed no time")?;
-                            let best = if watertight {
-                                &mut robust
+                            let best = if robust {
+                                &mut mitsuba_robust
                             } else {
                                 &mut mitsuba
                             };
@@ -146,8 +146,8 @@ fn main() -> common::Result<()> {
                 rate(ours),
                 rate(mitsuba),
                 mitsuba / ours,
-                rate(robust),
-                robust / ours
+                rate(mitsuba_robust),
+                mitsuba_robust / ours
             ),
             None => println!(
                 "| {name} | {ours:.2} | {:.2} | {before} | not run (`WPBGI_ANCHOR_PYTHON`) | | | | |",
