@@ -124,7 +124,6 @@ pub fn add_bounces(
     // The first bounce's time includes recording the transport.
     let mut start = std::time::Instant::now();
     let tau = baked.settings.tau;
-    let accel = Accel::build(scene);
     let bsdfs = &baked.bsdfs;
     // Diffuse surfels store RGB; every other one a map, through its BSDF's operator.
     let ops = baked.operators.of_each(bsdfs, settings.operator_tau, |b| {
@@ -137,9 +136,6 @@ pub fn add_bounces(
         .zip(&baked.surfels)
         .map(|((r, e), s)| without_emission(r, *e, s.n, tau))
         .collect();
-    // The gather's geometry: the tree as senders, read once from the bake in memory (the
-    // radiance each bounce sends comes from the transport's slots).
-    let senders = geometry_senders(baked)?;
     let kinds: Vec<Option<u32>> = ops
         .iter()
         .zip(bsdfs)
@@ -172,19 +168,6 @@ pub fn add_bounces(
                 too_many.0
             ))
         })?;
-    let gather = Gather {
-        scene,
-        accel: &accel,
-        senders: &senders,
-        surfels: &baked.surfels,
-        tau,
-        sent_tau: tau * SENT_TAU_FACTOR,
-        bsdfs,
-        normals: &baked.shading_normals,
-        ops: &ops,
-        slots: &slots,
-    };
-
     // The first bounce records every group's links, keeping them in group order while they
     // fit the budget.
     // The receivers' summed incident light (and one bounce's beside it) is held whatever the
@@ -219,6 +202,28 @@ pub fn add_bounces(
         }
     });
     handoff.replayed = reused.is_some();
+    // The gather's geometry (the scene's rays and the tree as senders, read once from the
+    // bake in memory; the radiance each bounce sends comes from the transport's slots) is
+    // built only where some group gathers: not for a replay that holds every group's links
+    // (0.4 of cbox-rough's 3 s relight).
+    let geometry = match &reused {
+        Some(t) if t.kept.len() == groups.len() => None,
+        _ => Some(GatherGeometry {
+            accel: Accel::build(scene),
+            senders: geometry_senders(baked)?,
+        }),
+    };
+    let gather = Gather {
+        scene,
+        geometry: geometry.as_ref(),
+        surfels: &baked.surfels,
+        tau,
+        sent_tau: tau * SENT_TAU_FACTOR,
+        bsdfs,
+        normals: &baked.shading_normals,
+        ops: &ops,
+        slots: &slots,
+    };
     let (index, kept, transport) = match reused {
         Some(t) => (SlotIndex::from_words(t.words), t.kept, t.report),
         None => record_transport(
@@ -659,11 +664,19 @@ impl Incident {
 /// and what each receiver gathered.
 type BounceLight = (Vec<SurfelRadiance>, Vec<(u32, Incident)>);
 
+/// What gathering a receiver's microbuffer traces and looks up.
+struct GatherGeometry {
+    /// The scene's triangles, for the rays that close a buffer's gaps.
+    accel: Accel,
+    /// The tree as senders of geometry alone.
+    senders: Senders,
+}
+
 /// What a bounce's gather needs: the scene, the senders' geometry and the receivers' BSDFs.
 struct Gather<'a> {
     scene: &'a Scene,
-    accel: &'a Accel,
-    senders: &'a Senders,
+    /// `None` where every receiver replays kept links and none gathers.
+    geometry: Option<&'a GatherGeometry>,
     surfels: &'a [Surfel],
     /// The cache's threshold, and that of the light sent between bounces
     /// ([`SENT_TAU_FACTOR`]).
@@ -699,6 +712,9 @@ impl Gather<'_> {
     /// The closed microbuffer of every member of `group`, recording links: gathered with the
     /// group's far senders shared (docs/method.md §8.3), and closed.
     fn buffers(&self, group: &Cluster, scratch: &mut Scratch) -> Vec<(u32, Microbuffer)> {
+        let Some(GatherGeometry { accel, senders }) = self.geometry else {
+            unreachable!("the gather's geometry is built wherever a group gathers")
+        };
         let Scratch { stack, buffers, .. } = scratch;
         let surfels = self.surfels;
         let side = |i: u32| {
@@ -725,11 +741,11 @@ impl Gather<'_> {
         };
         let closed = |i: u32, mut mb: Microbuffer| {
             let s = &surfels[i as usize];
-            close_buffer(self.senders, (self.accel, self.scene), s, &mut mb);
+            close_buffer(senders, (accel, self.scene), s, &mut mb);
             (i, mb)
         };
         let mut gather = if let [_] = group.members[..] {
-            ClusterGather::alone(self.senders)
+            ClusterGather::alone(senders)
         } else {
             let a = &surfels[group.active as usize];
             let spherical = self.bsdfs[group.active as usize].is_two_sided();
@@ -741,7 +757,7 @@ impl Gather<'_> {
                 .map(|&i| side(i))
                 .max()
                 .unwrap_or(Microbuffer::DEFAULT_SIDE);
-            ClusterGather::shared(self.senders, &receivers, VIEW_EPS, n)
+            ClusterGather::shared(senders, &receivers, VIEW_EPS, n)
         };
         group
             .members
@@ -963,10 +979,10 @@ mod tests {
         let cache = crate::bake::store::in_memory(Path::new("test"), &baked).expect("cache");
         let senders = Senders::from_cache(&cache).expect("senders");
         let slots = Slots::new(&baked.tree, &baked.radiance, baked.plan.map_levels).expect("slots");
+        let geometry = GatherGeometry { accel, senders };
         let gather = Gather {
             scene: &scene,
-            accel: &accel,
-            senders: &senders,
+            geometry: Some(&geometry),
             surfels: &baked.surfels,
             tau: 0.0,
             sent_tau: 0.0,
