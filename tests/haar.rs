@@ -484,6 +484,11 @@ fn sparse_tree_encoding_round_trips_and_refuses_damage() {
     let (a, used) = SparseHaar::<Vec3>::read_from(&bytes).expect("rgb tree");
     assert_eq!((a, used), (rgb.clone(), split));
     let (b, used) = SparseHaar::<f32>::read_from(&bytes[split..]).expect("scalar tree");
+    // The lengths the writer reserves are the lengths it writes.
+    assert_eq!(
+        (rgb.encoded_len(), scalar.encoded_len()),
+        (split, bytes.len() - split)
+    );
     assert_eq!((b, used), (scalar, bytes.len() - split));
     // Every truncation of the first tree is refused.
     for len in 0..split {

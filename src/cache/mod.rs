@@ -31,7 +31,7 @@ pub mod store;
 use crate::atomic::write_atomically;
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use xxhash_rust::xxh3::{xxh3_128, xxh3_64};
+use xxhash_rust::xxh3::{xxh3_128, xxh3_64, Xxh3};
 
 /// The first eight bytes of every cache file.
 pub(crate) const MAGIC: [u8; 8] = [0x89, b'W', b'P', b'C', 0x0d, 0x0a, 0x1a, 0x0a];
@@ -67,6 +67,18 @@ pub fn hash_hex(hash: [u8; 16]) -> String {
 /// first and the sections are streamed to the file, so the whole cache is never copied into
 /// one buffer.
 pub fn write(path: &Path, hash: [u8; 16], sections: &[(&str, &[u8])]) -> Result<(), CacheError> {
+    write_pieces(path, hash, &whole(sections))
+}
+
+/// [`write()`] for sections each made of pieces (name, pieces), written one after the other
+/// as one section: what a writer that encodes a large section on several threads hands in,
+/// without joining the pieces into one buffer first. The file is the one [`write()`] writes
+/// of the joined bytes, byte for byte.
+pub fn write_pieces(
+    path: &Path,
+    hash: [u8; 16],
+    sections: &[(&str, &[&[u8]])],
+) -> Result<(), CacheError> {
     let werr = |reason: String| CacheError::Write {
         path: path.to_path_buf(),
         reason,
@@ -83,16 +95,36 @@ pub fn write(path: &Path, hash: [u8; 16], sections: &[(&str, &[u8])]) -> Result<
     .map_err(|e| werr(e.to_string()))
 }
 
-/// The bytes of a cache holding `sections`, in memory (what [`write()`] would write), for a
-/// reader that needs a cache that never goes to disk: the bake's bounces read the tree of
-/// the previous bounce this way.
-pub fn to_bytes(hash: [u8; 16], sections: &[(&str, &[u8])]) -> Result<Vec<u8>, String> {
+/// The bytes of a cache holding `sections` (in pieces, as [`write_pieces`]), in memory (what
+/// [`write_pieces`] would write), for a reader that needs a cache that never goes to disk:
+/// the bake's bounces read the tree of the previous bounce this way.
+pub fn to_bytes(hash: [u8; 16], sections: &[(&str, &[&[u8]])]) -> Result<Vec<u8>, String> {
     let layout = Layout::new(hash, sections)?;
-    let mut bytes = Vec::new();
+    let mut bytes = Vec::with_capacity(layout.table_offset + layout.table.len());
     layout
         .stream(&mut bytes, sections)
         .map_err(|e| e.to_string())?;
     Ok(bytes)
+}
+
+/// Sections of one piece each, as [`write_pieces`] takes them.
+fn whole<'a>(sections: &'a [(&'a str, &'a [u8])]) -> Vec<(&'a str, &'a [&'a [u8]])> {
+    sections
+        .iter()
+        .map(|(name, bytes)| (*name, std::slice::from_ref(bytes)))
+        .collect()
+}
+
+/// The XXH3-64 of `pieces` joined: the same value as `xxh3_64` of their concatenation.
+fn checksum(pieces: &[&[u8]]) -> u64 {
+    match pieces {
+        [one] => xxh3_64(one),
+        _ => {
+            let mut h = Xxh3::new();
+            pieces.iter().for_each(|p| h.update(p));
+            h.digest()
+        }
+    }
 }
 
 /// Where everything of a cache goes: its header, the sections' offsets and the table.
@@ -104,24 +136,25 @@ struct Layout {
 }
 
 impl Layout {
-    fn new(hash: [u8; 16], sections: &[(&str, &[u8])]) -> Result<Layout, String> {
+    fn new(hash: [u8; 16], sections: &[(&str, &[&[u8]])]) -> Result<Layout, String> {
         let aligned = |x: usize| x.div_ceil(ALIGNMENT) * ALIGNMENT;
         let mut table = Vec::with_capacity(sections.len() * ENTRY_LEN);
         let mut offsets = Vec::with_capacity(sections.len());
         let mut at = HEADER_LEN;
-        for (name, bytes) in sections {
+        for (name, pieces) in sections {
             if name.is_empty() || name.len() > NAME_LEN || name.contains('\0') {
                 return Err(format!("bad section name \"{name}\""));
             }
+            let len: usize = pieces.iter().map(|p| p.len()).sum();
             at = aligned(at);
             offsets.push(at);
             let mut n = [0u8; NAME_LEN];
             n[..name.len()].copy_from_slice(name.as_bytes());
             table.extend_from_slice(&n);
             table.extend_from_slice(&(at as u64).to_le_bytes());
-            table.extend_from_slice(&(bytes.len() as u64).to_le_bytes());
-            table.extend_from_slice(&xxh3_64(bytes).to_le_bytes());
-            at += bytes.len();
+            table.extend_from_slice(&(len as u64).to_le_bytes());
+            table.extend_from_slice(&checksum(pieces).to_le_bytes());
+            at += len;
         }
         let table_offset = aligned(at);
         let mut h = [0u8; HEADER_LEN];
@@ -143,14 +176,17 @@ impl Layout {
     }
 
     /// Write the header, the (aligned) sections and the table to `out`.
-    fn stream(&self, out: &mut impl Write, sections: &[(&str, &[u8])]) -> std::io::Result<()> {
+    fn stream(&self, out: &mut impl Write, sections: &[(&str, &[&[u8]])]) -> std::io::Result<()> {
         let zeros = [0u8; ALIGNMENT];
         let mut written = HEADER_LEN;
         out.write_all(&self.header)?;
-        for ((_, bytes), &offset) in sections.iter().zip(&self.offsets) {
+        for ((_, pieces), &offset) in sections.iter().zip(&self.offsets) {
             out.write_all(&zeros[..offset - written])?;
-            out.write_all(bytes)?;
-            written = offset + bytes.len();
+            written = offset;
+            for piece in *pieces {
+                out.write_all(piece)?;
+                written += piece.len();
+            }
         }
         out.write_all(&zeros[..self.table_offset - written])?;
         out.write_all(&self.table)

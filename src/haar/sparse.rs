@@ -440,6 +440,7 @@ impl<T: Coefficient> SparseHaar<T> {
     /// coefficient, then the nodes in pre-order, each as a byte whose low four bits say which
     /// children follow, and its three details. Child positions are implicit in the order.
     pub fn write_to(&self, out: &mut Vec<u8>) {
+        let start = out.len();
         out.extend_from_slice(&self.levels.to_le_bytes());
         out.extend_from_slice(&(self.nodes.len() as u32).to_le_bytes());
         self.scale.write_le(out);
@@ -454,6 +455,14 @@ impl<T: Coefficient> SparseHaar<T> {
                 d.write_le(out);
             }
         }
+        debug_assert_eq!(out.len() - start, self.encoded_len());
+    }
+
+    /// The bytes [`SparseHaar::write_to`] appends: 8 for levels and count, the scaling
+    /// coefficient, and per node its byte of children and three details.
+    pub fn encoded_len(&self) -> usize {
+        let value = 4 * T::FLOATS;
+        8 + value + self.nodes.len() * (1 + 3 * value)
     }
 
     /// Decode one tree from the front of `bytes`, returning it and the bytes it used; `None`
