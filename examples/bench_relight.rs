@@ -7,8 +7,21 @@
 //! between the final renders (256², default settings) of the relit and the fresh caches. The
 //! issue asks for a tenth of the bake's time at relMSE 1e-3.
 //!
+//! Beside them, from the same run: with `WPBGI_PREVIOUS=/path/to/an/older/wpbgi`, that
+//! version's `wpbgi relight` of the same cache and transport, timed as a process beside this
+//! version's `target/release/wpbgi relight` (both the command a user runs: the scene's load
+//! included; the fastest of two runs each, alternated), with the ratio; and with `WPBGI_ANCHOR_PYTHON` (see `bench_bounces`) what a user
+//! would do instead of relighting: render the scene again with Mitsuba 3 + OIDN
+//! (`scripts/anchor/mitsuba_oidn.py` at 16, 64 and 256 spp: seconds and relMSE against
+//! Mitsuba's reference), beside a re-solving relight plus the final render from its cache, and
+//! that render's relMSE against the same reference. Mitsuba has references of the unedited
+//! scenes only, so the anchor is taken on them: an edit changes neither Mitsuba's time a
+//! sample nor, measurably, ours (the relit caches are the fresh bakes', byte for byte).
+//!
 //! `cargo run --release --example bench_relight [-- SCENE_NAME ...]`
 
+use std::path::Path;
+use std::process::Command;
 use std::sync::atomic::AtomicBool;
 use std::time::Instant;
 use wpbgi::bake::bounce::kept::beside;
@@ -16,15 +29,21 @@ use wpbgi::bake::bounce::TransportHandoff;
 use wpbgi::bake::relight::{relight, Relighting};
 use wpbgi::bake::{bake_with_transport, BakeSettings};
 use wpbgi::cache::store::BakedCache;
-use wpbgi::image::error_against;
+use wpbgi::image::{error_against, read_exr};
 use wpbgi::render::FinalSettings;
 use wpbgi::scene::edit::Edit;
 use wpbgi::scene::Scene;
 
-#[allow(dead_code)] // the benchmarks' shared helpers, of which this one uses three
+#[allow(dead_code)] // the benchmarks' shared helpers, of which this one uses five
 mod common;
 
-use common::{bake_cache, data, timed_render, Result};
+use common::{bake_cache, data, mitsuba_anchor, run_ok, timed_render, Result};
+
+/// Runs of each version's `wpbgi relight` per edit, of which the fastest counts.
+const CLI_ROUNDS: usize = 2;
+
+/// The sample counts Mitsuba + OIDN renders each scene at, for the anchor line.
+const ANCHOR_SPP: [u32; 3] = [16, 64, 256];
 
 /// The edits measured: each kind the issue names that the Cornell boxes have (they have no
 /// punctual light, so `intensity` is measured on none).
@@ -59,6 +78,9 @@ fn main() -> Result<()> {
     };
     let settings = BakeSettings::default();
     let render = FinalSettings::default();
+    let previous = std::env::var_os("WPBGI_PREVIOUS");
+    let python = std::env::var_os("WPBGI_ANCHOR_PYTHON");
+    let this_bin = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/release/wpbgi");
     for name in scenes {
         let original = Scene::load(&data(&format!("{name}.gltf")))?;
         let (path, cache, kept_seconds) = bake_keeping_transport(&original, &settings, name)?;
@@ -69,9 +91,21 @@ fn main() -> Result<()> {
             transport_bytes / 1_000_000
         );
         println!(
-            "{:<12} {:<20} {:>9} {:>9} {:>7} {:>9} {:>7} {:>10}  how (with the transport)",
-            "scene", "edit", "bake s", "alone s", "ratio", "kept s", "ratio", "relMSE"
+            "{:<12} {:<20} {:>9} {:>9} {:>7} {:>9} {:>7} {:>10} {:>9} {:>10} {:>7}  how (with the transport)",
+            "scene",
+            "edit",
+            "bake s",
+            "alone s",
+            "ratio",
+            "kept s",
+            "ratio",
+            "relMSE",
+            "CLI s",
+            "prev. s",
+            "ratio"
         );
+        // The re-solving relights' seconds, for the anchor line.
+        let mut resolved_seconds = Vec::new();
         let camera = original.camera(None, 256, 256)?;
         let mut edits: Vec<(&str, String)> =
             EDITS.iter().map(|(k, e)| (*k, e.to_string())).collect();
@@ -111,17 +145,124 @@ fn main() -> Result<()> {
             let (_, rel) = error_against(&a.beauty, &b.beauty).ok_or("image sizes differ")?;
             let how = match how {
                 Relighting::Rescaled { .. } => "rescaled".to_string(),
-                Relighting::Resolved { .. } => "re-solved from the kept transport".to_string(),
+                Relighting::Resolved { .. } => {
+                    resolved_seconds.push(kept_seconds);
+                    "re-solved from the kept transport".to_string()
+                }
                 Relighting::Rebaked { why } => format!("baked again: {why}"),
             };
+            // The command a user runs, this version's and the previous one's, the fastest of
+            // [`CLI_ROUNDS`] each, alternated (the first of a pair reads the transport less
+            // warm from the page cache).
+            let (this_cli, previous_cli) = match &previous {
+                Some(bin) => {
+                    let (mut this, mut before) = (f64::INFINITY, Some(f64::INFINITY));
+                    for round in 0..CLI_ROUNDS {
+                        for which in [round % 2, 1 - round % 2] {
+                            if which == 0 {
+                                this = this.min(cli_relight(&this_bin, name, &path, &text)?);
+                            } else if let Some(b) = before {
+                                before = match cli_relight(Path::new(bin), name, &path, &text) {
+                                    Ok(s) => Some(b.min(s)),
+                                    Err(e) => {
+                                        eprintln!("the previous version's relight failed: {e}");
+                                        None
+                                    }
+                                };
+                            }
+                        }
+                    }
+                    (format!("{this:.2}"), before)
+                }
+                None => ("-".to_string(), None),
+            };
+            let (previous_shown, ratio) = match (previous_cli, this_cli.parse::<f64>()) {
+                (Some(p), Ok(t)) => (format!("{p:.2}"), format!("{:.3}", t / p)),
+                _ if previous.is_some() => ("failed".to_string(), "-".to_string()),
+                _ => ("not run".to_string(), "-".to_string()),
+            };
             println!(
-                "{name:<12} {kind:<20} {bake_seconds:>9.2} {alone_seconds:>9.2} {:>7.3} {kept_seconds:>9.2} {:>7.3} {rel:>10.2e}  {how}",
+                "{name:<12} {kind:<20} {bake_seconds:>9.2} {alone_seconds:>9.2} {:>7.3} {kept_seconds:>9.2} {:>7.3} {rel:>10.2e} {this_cli:>9} {previous_shown:>10} {ratio:>7}  {how}",
                 alone_seconds / bake_seconds,
                 kept_seconds / bake_seconds
             );
         }
+        anchor_line(
+            name,
+            &original,
+            &cache,
+            &camera,
+            &render,
+            &resolved_seconds,
+            &python,
+        )?;
     }
     Ok(())
+}
+
+/// The anchor on the unedited scene `name`: the median re-solving relight (`resolved`
+/// seconds) plus the final render from `cache`, and that render's relMSE against Mitsuba's
+/// reference, beside Mitsuba + OIDN's seconds and relMSE at [`ANCHOR_SPP`] (when `python`
+/// names an anchor Python).
+fn anchor_line(
+    name: &str,
+    scene: &Scene,
+    cache: &BakedCache,
+    camera: &wpbgi::scene::camera::Camera,
+    render: &FinalSettings,
+    resolved: &[f64],
+    python: &Option<std::ffi::OsString>,
+) -> Result<()> {
+    let reference_path = data(&format!("{name}_d8_ref.exr"));
+    let reference = read_exr(&reference_path)?;
+    let (ours, render_seconds) = timed_render(scene, cache, camera, render)?;
+    let (_, rel) = error_against(&ours.beauty, &reference).ok_or("image sizes differ")?;
+    let mut sorted = resolved.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    let relight = sorted.get(sorted.len() / 2).copied();
+    print!(
+        "{name} against Mitsuba's reference (max_depth 8): ours relight {} + render {render_seconds:.2} s = {}, relMSE {rel:.2e}",
+        relight.map_or("-".to_string(), |s| format!("{s:.2}")),
+        relight.map_or("-".to_string(), |s| format!("{:.2} s", s + render_seconds)),
+    );
+    match python {
+        Some(py) => {
+            let runs = mitsuba_anchor(
+                Path::new(py),
+                &data(&format!("{name}.gltf")),
+                &reference_path,
+                &ANCHOR_SPP,
+            )?;
+            for (spp, v) in runs {
+                if let (Some(s), Some(r)) = (v["oidn_total_s"].as_f64(), v["oidn"][1].as_f64()) {
+                    print!("; Mitsuba + OIDN {spp} spp {s:.2} s, relMSE {r:.2e}");
+                }
+            }
+            println!();
+        }
+        None => println!("; Mitsuba + OIDN not run (`WPBGI_ANCHOR_PYTHON`)"),
+    }
+    Ok(())
+}
+
+/// `wpbgi relight` of binary `bin` on cache `cache` of scene `name` with the edit `edit`, as
+/// a user runs it: the seconds the process took.
+fn cli_relight(bin: &Path, name: &str, cache: &Path, edit: &str) -> Result<f64> {
+    let out = std::env::temp_dir().join(format!("wpbgi-bench-cli-relit-{name}.wpc"));
+    let start = Instant::now();
+    run_ok(
+        &bin.display().to_string(),
+        Command::new(bin)
+            .arg("relight")
+            .arg(cache)
+            .arg("--scene")
+            .arg(data(&format!("{name}.gltf")))
+            .arg("-o")
+            .arg(&out)
+            .arg("--set")
+            .arg(edit),
+    )?;
+    Ok(start.elapsed().as_secs_f64())
 }
 
 /// Bake `scene` and write its cache with the transport beside it (`wpbgi bake

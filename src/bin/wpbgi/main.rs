@@ -24,6 +24,7 @@ mod assemble_cmd;
 mod bake_cmd;
 mod compare_cmd;
 mod frames;
+mod heap;
 mod interrupt;
 mod preview_cmd;
 mod relight_cmd;
@@ -683,6 +684,7 @@ fn demo(a: DemoArgs) -> Result<()> {
 }
 
 fn main() {
+    heap::keep_freed_memory();
     let cli = Cli::parse();
     verbosity::set(cli.quiet, cli.verbose);
     interrupt::install();
