@@ -41,6 +41,7 @@ use crate::haar::SparseHaar;
 use crate::spectrum::Rgb;
 use crate::surfels::radiance::SurfelRadiance;
 use crate::surfels::Surfel;
+use rayon::prelude::*;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use xxhash_rust::xxh3::Xxh3;
@@ -282,26 +283,24 @@ fn parse_body(mut r: Reader) -> std::result::Result<KeptTransport, String> {
     let report = report_of(fields);
     let words = r.count(8)?;
     let words: Vec<u64> = get(r.take(words * 8)?);
+    // The groups' bytes found first, from their receivers' counts alone, then parsed on all
+    // threads: the copies out of the file are most of a read.
     let groups = r.count(4)?;
-    let mut kept = Vec::with_capacity(groups);
+    let mut spans = Vec::with_capacity(groups);
     for _ in 0..groups {
+        let start = r.bytes;
         let members = r.u32()? as usize;
-        let mut group = Vec::with_capacity(members.min(r.bytes.len() / 16));
         for _ in 0..members {
-            let surfel = r.u32()?;
+            r.take(4)?;
             let (ends, terms, texels) = (r.u32()?, r.u32()?, r.u32()?);
-            let ends: Vec<u32> = get(r.take(ends as usize * 4)?);
-            let terms: Vec<Term> = get(r.take(terms as usize * 8)?);
-            let texels: Vec<u16> = get(r.take(texels as usize * 2)?);
-            group.push(ReceiverLinks::from_parts(
-                surfel,
-                ends.into(),
-                terms.into(),
-                texels.into(),
-            ));
+            r.take(ends as usize * 4 + terms as usize * 8 + texels as usize * 2)?;
         }
-        kept.push(group);
+        spans.push(&start[..start.len() - r.bytes.len()]);
     }
+    let kept = spans
+        .into_par_iter()
+        .map(parse_group)
+        .collect::<std::result::Result<Vec<_>, String>>()?;
     let direct = match r.take(1)?[0] {
         0 => None,
         1 => Some(parse_direct(&mut r)?),
@@ -317,6 +316,28 @@ fn parse_body(mut r: Reader) -> std::result::Result<KeptTransport, String> {
         kept,
         direct,
     })
+}
+
+/// One receiver group's links from its bytes (as [`parse_body`] found them: their counts
+/// already checked against the bytes).
+fn parse_group(bytes: &[u8]) -> std::result::Result<Vec<ReceiverLinks>, String> {
+    let mut r = Reader { bytes };
+    let members = r.u32()? as usize;
+    let mut group = Vec::with_capacity(members.min(r.bytes.len() / 16));
+    for _ in 0..members {
+        let surfel = r.u32()?;
+        let (ends, terms, texels) = (r.u32()?, r.u32()?, r.u32()?);
+        let ends: Vec<u32> = get(r.take(ends as usize * 4)?);
+        let terms: Vec<Term> = get(r.take(terms as usize * 8)?);
+        let texels: Vec<u16> = get(r.take(texels as usize * 2)?);
+        group.push(ReceiverLinks::from_parts(
+            surfel,
+            ends.into(),
+            terms.into(),
+            texels.into(),
+        ));
+    }
+    Ok(group)
 }
 
 /// Bytes of a [`Surfel`] in the file (and in memory).
@@ -471,7 +492,22 @@ fn put<T: LittleEndian>(bytes: &mut Vec<u8>, values: &[T]) {
 /// The values whose bytes, in the file's byte order, are `bytes` (a whole number of them,
 /// at any alignment).
 fn get<T: LittleEndian>(bytes: &[u8]) -> Vec<T> {
-    let values: Vec<T> = bytemuck::pod_collect_to_vec(bytes);
+    let count = bytes.len() / std::mem::size_of::<T>();
+    debug_assert_eq!(count * std::mem::size_of::<T>(), bytes.len());
+    // Copied into the new vector's room without filling it with zeros first (a pass over
+    // hundreds of MB a read, as `bytemuck::pod_collect_to_vec` makes).
+    let mut values: Vec<T> = Vec::with_capacity(count);
+    // SAFETY: the room holds `count` values, `count × size_of::<T>()` bytes, which the copy
+    // fills from `bytes` (at least as long; the vector's own alignment is T's, the copy
+    // bytewise); any bytes are a valid T (`Pod`), so all `count` are initialised.
+    unsafe {
+        std::ptr::copy_nonoverlapping(
+            bytes.as_ptr(),
+            values.as_mut_ptr().cast::<u8>(),
+            count * std::mem::size_of::<T>(),
+        );
+        values.set_len(count);
+    }
     if cfg!(target_endian = "little") {
         values
     } else {
