@@ -11,10 +11,10 @@
 //! version's `wpbgi relight` of the same cache and transport, timed as a process beside this
 //! version's `target/release/wpbgi relight` (both the command a user runs: the scene's load
 //! included; the fastest of two runs each, alternated), with the ratio; and with `WPBGI_ANCHOR_PYTHON` (see `bench_bounces`) what a user
-//! would do instead of relighting: render the scene again with Mitsuba 3 + OIDN
+//! would do instead of relighting: render the scene again with Mitsuba 3, raw and + OIDN
 //! (`scripts/anchor/mitsuba_oidn.py` at 16, 64 and 256 spp: seconds and relMSE against
 //! Mitsuba's reference), beside a re-solving relight plus the final render from its cache, and
-//! that render's relMSE against the same reference. Mitsuba has references of the unedited
+//! that render's relMSE against the same reference, with ours over each as ratios. Mitsuba has references of the unedited
 //! scenes only, so the anchor is taken on them: an edit changes neither Mitsuba's time a
 //! sample nor, measurably, ours (the relit caches are the fresh bakes', byte for byte).
 //!
@@ -233,9 +233,32 @@ fn anchor_line(
                 &reference_path,
                 &ANCHOR_SPP,
             )?;
+            // Each Mitsuba figure with ours over it: time (relight + render) and relMSE.
+            let ours = relight.map(|s| s + render_seconds);
+            let against = |s: f64, r: f64| match ours {
+                Some(t) => format!(
+                    " (ours / it: {:.2}× the time, {:.2}× the relMSE)",
+                    t / s,
+                    rel / r
+                ),
+                None => String::new(),
+            };
             for (spp, v) in runs {
-                if let (Some(s), Some(r)) = (v["oidn_total_s"].as_f64(), v["oidn"][1].as_f64()) {
-                    print!("; Mitsuba + OIDN {spp} spp {s:.2} s, relMSE {r:.2e}");
+                let field = |k: &str, i: Option<usize>| match i {
+                    Some(i) => v[k][i].as_f64(),
+                    None => v[k].as_f64(),
+                };
+                if let (Some(s), Some(r)) = (field("pt_s", None), field("pt", Some(1))) {
+                    print!(
+                        "; Mitsuba {spp} spp {s:.2} s, relMSE {r:.2e}{}",
+                        against(s, r)
+                    );
+                }
+                if let (Some(s), Some(r)) = (field("oidn_total_s", None), field("oidn", Some(1))) {
+                    print!(
+                        "; Mitsuba + OIDN {spp} spp {s:.2} s, relMSE {r:.2e}{}",
+                        against(s, r)
+                    );
                 }
             }
             println!();

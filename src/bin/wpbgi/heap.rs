@@ -5,10 +5,13 @@
 //! threshold (128 KiB at first, raised as large blocks are freed). A bake's bounces, and a
 //! relight's, free and allocate hundreds of MB of maps and links a bounce, so each bounce
 //! faulted in again pages the kernel had just taken back, and the kernel cleared every one:
-//! `clear_page` was 23 % of a cbox-glossy relight's perf samples. With the threshold out of
-//! reach, that relight took 5.2–5.4 s instead of 5.9–6.0 s (two alternated pairs, the same
-//! cache byte for byte; docs/relight.md). Peak memory is unchanged (1.62 GB either way):
-//! what a bounce frees the next one reuses. What the process does not give back it holds
+//! `clear_page` was 23 % of a cbox-glossy relight's perf samples. The same setting given to
+//! the previous binary through `GLIBC_TUNABLES=glibc.malloc.trim_threshold=…` took that
+//! relight to 5.23 and 5.39 s from 5.99 and 5.86 s (two alternated pairs, the same cache
+//! byte for byte; with this commit's other change, docs/relight.md). Peak memory is
+//! unchanged (1.62 GB either way): what a bounce frees the next one reuses. (Setting the
+//! threshold also stops glibc raising its mmap threshold, so blocks over 128 KiB are still
+//! mapped and unmapped one by one; keeping those too was not measurably faster.) What the process does not give back it holds
 //! until it exits, at most its peak; the commands here run one job and exit (the preview's
 //! window holds its peak while it stays open).
 //!
