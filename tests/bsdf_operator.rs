@@ -5,8 +5,8 @@
 use glam::Vec3;
 use wpbgi::bake::bounce::bsdf_operator::operator_side;
 use wpbgi::bake::bounce::bsdf_operator::{
-    forward, inverse, kernel, mean_cosines, quantised_alpha, Basis, BsdfOperator, Operators,
-    INCOMING_TAU, QUANTISATION_ERROR, ROUGHNESS_LEVELS_PER_OCTAVE, UNTINTED,
+    forward, inverse, kernel, mean_cosines, quantised_alpha, Basis, BsdfOperator, OperatorParts,
+    Operators, INCOMING_TAU, QUANTISATION_ERROR, ROUGHNESS_LEVELS_PER_OCTAVE, UNTINTED,
 };
 use wpbgi::bsdf::{
     Bsdf, Diffuse, Distribution, Microfacet, RoughConductor, RoughDielectric, ThinDielectric,
@@ -342,4 +342,97 @@ fn roughness_levels_stay_within_the_stated_error() {
     }
     eprintln!("worst relative L2 {worst:.4}");
     assert!(worst <= QUANTISATION_ERROR, "worst {worst}");
+}
+
+/// An operator given back from its parts is the same bit for bit, in either basis, RGB or
+/// grey; operators handed to a bake are taken where their key is asked for, and built where
+/// it is not (another roughness).
+#[test]
+fn operators_come_back_from_their_parts_and_are_taken_by_key() {
+    for (bsdf, n) in [
+        (conductor(0.2), 8),
+        (conductor(0.001), 32),
+        (dielectric(0.1), 4),
+    ] {
+        let op = BsdfOperator::new(&bsdf, n, 0.01);
+        let back = BsdfOperator::from_parts(op.parts()).expect("parts");
+        assert_eq!(back, op, "{bsdf:?}");
+    }
+    assert_eq!(
+        BsdfOperator::new(&conductor(0.001), 32, 0.01).basis(),
+        Basis::Texels
+    );
+    assert!(BsdfOperator::new(&dielectric(0.1), 4, 0.01).parts().grey);
+
+    let tinted = |alpha: f32, tint: Rgb| match conductor(alpha) {
+        Bsdf::Conductor(c) => Bsdf::Conductor(RoughConductor {
+            specular_reflectance: tint,
+            ..c
+        }),
+        _ => unreachable!(),
+    };
+    let mut first = Operators::default();
+    let built = first.get(&tinted(0.2, Rgb::ONE), 0.01);
+    assert_eq!(first.reused(), 0);
+    let mut second = Operators::with_kept(first.keyed());
+    let taken = second.get(&tinted(0.2, Rgb::new(0.9, 0.6, 0.3)), 0.01);
+    assert_eq!(second.reused(), 1, "the same untinted BSDF: taken");
+    assert!(std::sync::Arc::ptr_eq(&taken.shared, &built.shared));
+    let other = second.get(&tinted(0.24, Rgb::ONE), 0.01);
+    assert_eq!((second.reused(), second.len()), (1, 2), "another α: built");
+    assert_eq!(
+        *other.shared,
+        BsdfOperator::new(&conductor(0.24), operator_side(&conductor(0.24)), 0.01)
+    );
+    let mut third = Operators::with_kept(first.keyed());
+    third.get(&tinted(0.2, Rgb::ONE), 0.02);
+    assert_eq!(third.reused(), 0, "another threshold: built");
+}
+
+/// Parts that are not an operator's are refused in words, not taken to a product that would
+/// read out of bounds.
+#[test]
+fn damaged_operator_parts_are_refused() {
+    let good = BsdfOperator::new(&conductor(0.2), 4, 0.01).parts();
+    type Damage = Box<dyn Fn(&mut OperatorParts)>;
+    let cases: Vec<(&str, Damage)> = vec![
+        ("grid not a power of two", Box::new(|p| p.n = 3)),
+        ("three hemispheres", Box::new(|p| p.hemispheres = 3)),
+        (
+            "a column past the entries",
+            Box::new(|p| *p.starts.last_mut().unwrap() += 1),
+        ),
+        (
+            "columns out of order",
+            Box::new(|p| p.starts[1] = p.starts[2] + 1),
+        ),
+        ("a row off the grid", Box::new(|p| p.rows[0] = 16)),
+        (
+            "rows out of order",
+            Box::new(|p| {
+                // The first column of two entries or more, its first two swapped.
+                let a = p.starts.windows(2).position(|w| w[1] >= w[0] + 2).unwrap();
+                let at = p.starts[a] as usize;
+                p.rows.swap(at, at + 1);
+            }),
+        ),
+        (
+            "values short",
+            Box::new(|p| {
+                p.values.pop();
+            }),
+        ),
+        ("a value not a number", Box::new(|p| p.values[0] = f32::NAN)),
+        (
+            "albedo short",
+            Box::new(|p| {
+                p.albedo.pop();
+            }),
+        ),
+    ];
+    for (why, damage) in cases {
+        let mut parts = good.clone();
+        damage(&mut parts);
+        assert!(BsdfOperator::from_parts(parts).is_err(), "{why}");
+    }
 }

@@ -165,8 +165,10 @@ fn fresh_bake_bytes(scene: &Scene, path: &std::path::Path) -> Vec<u8> {
     std::fs::read(path).expect("fresh")
 }
 
-/// With the transport kept beside the cache, edits of a reflectance, a conductor's tint and a
-/// dielectric's transmittance re-solve the bounces from it instead of gathering again, and
+/// With the transport kept beside the cache, edits of a reflectance, a conductor's tint, a
+/// dielectric's transmittance and a roughness within its operator's grid re-solve the bounces
+/// from it instead of gathering again (every BSDF operator but an edited roughness's taken
+/// from the file), and
 /// the relit cache is a fresh bake of the edited scene byte for byte (the transport is
 /// geometry; replaying it is the same arithmetic as recording it). A roughness edit that
 /// changes a BSDF operator's grid, and a damaged or truncated transport file, are refused
@@ -192,6 +194,9 @@ fn a_kept_transport_re_solves_scattering_edits_as_a_fresh_bake_would() {
             None,
         ),
         ("glass-a0.1.specular_transmittance=0.7", &transport, None),
+        // α 0.24: the same grid, so the same transport, and the conductor's operator built
+        // again (the glass's taken from the file).
+        ("gold-a0.2.alpha*=1.2", &transport, None),
         // α 0.3: the operator's grid goes from 16² to 8² texels a hemisphere.
         (
             "gold-a0.2.alpha*=1.5",
@@ -208,7 +213,18 @@ fn a_kept_transport_re_solves_scattering_edits_as_a_fresh_bake_would() {
         let edits = edits(&[edit]);
         let output = dir.join(format!("relit-{k}.wpc"));
         match (&relit_to(&original, &cache, &edits, &output), expected) {
-            (Relighting::Resolved { kept_direct, .. }, None) => {
+            (
+                Relighting::Resolved {
+                    kept_direct,
+                    kept_operators,
+                    ..
+                },
+                None,
+            ) => {
+                // Every operator is the kept one but a roughness edit's, built again.
+                assert!(kept_operators.1 > 0, "{edit}: the scene has glossy BSDFs");
+                let rebuilt = usize::from(edit.contains(".alpha"));
+                assert_eq!(kept_operators.0 + rebuilt, kept_operators.1, "{edit}");
                 assert!(
                     beside(&output).exists(),
                     "{edit}: the relit cache keeps the transport beside it"

@@ -176,6 +176,12 @@ pub fn bake_with_transport(
     // same too, the direct light of every surfel whose material is.
     // What this bake's surfels and direct light come from, hashed only where a kept direct
     // light is handed in or asked for (the geometry's hash reads every vertex and texel).
+    // A relight's kept BSDF operators, taken where this bake would build the same ones.
+    let kept_operators = handoff
+        .reuse
+        .as_mut()
+        .map(|t| std::mem::take(&mut t.operators))
+        .unwrap_or_default();
     let geometry = (handoff.keep || handoff.reuse.is_some())
         .then(|| geometry_hash(scene, &settings.to_json()));
     let kept = handoff
@@ -229,7 +235,7 @@ pub fn bake_with_transport(
         .iter()
         .map(|s| surfel_shading_normal(scene, s))
         .collect();
-    let mut operators = Operators::default();
+    let mut operators = Operators::with_kept(kept_operators);
     let near_specular = operators.of_each(&bsdfs, settings.bounces.operator_tau, |b| {
         b.alpha().is_some_and(|a| a < NEAR_SPECULAR_ALPHA)
     });

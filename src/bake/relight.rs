@@ -61,6 +61,9 @@ pub enum Relighting {
         /// Surfels whose direct light was kept (their material and every emitter unedited),
         /// of all.
         kept_direct: (usize, usize),
+        /// BSDF operators taken from the transport file (their untinted BSDFs unedited), of
+        /// all the bake used.
+        kept_operators: (usize, usize),
     },
     /// The edited scene baked again with the cache's settings.
     Rebaked {
@@ -77,11 +80,15 @@ impl std::fmt::Display for Relighting {
                 "every emitter ×({:.4}, {:.4}, {:.4}), the cache rescaled",
                 factor.x, factor.y, factor.z
             ),
-            Relighting::Resolved { why, kept_direct } => write!(
+            Relighting::Resolved {
+                why,
+                kept_direct,
+                kept_operators,
+            } => write!(
                 f,
-                "re-solved from the kept transport, the direct light of {} of {} surfels kept: \
-                 {why}",
-                kept_direct.0, kept_direct.1
+                "re-solved from the kept transport, the direct light of {} of {} surfels and {} \
+                 of {} BSDF operators kept: {why}",
+                kept_direct.0, kept_direct.1, kept_operators.0, kept_operators.1
             ),
             Relighting::Rebaked { why } => write!(f, "baked again: {why}"),
         }
@@ -163,6 +170,7 @@ pub fn relight(
                 Relighting::Resolved {
                     why,
                     kept_direct: (handoff.direct_reused, baked.surfels.len()),
+                    kept_operators: (baked.operators.reused(), baked.operators.len()),
                 }
             } else {
                 let note = match unused {

@@ -319,6 +319,7 @@ pub fn add_bounces(
             report: report.transport,
             words: index.words(),
             kept,
+            operators: baked.operators.keyed(),
             direct: None,
         });
     }

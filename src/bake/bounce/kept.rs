@@ -8,8 +8,9 @@
 //! tint, a transmittance or an emission changes. The bounces' first pass records it (most of
 //! their time: 3.8 of cbox-rough's 5.0 s at the default preset); a bake that is handed a kept
 //! transport whose [`TransportKey`] is its own replays it instead, and writes the same cache
-//! byte for byte as a bake that recorded it. The surfels and their direct light are kept with
-//! it ([`KeptDirect`]), with hashes of what they came from: a bake of the same geometry takes
+//! byte for byte as a bake that recorded it. The bake's BSDF operators are kept with it (a
+//! relight takes each one whose key it would build: [`Operators::with_kept`]), and so are its
+//! surfels and their direct light ([`KeptDirect`]), with hashes of what they came from: a bake of the same geometry takes
 //! the surfels, and where its emitters are the same, each surfel's direct light where its
 //! material is.
 //!
@@ -24,6 +25,8 @@
 //! | 8 + 8 × w | the read slots' bitmap: w words |
 //! | 8 | receiver groups kept |
 //! | per group | its receivers (u32), then per receiver: surfel, pixel ends, terms and map texels counts (u32 each), the pixel ends (u32), the terms (u32 slot, f32 weight), the map texels (u16) |
+//! | 8 | BSDF operators kept |
+//! | per operator | its [`OperatorKey`] (16), its grid side, hemispheres, basis (0 Haar, 1 texels) and 1 where grey, else 0 (u32 each), its two norms (f32), its entries' count e (u64), then its column starts (u32 × (s + 1), s its texels), the entries' rows (u32 × e), their values (f32 × e, or × 3e where not grey), the albedo (f32 × 6s) and the mean cosines (f32 × s) |
 //! | 1 | 1 when the direct light follows, else 0 |
 //! | 32 + 8 + 16 × m + 8 + 56 × n + … | the direct light: the hashes of its geometry and settings and of its emitters, m materials' hashes, n surfels (44 bytes each: position, normal, area, mesh, triangle, barycentrics), their emission (3 × f32), then per surfel 0 and an RGB (3 × f32) or 1 and a wavelet map as the cache stores one |
 //! | 8 | XXH3-64 of every byte before it |
@@ -32,6 +35,7 @@
 //! out of range, receivers that are not the bake's) is refused with a reason, and the bake
 //! records the transport as if none had been handed to it.
 
+use super::bsdf_operator::{Basis, BsdfOperator, KeyedOperator, OperatorParts};
 use super::report::TransportReport;
 use super::transport::{ReceiverLinks, Slots, Term};
 use crate::atomic::write_atomically_unsynced;
@@ -50,7 +54,7 @@ use xxhash_rust::xxh3::Xxh3;
 const MAGIC: &[u8; 16] = b"WPBGI-TRANSPORT\0";
 
 /// The format this build writes and reads.
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
 
 /// The hash of everything a bake's transport depends on (see [`super::iterate`]'s
 /// `transport_key`): equal keys, equal transports.
@@ -73,6 +77,8 @@ pub struct KeptTransport {
     pub(super) words: Vec<u64>,
     /// The links of the receiver groups kept, in group order, their slots compact.
     pub(super) kept: Vec<Vec<ReceiverLinks>>,
+    /// The bake's BSDF operators, with their keys.
+    pub(crate) operators: Vec<KeyedOperator>,
     /// The bake's direct light, where it was handed out with the transport.
     pub direct: Option<KeptDirect>,
 }
@@ -199,6 +205,12 @@ impl KeptTransport {
             }
             out.write_all(&bytes)?;
         }
+        out.write_all(&(self.operators.len() as u64).to_le_bytes())?;
+        for (key, op) in &self.operators {
+            bytes.clear();
+            put_operator(&mut bytes, key, op.parts());
+            out.write_all(&bytes)?;
+        }
         match &self.direct {
             None => out.write_all(&[0])?,
             Some(d) => {
@@ -301,6 +313,9 @@ fn parse_body(mut r: Reader) -> std::result::Result<KeptTransport, String> {
         .into_par_iter()
         .map(parse_group)
         .collect::<std::result::Result<Vec<_>, String>>()?;
+    let operators = (0..r.count(16 + 7 * 4 + 8)?)
+        .map(|_| parse_operator(&mut r))
+        .collect::<std::result::Result<Vec<_>, String>>()?;
     let direct = match r.take(1)?[0] {
         0 => None,
         1 => Some(parse_direct(&mut r)?),
@@ -314,6 +329,7 @@ fn parse_body(mut r: Reader) -> std::result::Result<KeptTransport, String> {
         report,
         words,
         kept,
+        operators,
         direct,
     })
 }
@@ -338,6 +354,65 @@ fn parse_group(bytes: &[u8]) -> std::result::Result<Vec<ReceiverLinks>, String> 
         ));
     }
     Ok(group)
+}
+
+/// One BSDF operator's bytes, as the format table says.
+fn put_operator(bytes: &mut Vec<u8>, key: &[u8; 16], p: OperatorParts) {
+    bytes.extend_from_slice(key);
+    let basis = match p.basis {
+        Basis::Haar => 0,
+        Basis::Texels => 1,
+    };
+    put(bytes, &[p.n, p.hemispheres, basis, u32::from(p.grey)]);
+    put(bytes, &p.norms);
+    bytes.extend_from_slice(&(p.rows.len() as u64).to_le_bytes());
+    put(bytes, &p.starts);
+    put(bytes, &p.rows);
+    put(bytes, &p.values);
+    put(bytes, &p.albedo);
+    put(bytes, &p.cosines);
+}
+
+/// One BSDF operator from its bytes, checked ([`BsdfOperator::from_parts`]).
+fn parse_operator(r: &mut Reader) -> std::result::Result<KeyedOperator, String> {
+    let key: [u8; 16] = r.take(16)?.try_into().map_err(|_| "short key")?;
+    let [n, hemispheres, basis, grey] = [r.u32()?, r.u32()?, r.u32()?, r.u32()?];
+    let basis = match basis {
+        0 => Basis::Haar,
+        1 => Basis::Texels,
+        _ => return Err("an operator is in no basis".into()),
+    };
+    let grey = match grey {
+        0 => false,
+        1 => true,
+        _ => return Err("an operator is marked neither grey nor RGB".into()),
+    };
+    let norms: Vec<f32> = get(r.take(8)?);
+    let per = if grey { 1 } else { 3 };
+    let entries = r.count(4 + 4 * per)?;
+    // The grid's size is checked by `from_parts`; bounded here by the bytes left.
+    let size = (u64::from(hemispheres) * u64::from(n) * u64::from(n)) as usize;
+    if size.saturating_mul(4 * 8) > r.bytes.len() {
+        return Err("it is truncated".into());
+    }
+    let starts = get(r.take((size + 1) * 4)?);
+    let rows = get(r.take(entries * 4)?);
+    let values = get(r.take(entries * per * 4)?);
+    let albedo = get(r.take(size * 6 * 4)?);
+    let cosines = get(r.take(size * 4)?);
+    let op = BsdfOperator::from_parts(OperatorParts {
+        n,
+        hemispheres,
+        basis,
+        starts,
+        rows,
+        values,
+        grey,
+        norms: [norms[0], norms[1]],
+        albedo,
+        cosines,
+    })?;
+    Ok((key, std::sync::Arc::new(op)))
 }
 
 /// Bytes of a [`Surfel`] in the file (and in memory).
@@ -599,6 +674,7 @@ mod tests {
                     vec![0, 3, u16::MAX, 1].into(),
                 )],
             ],
+            operators: vec![([8; 16], std::sync::Arc::new(gold_operator()))],
             direct: Some(KeptDirect {
                 geometry: [3; 16],
                 emitters: [4; 16],
@@ -629,6 +705,18 @@ mod tests {
         }
     }
 
+    /// A gold conductor's operator on the smallest grid (2² texels): RGB entries.
+    fn gold_operator() -> BsdfOperator {
+        use crate::bsdf::{Bsdf, Distribution, Microfacet, RoughConductor};
+        let gold = Bsdf::Conductor(RoughConductor {
+            distr: Microfacet::new(Distribution::Ggx, 0.3, 0.3),
+            eta: glam::Vec3::new(0.143, 0.375, 1.442),
+            k: glam::Vec3::new(3.983, 2.386, 1.603),
+            specular_reflectance: Rgb::ONE,
+        });
+        BsdfOperator::new(&gold, 2, 0.01)
+    }
+
     fn file_bytes(t: &KeptTransport) -> Vec<u8> {
         let mut bytes = Vec::new();
         t.stream(&mut bytes).expect("in memory");
@@ -646,6 +734,7 @@ mod tests {
             (t.key, t.report, &t.words)
         );
         assert_eq!(back.direct, t.direct);
+        assert_eq!(back.operators, t.operators);
         assert_eq!(back.kept.len(), t.kept.len());
         for (a, b) in back.kept.iter().flatten().zip(t.kept.iter().flatten()) {
             assert_eq!((a.surfel, a.parts()), (b.surfel, b.parts()));

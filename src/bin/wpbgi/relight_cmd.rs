@@ -53,9 +53,19 @@ pub fn relight_command(a: RelightArgs) -> Result<()> {
     bar.as_ref().map(crate::StagedBar::finish);
     let (how, detail) = match &relit.how {
         Relighting::Rescaled { factor } => ("rescaled", json!({"factor": factor.to_array()})),
-        Relighting::Resolved { why, kept_direct } => (
+        Relighting::Resolved {
+            why,
+            kept_direct,
+            kept_operators,
+        } => (
             "resolved",
-            json!({"why": why, "kept_direct_surfels": kept_direct.0, "surfels": kept_direct.1}),
+            json!({
+                "why": why,
+                "kept_direct_surfels": kept_direct.0,
+                "surfels": kept_direct.1,
+                "kept_operators": kept_operators.0,
+                "operators": kept_operators.1,
+            }),
         ),
         Relighting::Rebaked { why } => ("rebaked", json!({"why": why})),
     };
