@@ -24,12 +24,16 @@
 //! | 8 × 8 | the [`TransportReport`]: bytes, bytes unbounded, kept and regathered groups, receivers, read slots, slots, incident bytes |
 //! | 8 + 8 × w | the read slots' bitmap: w words |
 //! | 8 | receiver groups kept |
-//! | per group | its receivers (u32), then per receiver: surfel, pixel ends, terms and map texels counts (u32 each), the pixel ends (u32), the terms (u32 slot, f32 weight), the map texels (u16) |
+//! | per group | its receivers (u32), then per receiver: surfel, pixel ends, terms and map texels counts (u32 each), the pixel ends (u32), the terms (u32 slot, f32 weight), the map texels (u16), two zero bytes where their count is odd |
 //! | 8 | BSDF operators kept |
 //! | per operator | its [`OperatorKey`] (16), its grid side, hemispheres, basis (0 Haar, 1 texels) and 1 where grey, else 0 (u32 each), its two norms (f32), its entries' count e (u64), then its column starts (u32 × (s + 1), s its texels), the entries' rows (u32 × e), their values (f32 × e, or × 3e where not grey), the albedo (f32 × 6s) and the mean cosines (f32 × s) |
 //! | 1 | 1 when the direct light follows, else 0 |
 //! | 32 + 8 + 16 × m + 8 + 56 × n + … | the direct light: the hashes of its geometry and settings and of its emitters, m materials' hashes, n surfels (44 bytes each: position, normal, area, mesh, triangle, barycentrics), their emission (3 × f32), then per surfel 0 and an RGB (3 × f32) or 1 and a wavelet map as the cache stores one |
 //! | 8 | XXH3-64 of every byte before it |
+//!
+//! Every receiver's arrays start at a multiple of four bytes from the file's start, so that on
+//! a little-endian machine a read leaves them in the mapped file ([`Run::in_place`]) instead
+//! of copying them out.
 //!
 //! Anything that does not check out (magic, version, length, checksum, a count or an index
 //! out of range, receivers that are not the bake's) is refused with a reason, and the bake
@@ -37,6 +41,7 @@
 
 use super::bsdf_operator::{Basis, BsdfOperator, KeyedOperator, OperatorParts};
 use super::report::TransportReport;
+use super::run::{Run, SharedBytes};
 use super::transport::{ReceiverLinks, Slots, Term};
 use crate::atomic::write_atomically_unsynced;
 use crate::error::Result;
@@ -54,7 +59,7 @@ use xxhash_rust::xxh3::Xxh3;
 const MAGIC: &[u8; 16] = b"WPBGI-TRANSPORT\0";
 
 /// The format this build writes and reads.
-pub const VERSION: u32 = 2;
+pub const VERSION: u32 = 3;
 
 /// The hash of everything a bake's transport depends on (see [`super::iterate`]'s
 /// `transport_key`): equal keys, equal transports.
@@ -202,6 +207,7 @@ impl KeptTransport {
                 put(&mut bytes, ends);
                 put(&mut bytes, terms);
                 put(&mut bytes, texels);
+                bytes.extend_from_slice(&[0; 2][..texel_padding(texels.len())]);
             }
             out.write_all(&bytes)?;
         }
@@ -247,18 +253,23 @@ impl KeptTransport {
         Ok(())
     }
 
-    /// Read the transport file `path`; the reason, in words, when it cannot be used.
+    /// Read the transport file `path`; the reason, in words, when it cannot be used. Its
+    /// links stay in the mapped file where they can ([`Run::in_place`]), until the last is
+    /// dropped.
     pub fn read(path: &Path) -> std::result::Result<KeptTransport, String> {
         let file = std::fs::File::open(path).map_err(|e| e.to_string())?;
-        // SAFETY: the map is read-only and dropped before returning; a file truncated under
-        // it by another process is the one hazard, as for the cache's own map.
+        // SAFETY: the map is read-only; a file truncated or rewritten under it by another
+        // process while the links borrow it is the one hazard, as for the cache's own map
+        // (wpbgi replaces its files by renaming new ones over them, which leaves a mapped
+        // one as it was).
         let map = unsafe { memmap2::Mmap::map(&file) }.map_err(|e| e.to_string())?;
-        parse(&map)
+        parse(&(std::sync::Arc::new(map) as SharedBytes))
     }
 }
 
 /// A transport from the bytes of its file.
-fn parse(bytes: &[u8]) -> std::result::Result<KeptTransport, String> {
+fn parse(file: &SharedBytes) -> std::result::Result<KeptTransport, String> {
+    let bytes: &[u8] = (**file).as_ref();
     let body_len = bytes
         .len()
         .checked_sub(8)
@@ -277,7 +288,7 @@ fn parse(bytes: &[u8]) -> std::result::Result<KeptTransport, String> {
     let stored = u64::from_le_bytes(trailer.try_into().map_err(|_| "no checksum")?);
     // The checksum and the parse each take a pass over hundreds of MB: they run side by
     // side, and a file whose checksum fails is refused for that, whatever its parse found.
-    let (digest, parsed) = rayon::join(|| xxhash_rust::xxh3::xxh3_64(body), || parse_body(r));
+    let (digest, parsed) = rayon::join(|| xxhash_rust::xxh3::xxh3_64(body), || parse_body(r, file));
     if digest != stored {
         return Err("its checksum fails (damaged or truncated)".into());
     }
@@ -286,7 +297,7 @@ fn parse(bytes: &[u8]) -> std::result::Result<KeptTransport, String> {
 
 /// The transport from the bytes of its file past its magic and version, before its
 /// checksum.
-fn parse_body(mut r: Reader) -> std::result::Result<KeptTransport, String> {
+fn parse_body(mut r: Reader, file: &SharedBytes) -> std::result::Result<KeptTransport, String> {
     let key: TransportKey = r.take(16)?.try_into().map_err(|_| "short key")?;
     let mut fields = [0u64; 8];
     for f in &mut fields {
@@ -305,13 +316,14 @@ fn parse_body(mut r: Reader) -> std::result::Result<KeptTransport, String> {
         for _ in 0..members {
             r.take(4)?;
             let (ends, terms, texels) = (r.u32()?, r.u32()?, r.u32()?);
-            r.take(ends as usize * 4 + terms as usize * 8 + texels as usize * 2)?;
+            let texels = texels as usize;
+            r.take(ends as usize * 4 + terms as usize * 8 + texels * 2 + texel_padding(texels))?;
         }
         spans.push(&start[..start.len() - r.bytes.len()]);
     }
     let kept = spans
         .into_par_iter()
-        .map(parse_group)
+        .map(|span| parse_group(span, file))
         .collect::<std::result::Result<Vec<_>, String>>()?;
     let operators = (0..r.count(16 + 7 * 4 + 8)?)
         .map(|_| parse_operator(&mut r))
@@ -335,25 +347,41 @@ fn parse_body(mut r: Reader) -> std::result::Result<KeptTransport, String> {
 }
 
 /// One receiver group's links from its bytes (as [`parse_body`] found them: their counts
-/// already checked against the bytes).
-fn parse_group(bytes: &[u8]) -> std::result::Result<Vec<ReceiverLinks>, String> {
+/// already checked against the bytes), a span of `file`'s.
+fn parse_group(
+    bytes: &[u8],
+    file: &SharedBytes,
+) -> std::result::Result<Vec<ReceiverLinks>, String> {
     let mut r = Reader { bytes };
     let members = r.u32()? as usize;
     let mut group = Vec::with_capacity(members.min(r.bytes.len() / 16));
     for _ in 0..members {
         let surfel = r.u32()?;
         let (ends, terms, texels) = (r.u32()?, r.u32()?, r.u32()?);
-        let ends: Vec<u32> = get(r.take(ends as usize * 4)?);
-        let terms: Vec<Term> = get(r.take(terms as usize * 8)?);
-        let texels: Vec<u16> = get(r.take(texels as usize * 2)?);
-        group.push(ReceiverLinks::from_parts(
-            surfel,
-            ends.into(),
-            terms.into(),
-            texels.into(),
-        ));
+        let ends = run(r.take(ends as usize * 4)?, file);
+        let terms = run(r.take(terms as usize * 8)?, file);
+        let texels = texels as usize;
+        let map_texels = run(r.take(texels * 2)?, file);
+        r.take(texel_padding(texels))?;
+        group.push(ReceiverLinks::from_parts(surfel, ends, terms, map_texels));
     }
     Ok(group)
+}
+
+/// The values whose bytes are `bytes`, a span of `file`'s: left in place where the machine's
+/// byte order is the file's and they are aligned, else copied out.
+fn run<T: LittleEndian>(bytes: &[u8], file: &SharedBytes) -> Run<T> {
+    let start = bytes.as_ptr() as usize - (**file).as_ref().as_ptr() as usize;
+    cfg!(target_endian = "little")
+        .then(|| Run::in_place(file, start..start + bytes.len()))
+        .flatten()
+        .unwrap_or_else(|| get(bytes).into())
+}
+
+/// The zero bytes after `texels` map texels (u16 each) that bring the next receiver to a
+/// multiple of four bytes.
+fn texel_padding(texels: usize) -> usize {
+    2 * (texels % 2)
 }
 
 /// One BSDF operator's bytes, as the format table says.
@@ -663,9 +691,9 @@ mod tests {
             kept: vec![
                 vec![ReceiverLinks::from_parts(
                     3,
-                    Box::default(),
+                    Run::default(),
                     vec![term(0, 0.5), term(2, -1.25)].into(),
-                    Box::default(),
+                    Run::default(),
                 )],
                 vec![ReceiverLinks::from_parts(
                     9,
@@ -673,6 +701,21 @@ mod tests {
                     vec![term(1, 1.0), term(0, 2.0), term(4, f32::MIN_POSITIVE)].into(),
                     vec![0, 3, u16::MAX, 1].into(),
                 )],
+                // An odd count of map texels, padded, and a receiver after it.
+                vec![
+                    ReceiverLinks::from_parts(
+                        11,
+                        vec![1].into(),
+                        vec![term(3, 0.75)].into(),
+                        vec![2, u16::MAX, 0].into(),
+                    ),
+                    ReceiverLinks::from_parts(
+                        12,
+                        Run::default(),
+                        vec![term(1, 0.5)].into(),
+                        Run::default(),
+                    ),
+                ],
             ],
             operators: vec![([8; 16], std::sync::Arc::new(gold_operator()))],
             direct: Some(KeptDirect {
@@ -717,6 +760,10 @@ mod tests {
         BsdfOperator::new(&gold, 2, 0.01)
     }
 
+    fn shared(bytes: Vec<u8>) -> SharedBytes {
+        std::sync::Arc::new(bytes)
+    }
+
     fn file_bytes(t: &KeptTransport) -> Vec<u8> {
         let mut bytes = Vec::new();
         t.stream(&mut bytes).expect("in memory");
@@ -728,7 +775,7 @@ mod tests {
     #[test]
     fn a_transport_reads_back_as_written() {
         let t = sample();
-        let back = parse(&file_bytes(&t)).expect("parse");
+        let back = parse(&shared(file_bytes(&t))).expect("parse");
         assert_eq!(
             (back.key, back.report, &back.words),
             (t.key, t.report, &t.words)
@@ -739,6 +786,13 @@ mod tests {
         for (a, b) in back.kept.iter().flatten().zip(t.kept.iter().flatten()) {
             assert_eq!((a.surfel, a.parts()), (b.surfel, b.parts()));
         }
+        // Read from an aligned buffer on a little-endian machine, the links stay in it.
+        let bytes = shared(file_bytes(&t));
+        if cfg!(target_endian = "little") && ((*bytes).as_ref().as_ptr() as usize).is_multiple_of(4)
+        {
+            let back = parse(&bytes).expect("parse");
+            assert!(back.kept.iter().flatten().all(ReceiverLinks::in_place));
+        }
     }
 
     /// Every prefix of a file is refused, and so is every byte changed, without a panic: a
@@ -748,12 +802,15 @@ mod tests {
     fn damaged_files_are_refused_in_words() {
         let bytes = file_bytes(&sample());
         for len in 0..bytes.len() {
-            assert!(parse(&bytes[..len]).is_err(), "a prefix of {len} bytes");
+            assert!(
+                parse(&shared(bytes[..len].to_vec())).is_err(),
+                "a prefix of {len} bytes"
+            );
         }
         for i in 0..bytes.len() {
             let mut damaged = bytes.clone();
             damaged[i] ^= 0x40;
-            let why = parse(&damaged).err().unwrap_or_default();
+            let why = parse(&shared(damaged)).err().unwrap_or_default();
             assert!(!why.is_empty(), "byte {i} changed");
         }
         // A count past the file's end, with a checksum that matches it, is refused before
@@ -764,7 +821,10 @@ mod tests {
         bytes[words_count..words_count + 8].copy_from_slice(&u64::MAX.to_le_bytes());
         let digest = xxhash_rust::xxh3::xxh3_64(&bytes);
         bytes.extend_from_slice(&digest.to_le_bytes());
-        assert_eq!(parse(&bytes).err().as_deref(), Some("it is truncated"));
+        assert_eq!(
+            parse(&shared(bytes)).err().as_deref(),
+            Some("it is truncated")
+        );
     }
 
     /// The links' own check: slots past the read ones, pixel ends out of order or past the
@@ -784,7 +844,12 @@ mod tests {
             (vec![1, 1, 2, 2], "ends short of the terms"),
         ] {
             let (_, terms, texels) = directional.parts();
-            let links = ReceiverLinks::from_parts(9, ends.into(), terms.into(), texels.into());
+            let links = ReceiverLinks::from_parts(
+                9,
+                ends.into(),
+                terms.to_vec().into(),
+                texels.to_vec().into(),
+            );
             assert!(links.check(Some((4, 4)), 5).is_err(), "{why}");
         }
     }

@@ -5,6 +5,7 @@ pub mod iterate;
 pub mod kept;
 pub mod receivers;
 pub mod report;
+pub mod run;
 pub mod settings;
 pub mod transport;
 pub mod view_tree;

@@ -29,6 +29,7 @@
 //! - **Determinism.** Terms are sorted by slot (and pixel) and summed in that order; which
 //!   groups are kept depends on their sizes alone, never on threads.
 
+use super::run::Run;
 use crate::bsdf::Diffuse;
 use crate::gather::lookup::Lookup;
 use crate::gather::microbuffer::{group_by_pixel, Microbuffer};
@@ -291,12 +292,12 @@ pub struct ReceiverLinks {
     /// The receiving surfel.
     pub surfel: u32,
     /// For a directional receiver, the end of each pixel's terms; empty for a diffuse one.
-    pixel_ends: Box<[u32]>,
-    terms: Box<[Term]>,
+    pixel_ends: Run<u32>,
+    terms: Run<Term>,
     /// For a directional receiver: per texel of its outgoing map, the texel of its operator's
     /// grid it takes its radiance from, or [`NO_TEXEL`](super::bsdf_operator::NO_TEXEL)
     /// (geometry alone, so recorded once).
-    map_texels: Box<[u16]>,
+    map_texels: Run<u16>,
 }
 
 impl ReceiverLinks {
@@ -319,9 +320,9 @@ impl ReceiverLinks {
         let Some(links) = mb.links() else {
             return ReceiverLinks {
                 surfel,
-                pixel_ends: Box::default(),
-                terms: Box::default(),
-                map_texels: Box::default(),
+                pixel_ends: Run::default(),
+                terms: Run::default(),
+                map_texels: Run::default(),
             };
         };
         if diffuse {
@@ -349,9 +350,9 @@ impl ReceiverLinks {
             merge_by_slot(run, terms);
             return ReceiverLinks {
                 surfel,
-                pixel_ends: Box::default(),
-                terms: terms.as_slice().into(),
-                map_texels: Box::default(),
+                pixel_ends: Run::default(),
+                terms: Box::<[Term]>::from(terms.as_slice()).into(),
+                map_texels: Run::default(),
             };
         }
         // Directional: the entries grouped into pixel runs, each run merged by slot.
@@ -375,16 +376,16 @@ impl ReceiverLinks {
         }
         ReceiverLinks {
             surfel,
-            pixel_ends: pixel_ends.into_boxed_slice(),
-            terms: terms.as_slice().into(),
-            map_texels: Box::default(),
+            pixel_ends: pixel_ends.into(),
+            terms: Box::<[Term]>::from(terms.as_slice()).into(),
+            map_texels: Run::default(),
         }
     }
 
     /// The same links with the directional receiver's map texels (see
     /// [`ReceiverLinks::map_texels`]).
     pub(crate) fn with_map_texels(mut self, texels: Vec<u16>) -> ReceiverLinks {
-        self.map_texels = texels.into_boxed_slice();
+        self.map_texels = texels.into();
         self
     }
 
@@ -392,9 +393,9 @@ impl ReceiverLinks {
     /// transport read back ([`super::kept`]), which checks them before they are used.
     pub(super) fn from_parts(
         surfel: u32,
-        pixel_ends: Box<[u32]>,
-        terms: Box<[Term]>,
-        map_texels: Box<[u16]>,
+        pixel_ends: Run<u32>,
+        terms: Run<Term>,
+        map_texels: Run<u16>,
     ) -> ReceiverLinks {
         ReceiverLinks {
             surfel,
@@ -402,6 +403,14 @@ impl ReceiverLinks {
             terms,
             map_texels,
         }
+    }
+
+    /// Whether every array of these links is read in place ([`Run::InPlace`]).
+    #[cfg(test)]
+    pub(super) fn in_place(&self) -> bool {
+        matches!(self.pixel_ends, Run::InPlace { .. })
+            && matches!(self.terms, Run::InPlace { .. })
+            && matches!(self.map_texels, Run::InPlace { .. })
     }
 
     /// The pixels' ends, the terms and the map texels.
@@ -451,7 +460,7 @@ impl ReceiverLinks {
 
     /// Renumber the slots among the read ones (after [`SlotIndex::freeze`]).
     pub(crate) fn compact(&mut self, index: &SlotIndex) {
-        for t in self.terms.iter_mut() {
+        for t in self.terms.to_mut() {
             t.slot = index.compact(t.slot);
         }
     }
