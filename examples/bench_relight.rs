@@ -10,7 +10,8 @@
 //! Beside them, from the same run: with `WPBGI_PREVIOUS=/path/to/an/older/wpbgi`, that
 //! version's `wpbgi relight` of the same cache and transport, timed as a process beside this
 //! version's `target/release/wpbgi relight` (both the command a user runs: the scene's load
-//! included; the fastest of two runs each, alternated), with the ratio; and with `WPBGI_ANCHOR_PYTHON` (see `bench_bounces`) what a user
+//! included; the fastest of two runs each, alternated; the previous version relights a cache
+//! and transport it baked itself, as its transport file may be of an older format), with the ratio; and with `WPBGI_ANCHOR_PYTHON` (see `bench_bounces`) what a user
 //! would do instead of relighting: render the scene again with Mitsuba 3, raw and + OIDN
 //! (`scripts/anchor/mitsuba_oidn.py` at 16, 64 and 256 spp: seconds and relMSE against
 //! Mitsuba's reference), beside a re-solving relight plus the final render from its cache, and
@@ -84,6 +85,12 @@ fn main() -> Result<()> {
     for name in scenes {
         let original = Scene::load(&data(&format!("{name}.gltf")))?;
         let (path, cache, kept_seconds) = bake_keeping_transport(&original, &settings, name)?;
+        // The previous version relights a cache and transport of its own baking: its
+        // transport file may be of another format (the caches are the same bytes).
+        let previous_path = match &previous {
+            Some(bin) => Some(previous_bake(Path::new(bin), name)?),
+            None => None,
+        };
         let transport = beside(&path);
         let transport_bytes = std::fs::metadata(&transport)?.len();
         println!(
@@ -161,8 +168,8 @@ fn main() -> Result<()> {
                         for which in [round % 2, 1 - round % 2] {
                             if which == 0 {
                                 this = this.min(cli_relight(&this_bin, name, &path, &text)?);
-                            } else if let Some(b) = before {
-                                before = match cli_relight(Path::new(bin), name, &path, &text) {
+                            } else if let (Some(b), Some(p)) = (before, &previous_path) {
+                                before = match cli_relight(Path::new(bin), name, p, &text) {
                                     Ok(s) => Some(b.min(s)),
                                     Err(e) => {
                                         eprintln!("the previous version's relight failed: {e}");
@@ -286,6 +293,22 @@ fn cli_relight(bin: &Path, name: &str, cache: &Path, edit: &str) -> Result<f64> 
             .arg(edit),
     )?;
     Ok(start.elapsed().as_secs_f64())
+}
+
+/// The previous version's `wpbgi bake --keep-transport` of scene `name`: its cache's path.
+fn previous_bake(bin: &Path, name: &str) -> Result<std::path::PathBuf> {
+    let out = std::env::temp_dir().join(format!("wpbgi-bench-relight-{name}-previous.wpc"));
+    run_ok(
+        &bin.display().to_string(),
+        Command::new(bin)
+            .arg("bake")
+            .arg(data(&format!("{name}.gltf")))
+            .arg("-o")
+            .arg(&out)
+            .arg("--keep-transport")
+            .arg("-q"),
+    )?;
+    Ok(out)
 }
 
 /// Bake `scene` and write its cache with the transport beside it (`wpbgi bake
