@@ -9,7 +9,7 @@
 //! their time: 3.8 of cbox-rough's 5.0 s at the default preset); a bake that is handed a kept
 //! transport whose [`TransportKey`] is its own replays it instead, and writes the same cache
 //! byte for byte as a bake that recorded it. The bake's BSDF operators are kept with it (a
-//! relight takes each one whose key it would build: [`Operators::with_kept`]), and so are its
+//! relight takes each one whose key it would build: [`Operators::with_kept`](super::bsdf_operator::Operators::with_kept)), and so are its
 //! surfels and their direct light ([`KeptDirect`]), with hashes of what they came from: a bake of the same geometry takes
 //! the surfels, and where its emitters are the same, each surfel's direct light where its
 //! material is.
@@ -26,7 +26,7 @@
 //! | 8 | receiver groups kept |
 //! | per group | its receivers (u32), then per receiver: surfel, pixel ends, terms and map texels counts (u32 each), the pixel ends (u32), the terms (u32 slot, f32 weight), the map texels (u16), two zero bytes where their count is odd |
 //! | 8 | BSDF operators kept |
-//! | per operator | its [`OperatorKey`] (16), its grid side, hemispheres, basis (0 Haar, 1 texels) and 1 where grey, else 0 (u32 each), its two norms (f32), its entries' count e (u64), then its column starts (u32 × (s + 1), s its texels), the entries' rows (u32 × e), their values (f32 × e, or × 3e where not grey), the albedo (f32 × 6s) and the mean cosines (f32 × s) |
+//! | per operator | its [`OperatorKey`](super::bsdf_operator::OperatorKey) (16), its grid side, hemispheres, basis (0 Haar, 1 texels) and 1 where grey, else 0 (u32 each), its two norms (f32), its entries' count e (u64), then its column starts (u32 × (s + 1), s its texels), the entries' rows (u32 × e), their values (f32 × e, or × 3e where not grey), the albedo (f32 × 6s) and the mean cosines (f32 × s) |
 //! | 1 | 1 when the direct light follows, else 0 |
 //! | 32 + 8 + 16 × m + 8 + 56 × n + … | the direct light: the hashes of its geometry and settings and of its emitters, m materials' hashes, n surfels (44 bytes each: position, normal, area, mesh, triangle, barycentrics), their emission (3 × f32), then per surfel 0 and an RGB (3 × f32) or 1 and a wavelet map as the cache stores one |
 //! | 8 | XXH3-64 of every byte before it |
