@@ -483,11 +483,13 @@ impl ReceiverLinks {
 
     /// Each pixel's radiance, for a directional receiver.
     pub(crate) fn pixel_radiance(&self, values: &[Rgb]) -> Vec<Rgb> {
+        // Borrowed once, not per pixel (a run in place checks its bytes on each borrow).
+        let terms: &[Term] = &self.terms;
         let mut begin = 0;
         self.pixel_ends
             .iter()
             .map(|&end| {
-                let l = self.terms[begin..end as usize]
+                let l = terms[begin..end as usize]
                     .iter()
                     .fold(Rgb::ZERO, |a, t| a + values[t.slot as usize] * t.w);
                 begin = end as usize;
