@@ -168,7 +168,7 @@ fn fresh_bake_bytes(scene: &Scene, path: &std::path::Path) -> Vec<u8> {
 /// With the transport kept beside the cache, edits of a reflectance, a conductor's tint, a
 /// dielectric's transmittance and a roughness within its operator's grid re-solve the bounces
 /// from it instead of gathering again (every BSDF operator but an edited roughness's taken
-/// from the file), and
+/// from the file, and the edited diffuse surfels' irradiance, reflected again), and
 /// the relit cache is a fresh bake of the edited scene byte for byte (the transport is
 /// geometry; replaying it is the same arithmetic as recording it). A roughness edit that
 /// changes a BSDF operator's grid, and a damaged or truncated transport file, are refused
@@ -216,6 +216,7 @@ fn a_kept_transport_re_solves_scattering_edits_as_a_fresh_bake_would() {
             (
                 Relighting::Resolved {
                     kept_direct,
+                    kept_irradiance,
                     kept_operators,
                     ..
                 },
@@ -241,6 +242,14 @@ fn a_kept_transport_re_solves_scattering_edits_as_a_fresh_bake_would() {
                     .count();
                 assert_eq!(kept_direct.0 + edited, kept_direct.1, "{edit}");
                 assert!(edited > 0, "{edit}");
+                // The white walls' irradiance is reflected again with their new reflectance;
+                // the glossy materials' direct light is sampled again.
+                let diffuse_edit = edited_material == "white";
+                assert_eq!(
+                    *kept_irradiance,
+                    if diffuse_edit { edited } else { 0 },
+                    "{edit}"
+                );
             }
             (Relighting::Rebaked { why }, Some(reason)) => {
                 assert!(
@@ -281,10 +290,18 @@ fn edits_chain_from_the_kept_transport() {
         cache.surfels.iter().filter(material).count()
     };
     match relit_to(&once, &relit, &second, &dir.join("twice.wpc")) {
-        Relighting::Resolved { kept_direct, .. } => assert_eq!(
-            kept_direct.0 + surfels_of("white") + surfels_of("gold-a0.2"),
-            kept_direct.1
-        ),
+        Relighting::Resolved {
+            kept_direct,
+            kept_irradiance,
+            ..
+        } => {
+            assert_eq!(
+                kept_direct.0 + surfels_of("white") + surfels_of("gold-a0.2"),
+                kept_direct.1
+            );
+            // The walls' irradiance is the bake's, reflected with the first edit's reflectance.
+            assert_eq!(kept_irradiance, surfels_of("white"));
+        }
         other => panic!("expected a re-solve, got {other:?}"),
     }
     assert!(

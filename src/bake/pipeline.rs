@@ -12,7 +12,7 @@ use super::plan::Plan;
 use super::settings::BakeSettings;
 use crate::accel::Accel;
 use crate::bake::bounce::bsdf_operator::{quantised_alpha, Operators, SurfelOperator};
-use crate::bake::bounce::kept::KeptDirect;
+use crate::bake::bounce::kept::{KeptDirect, KeptIrradiance};
 use crate::bake::bounce::{add_bounces, TransportHandoff};
 use crate::bsdf::Bsdf;
 use crate::cache::store::{emitters_hash, geometry_hash, material_hash};
@@ -30,7 +30,7 @@ use crate::surfels::tree::SurfelTree;
 use crate::surfels::{sample_surfels_with_density, Surfel};
 use glam::Vec3;
 use rayon::prelude::*;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::time::Instant;
 
 /// Scenes with more point and spot lights than this use a light tree (Lightcuts).
@@ -182,7 +182,7 @@ pub fn bake_with_transport(
         .as_mut()
         .map(|t| std::mem::take(&mut t.operators))
         .unwrap_or_default();
-    let geometry = (handoff.keep || handoff.reuse.is_some())
+    let geometry = (handoff.keep || handoff.reuse.is_some() || handoff.projected.is_some())
         .then(|| geometry_hash(scene, &settings.to_json()));
     let kept = handoff
         .reuse
@@ -239,16 +239,36 @@ pub fn bake_with_transport(
     let near_specular = operators.of_each(&bsdfs, settings.bounces.operator_tau, |b| {
         b.alpha().is_some_and(|a| a < NEAR_SPECULAR_ALPHA)
     });
-    let done = std::sync::atomic::AtomicUsize::new(0);
+    let done = AtomicUsize::new(0);
     // The kept direct light, per surfel whose material is as it was in the bake that kept it.
     let kept_at = |i: usize, s: &Surfel| {
         kept_direct.as_ref().and_then(|(d, holds)| {
-            holds[scene.meshes[s.mesh as usize].material]
-                .then(|| (d.radiance[i].clone(), d.emitted[i]))
+            holds[scene.meshes[s.mesh as usize].material].then(|| SurfelDirect {
+                radiance: d.radiance[i].clone(),
+                emitted: d.emitted[i],
+                irradiance: d.irradiance[i],
+            })
         })
     };
-    let reused = std::sync::atomic::AtomicUsize::new(0);
-    let (radiance, emitted): (Vec<SurfelRadiance>, Vec<Rgb>) = surfels
+    // The kept irradiance of a diffuse surfel whose material is not (its reflectance edited),
+    // shading about the same normal: reflected again as the direct pass reflects it.
+    let reflected_at = |i: usize, s: &Surfel| {
+        let (d, _) = kept_direct.as_ref()?;
+        let kept = d.irradiance[i].filter(|k| same_bits(k.shading, shading_normals[i]))?;
+        let Bsdf::Diffuse(diffuse) = &bsdfs[i] else {
+            return None;
+        };
+        map_levels(&bsdfs[i]).is_none().then(|| {
+            let emitted = surfel_emission(scene, s);
+            SurfelDirect {
+                radiance: diffuse_radiance(diffuse.reflectance, kept.irradiance, emitted),
+                emitted,
+                irradiance: Some(kept),
+            }
+        })
+    };
+    let (reused, reflected) = (AtomicUsize::new(0), AtomicUsize::new(0));
+    let direct_light: Vec<SurfelDirect> = surfels
         .par_iter()
         .enumerate()
         .map(|(i, s)| {
@@ -256,6 +276,10 @@ pub fn bake_with_transport(
             if let Some(kept) = kept_at(i, s) {
                 reused.fetch_add(1, Ordering::Relaxed);
                 return Ok(kept);
+            }
+            if let Some(again) = reflected_at(i, s) {
+                reflected.fetch_add(1, Ordering::Relaxed);
+                return Ok(again);
             }
             let (bsdf, op) = (&bsdfs[i], near_specular[i].as_ref());
             let at = (s, shading_normals[i]);
@@ -267,9 +291,18 @@ pub fn bake_with_transport(
             Ok(r)
         })
         .collect::<Result<_>>()?;
+    let mut radiance = Vec::with_capacity(direct_light.len());
+    let mut emitted = Vec::with_capacity(direct_light.len());
+    let mut irradiance = Vec::with_capacity(direct_light.len());
+    for d in direct_light {
+        radiance.push(d.radiance);
+        emitted.push(d.emitted);
+        irradiance.push(d.irradiance);
+    }
     progress("direct light", 1.0);
     stage("direct light", t);
     handoff.direct_reused = reused.into_inner();
+    handoff.irradiance_reused = reflected.into_inner();
     if let Some(t) = handoff.reuse.as_mut() {
         t.direct = None; // taken where it held; the bounces need the links alone
     }
@@ -282,6 +315,7 @@ pub fn bake_with_transport(
             surfels: surfels.clone(),
             radiance: radiance.clone(),
             emitted: emitted.clone(),
+            irradiance,
         });
 
     let t = Instant::now();
@@ -318,9 +352,22 @@ pub fn bake_with_transport(
             settings.tau,
         )
     };
-    let area_leaf =
-        |i: u32| SparseHaar::compress_below(&projected_area_map(&surfels[i as usize]), 0.0);
-    let projected = encode(&tree, &area_leaf, PROJECTED_AREA_LEVELS, eps, settings.tau);
+    // A relight's cache holds the coding of this geometry's projected area already.
+    let kept_projected = handoff
+        .projected
+        .take()
+        .filter(|p| Some(p.geometry) == geometry && p.nodes.len() == tree.nodes.len());
+    let projected = match kept_projected {
+        Some(p) => CodedTree {
+            split_level: eps,
+            nodes: p.nodes,
+        },
+        None => {
+            let area_leaf =
+                |i: u32| SparseHaar::compress_below(&projected_area_map(&surfels[i as usize]), 0.0);
+            encode(&tree, &area_leaf, PROJECTED_AREA_LEVELS, eps, settings.tau)
+        }
+    };
     progress("coding", 1.0);
     stage("coding", t);
     stop()?;
@@ -400,8 +447,36 @@ pub fn surfel_shading_normal(scene: &Scene, s: &Surfel) -> Vec3 {
     )
 }
 
-/// Direct light plus emission leaving surfel `s` with its BSDF (and that BSDF's operator where
-/// its direct light goes through it, see [`NEAR_SPECULAR_ALPHA`]), and the emission alone.
+/// What the direct pass leaves a surfel.
+struct SurfelDirect {
+    /// Direct light plus emission leaving it.
+    radiance: SurfelRadiance,
+    /// The emission alone.
+    emitted: Rgb,
+    /// For a diffuse surfel, the irradiance it reflects.
+    irradiance: Option<KeptIrradiance>,
+}
+
+/// Whether two vectors are the same bit for bit.
+fn same_bits(a: Vec3, b: Vec3) -> bool {
+    a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits)
+}
+
+/// The emission leaving surfel `s`'s front face (both faces of a two-sided emitter are not
+/// separate surfels: the front is what a surfel stands for).
+fn surfel_emission(scene: &Scene, s: &Surfel) -> Rgb {
+    let (material, uv) = surfel_material(scene, s);
+    material.emission_at(&scene.textures, uv, true)
+}
+
+/// A diffuse surfel's outgoing radiance from its reflectance, the irradiance on its front
+/// face and its emission.
+fn diffuse_radiance(reflectance: Rgb, irradiance: Rgb, emitted: Rgb) -> SurfelRadiance {
+    SurfelRadiance::Rgb(reflectance * irradiance * std::f32::consts::FRAC_1_PI + emitted)
+}
+
+/// The direct pass at surfel `s` with its BSDF (and that BSDF's operator where its direct
+/// light goes through it, see [`NEAR_SPECULAR_ALPHA`]).
 fn surfel_radiance(
     scene: &Scene,
     direct: &DirectLight,
@@ -409,15 +484,17 @@ fn surfel_radiance(
     id: u64,
     (bsdf, op): (&Bsdf, Option<&SurfelOperator>),
     tau: f32,
-) -> (SurfelRadiance, Rgb) {
-    let (material, uv) = surfel_material(scene, s);
-    // Emission leaves the front face (both faces for two-sided emitters are not separate
-    // surfels: the front is what a surfel stands for).
-    let emitted = material.emission_at(&scene.textures, uv, true);
+) -> SurfelDirect {
+    let emitted = surfel_emission(scene, s);
+    let mut irradiance = None;
     let radiance = match (map_levels(bsdf), bsdf) {
         (None, Bsdf::Diffuse(d)) => {
             let e = direct.irradiance(s, shading, id);
-            SurfelRadiance::Rgb(d.reflectance * e * std::f32::consts::FRAC_1_PI + emitted)
+            irradiance = Some(KeptIrradiance {
+                irradiance: e,
+                shading,
+            });
+            diffuse_radiance(d.reflectance, e, emitted)
         }
         (levels, _) => {
             let levels = levels.unwrap_or(3);
@@ -438,5 +515,9 @@ fn surfel_radiance(
             ))
         }
     };
-    (radiance, emitted)
+    SurfelDirect {
+        radiance,
+        emitted,
+        irradiance,
+    }
 }

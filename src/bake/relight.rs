@@ -25,20 +25,22 @@
 
 use super::baked::Baked;
 use super::bounce::kept::beside;
-use super::bounce::{KeptTransport, TransportHandoff};
+use super::bounce::{KeptProjected, KeptTransport, TransportHandoff};
 use super::pipeline::bake_with_transport;
 use super::plan::{recolourable, SAME_RATIO};
 use super::settings::BakeSettings;
 use super::store::{save, write_scaled};
-use crate::cache::store::{bake_hash, BakedCache};
+use crate::cache::store::{bake_hash, geometry_hash, BakedCache, NO_MAP};
 use crate::cache::CacheError;
 use crate::error::Result;
 use crate::progress::Progress;
 use crate::scene::edit::Edit;
 use crate::scene::Scene;
 use crate::spectrum::Rgb;
+use crate::surfels::coding::NodeCoding;
 use crate::surfels::radiance::map_levels;
 use glam::Vec2;
+use rayon::prelude::*;
 use serde_json::json;
 use std::path::Path;
 use std::sync::atomic::AtomicBool;
@@ -61,6 +63,10 @@ pub enum Relighting {
         /// Surfels whose direct light was kept (their material and every emitter unedited),
         /// of all.
         kept_direct: (usize, usize),
+        /// Diffuse surfels of edited materials whose kept irradiance was reflected again
+        /// (their reflectance edited, their normal and every emitter as they were): no light
+        /// sampled for them either.
+        kept_irradiance: usize,
         /// BSDF operators taken from the transport file (their untinted BSDFs unedited), of
         /// all the bake used.
         kept_operators: (usize, usize),
@@ -83,11 +89,13 @@ impl std::fmt::Display for Relighting {
             Relighting::Resolved {
                 why,
                 kept_direct,
+                kept_irradiance,
                 kept_operators,
             } => write!(
                 f,
-                "re-solved from the kept transport, the direct light of {} of {} surfels and {} \
-                 of {} BSDF operators kept: {why}",
+                "re-solved from the kept transport, the direct light of {} of {} surfels (and \
+                 the irradiance of {kept_irradiance} more) and {} of {} BSDF operators kept: \
+                 {why}",
                 kept_direct.0, kept_direct.1, kept_operators.0, kept_operators.1
             ),
             Relighting::Rebaked { why } => write!(f, "baked again: {why}"),
@@ -148,6 +156,9 @@ pub fn relight(
             })?;
             let transport = beside(&cache.cache.path);
             let mut handoff = TransportHandoff::default();
+            let reading = Instant::now();
+            handoff.projected = Some(projected_of(cache, original, &settings)?);
+            timings.push(("read projected area", reading.elapsed().as_secs_f64()));
             let mut unused = None;
             let present = transport.exists();
             if present {
@@ -170,6 +181,7 @@ pub fn relight(
                 Relighting::Resolved {
                     why,
                     kept_direct: (handoff.direct_reused, baked.surfels.len()),
+                    kept_irradiance: handoff.irradiance_reused,
                     kept_operators: (baked.operators.reused(), baked.operators.len()),
                 }
             } else {
@@ -201,6 +213,31 @@ pub fn relight(
 /// link of it), so that edits chain: a hard link, which costs no space. Where none can be
 /// made (another file system) the relit cache goes without: a copy would cost seconds and
 /// several times the cache's size on disk, unasked.
+/// The cache's coding of the projected area, for the bake of the edited scene to take where
+/// its geometry is the cache's: keyed by the geometry of `original`, the scene the cache was
+/// checked against.
+fn projected_of(
+    cache: &BakedCache,
+    original: &Scene,
+    settings: &BakeSettings,
+) -> Result<KeptProjected, CacheError> {
+    let map = |i: u32| (i != NO_MAP).then(|| cache.map::<f32>(i)).transpose();
+    let nodes = cache
+        .nodes
+        .par_iter()
+        .map(|n| {
+            Ok(NodeCoding {
+                g: map(n.area_g)?,
+                h: map(n.area_h)?,
+            })
+        })
+        .collect::<Result<_, CacheError>>()?;
+    Ok(KeptProjected {
+        geometry: geometry_hash(original, &settings.to_json()),
+        nodes,
+    })
+}
+
 fn keep_beside(from: &Path, to: &Path) {
     if std::fs::canonicalize(from).ok() == std::fs::canonicalize(to).ok() {
         return;

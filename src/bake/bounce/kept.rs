@@ -28,7 +28,7 @@
 //! | 8 | BSDF operators kept |
 //! | per operator | its [`OperatorKey`](super::bsdf_operator::OperatorKey) (16), its grid side, hemispheres, basis (0 Haar, 1 texels) and 1 where grey, else 0 (u32 each), its two norms (f32), its entries' count e (u64), then its column starts (u32 × (s + 1), s its texels), the entries' rows (u32 × e), their values (f32 × e, or × 3e where not grey), the albedo (f32 × 6s) and the mean cosines (f32 × s) |
 //! | 1 | 1 when the direct light follows, else 0 |
-//! | 32 + 8 + 16 × m + 8 + 56 × n + … | the direct light: the hashes of its geometry and settings and of its emitters, m materials' hashes, n surfels (44 bytes each: position, normal, area, mesh, triangle, barycentrics), their emission (3 × f32), then per surfel 0 and an RGB (3 × f32) or 1 and a wavelet map as the cache stores one |
+//! | 32 + 8 + 16 × m + 8 + 56 × n + … | the direct light: the hashes of its geometry and settings and of its emitters, m materials' hashes, n surfels (44 bytes each: position, normal, area, mesh, triangle, barycentrics), their emission (3 × f32), then per surfel 0 and an RGB (3 × f32), 2 and an RGB, the irradiance it reflects (3 × f32) and the normal it was taken about (3 × f32) for a diffuse surfel, or 1 and a wavelet map as the cache stores one |
 //! | 8 | XXH3-64 of every byte before it |
 //!
 //! Every receiver's arrays start at a multiple of four bytes from the file's start, so that on
@@ -48,6 +48,7 @@ use crate::error::Result;
 use crate::gather::fpbgi::Cluster;
 use crate::haar::SparseHaar;
 use crate::spectrum::Rgb;
+use crate::surfels::coding::NodeCoding;
 use crate::surfels::radiance::SurfelRadiance;
 use crate::surfels::Surfel;
 use rayon::prelude::*;
@@ -59,7 +60,7 @@ use xxhash_rust::xxh3::Xxh3;
 const MAGIC: &[u8; 16] = b"WPBGI-TRANSPORT\0";
 
 /// The format this build writes and reads.
-pub const VERSION: u32 = 3;
+pub const VERSION: u32 = 4;
 
 /// The hash of everything a bake's transport depends on (see [`super::iterate`]'s
 /// `transport_key`): equal keys, equal transports.
@@ -108,17 +109,52 @@ pub struct KeptDirect {
     pub radiance: Vec<SurfelRadiance>,
     /// Each surfel's emission, included in `radiance`.
     pub emitted: Vec<Rgb>,
+    /// Per surfel, for a diffuse one the irradiance it reflected and the normal it was taken
+    /// about: what a diffuse surfel whose reflectance alone is edited reflects again (its
+    /// light samples see geometry and emitters alone).
+    pub irradiance: Vec<Option<KeptIrradiance>>,
 }
 
-/// What a bake's bounces do with a kept transport: replay one handed in, hand theirs out.
+/// The irradiance on a diffuse surfel's front face ([`DirectLight::irradiance`](crate::bake::direct::DirectLight::irradiance)) and the
+/// shading normal its cosines were taken to: a bake of the same geometry and emitters whose
+/// surfel shades with the same normal reflects this irradiance, whatever its reflectance.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct KeptIrradiance {
+    /// The irradiance, RGB.
+    pub irradiance: Rgb,
+    /// The shading normal.
+    pub shading: glam::Vec3,
+}
+
+/// A cache's coding of its tree's projected area, handed to a bake of the same geometry and
+/// settings (a relight's, from the cache it starts from): the area depends on the surfels and
+/// the tree alone, so that bake takes it instead of coding the area again, bit for bit the
+/// coding it would make.
+#[derive(Clone, Debug, PartialEq)]
+pub struct KeptProjected {
+    /// [`geometry_hash`](crate::cache::store::geometry_hash) of the scene and settings the
+    /// coding was made for.
+    pub geometry: [u8; 16],
+    /// Per node of the tree, its maps G and H of the projected area.
+    pub nodes: Vec<NodeCoding<f32>>,
+}
+
+/// What a bake's bounces do with a kept transport: replay one handed in, hand theirs out;
+/// and what else a relight hands the bake from the cache it starts from.
 #[derive(Default)]
 pub struct TransportHandoff {
     /// A transport kept from an earlier bake, replayed if its key is this bake's.
     pub reuse: Option<KeptTransport>,
+    /// The projected area's coding of a cache of this bake's geometry, taken where the
+    /// geometry hashes match and the tree has as many nodes.
+    pub projected: Option<KeptProjected>,
     /// Whether to hand this bake's transport out (in `kept`), with its direct light.
     pub keep: bool,
     /// Surfels whose direct light was taken from `reuse`.
     pub direct_reused: usize,
+    /// Diffuse surfels whose material was edited and whose irradiance was taken from `reuse`
+    /// and reflected again.
+    pub irradiance_reused: usize,
     /// The transport handed out, when `keep` was asked.
     pub kept: Option<KeptTransport>,
     /// Whether `reuse` was replayed.
@@ -234,14 +270,20 @@ impl KeptTransport {
                     put(&mut bytes, &e.to_array());
                 }
                 out.write_all(&bytes)?;
-                for r in &d.radiance {
+                for (r, e) in d.radiance.iter().zip(&d.irradiance) {
                     bytes.clear();
-                    match r {
-                        SurfelRadiance::Rgb(c) => {
+                    match (r, e) {
+                        (SurfelRadiance::Rgb(c), None) => {
                             bytes.push(0);
                             put(&mut bytes, &c.to_array());
                         }
-                        SurfelRadiance::Map(m) => {
+                        (SurfelRadiance::Rgb(c), Some(e)) => {
+                            bytes.push(2);
+                            put(&mut bytes, &c.to_array());
+                            put(&mut bytes, &e.irradiance.to_array());
+                            put(&mut bytes, &e.shading.to_array());
+                        }
+                        (SurfelRadiance::Map(m), _) => {
                             bytes.push(1);
                             m.write_to(&mut bytes);
                         }
@@ -464,20 +506,32 @@ fn parse_direct(r: &mut Reader) -> std::result::Result<KeptDirect, String> {
         .map(|c| Rgb::new(c[0], c[1], c[2]))
         .collect();
     let mut radiance = Vec::with_capacity(count);
+    let mut irradiance = Vec::with_capacity(count);
+    let rgb = |r: &mut Reader| -> std::result::Result<Rgb, String> {
+        let c: Vec<f32> = get(r.take(12)?);
+        Ok(Rgb::new(c[0], c[1], c[2]))
+    };
     for _ in 0..count {
-        radiance.push(match r.take(1)?[0] {
-            0 => {
-                let c: Vec<f32> = get(r.take(12)?);
-                SurfelRadiance::Rgb(Rgb::new(c[0], c[1], c[2]))
-            }
+        let (light, kept) = match r.take(1)?[0] {
+            0 => (SurfelRadiance::Rgb(rgb(r)?), None),
             1 => {
                 let (map, used) =
                     SparseHaar::read_from(r.bytes).ok_or("a surfel's direct light is damaged")?;
                 r.take(used)?;
-                SurfelRadiance::Map(map)
+                (SurfelRadiance::Map(map), None)
+            }
+            2 => {
+                let light = SurfelRadiance::Rgb(rgb(r)?);
+                let e = KeptIrradiance {
+                    irradiance: rgb(r)?,
+                    shading: rgb(r)?,
+                };
+                (light, Some(e))
             }
             _ => return Err("a surfel's direct light is of no kind".into()),
-        });
+        };
+        radiance.push(light);
+        irradiance.push(kept);
     }
     Ok(KeptDirect {
         geometry,
@@ -486,6 +540,7 @@ fn parse_direct(r: &mut Reader) -> std::result::Result<KeptDirect, String> {
         surfels,
         radiance,
         emitted,
+        irradiance,
     })
 }
 
@@ -731,6 +786,13 @@ mod tests {
                     )),
                 ],
                 emitted: vec![Rgb::ZERO, Rgb::new(1.0, 2.0, 3.0)],
+                irradiance: vec![
+                    Some(KeptIrradiance {
+                        irradiance: Rgb::new(2.0, 0.0, 1.5),
+                        shading: glam::Vec3::new(0.0, 0.6, 0.8),
+                    }),
+                    None,
+                ],
             }),
         }
     }

@@ -12,6 +12,6 @@ pub mod view_tree;
 
 pub use bsdf_operator::BsdfOperator;
 pub use iterate::add_bounces;
-pub use kept::{KeptTransport, TransportHandoff};
+pub use kept::{KeptProjected, KeptTransport, TransportHandoff};
 pub use report::{BounceReport, TransportReport};
 pub use settings::BounceSettings;

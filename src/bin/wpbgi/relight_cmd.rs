@@ -56,12 +56,14 @@ pub fn relight_command(a: RelightArgs) -> Result<()> {
         Relighting::Resolved {
             why,
             kept_direct,
+            kept_irradiance,
             kept_operators,
         } => (
             "resolved",
             json!({
                 "why": why,
                 "kept_direct_surfels": kept_direct.0,
+                "kept_irradiance_surfels": kept_irradiance,
                 "surfels": kept_direct.1,
                 "kept_operators": kept_operators.0,
                 "operators": kept_operators.1,
