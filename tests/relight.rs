@@ -525,3 +525,55 @@ fn every_light_doubled_rescales_and_one_alone_bakes_again() {
         other => panic!("expected a re-bake, got {other:?}"),
     }
 }
+
+/// A bake handed a cache's projected-area coding takes it only where the geometry hash is its
+/// own and the tree has as many nodes; otherwise it codes the area itself. (The relit caches
+/// above are byte for byte the fresh bakes, which cannot tell the two apart: here the coding
+/// handed in is deliberately not the one the bake would make, so taking it shows.)
+#[test]
+fn a_kept_projected_coding_is_taken_only_for_its_geometry() {
+    use wpbgi::bake::bounce::KeptProjected;
+    use wpbgi::surfels::coding::NodeCoding;
+    let scene = Scene::load(&common::mitsuba_data("cbox-rough.gltf")).expect("scene");
+    let mut settings = settings();
+    settings.bounces.max = 0;
+    let bake = |projected: Option<KeptProjected>| {
+        let mut handoff = TransportHandoff {
+            projected,
+            ..TransportHandoff::default()
+        };
+        let baked = bake_with_transport(
+            &scene,
+            &settings,
+            &|_, _| {},
+            &AtomicBool::new(false),
+            &mut handoff,
+        )
+        .expect("bake");
+        baked.projected
+    };
+    let own = bake(None);
+    assert!(own.nodes.iter().any(|n| n.g.is_some() || n.h.is_some()));
+    let geometry = wpbgi::cache::store::geometry_hash(&scene, &settings.to_json());
+    let empty = |nodes: usize| KeptProjected {
+        geometry,
+        nodes: vec![NodeCoding::default(); nodes],
+    };
+    let taken = bake(Some(empty(own.nodes.len())));
+    assert!(taken.nodes.iter().all(|n| n.g.is_none() && n.h.is_none()));
+    assert_eq!(taken.split_level, own.split_level);
+    let other_geometry = KeptProjected {
+        geometry: [0; 16],
+        ..empty(own.nodes.len())
+    };
+    assert_eq!(
+        bake(Some(other_geometry)),
+        own,
+        "another geometry's coding is not taken"
+    );
+    assert_eq!(
+        bake(Some(empty(own.nodes.len() + 1))),
+        own,
+        "nor one of another tree"
+    );
+}

@@ -209,10 +209,6 @@ pub fn relight(
     })
 }
 
-/// Keep the transport file `from` beside the relit cache too, as `to` (the edits changed no
-/// link of it), so that edits chain: a hard link, which costs no space. Where none can be
-/// made (another file system) the relit cache goes without: a copy would cost seconds and
-/// several times the cache's size on disk, unasked.
 /// The cache's coding of the projected area, for the bake of the edited scene to take where
 /// its geometry is the cache's: keyed by the geometry of `original`, the scene the cache was
 /// checked against.
@@ -238,6 +234,10 @@ fn projected_of(
     })
 }
 
+/// Keep the transport file `from` beside the relit cache too, as `to` (the edits changed no
+/// link of it), so that edits chain: a hard link, which costs no space. Where none can be
+/// made (another file system) the relit cache goes without: a copy would cost seconds and
+/// several times the cache's size on disk, unasked.
 fn keep_beside(from: &Path, to: &Path) {
     if std::fs::canonicalize(from).ok() == std::fs::canonicalize(to).ok() {
         return;
