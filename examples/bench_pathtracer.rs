@@ -7,9 +7,11 @@
 //! `bench_bounces`); then the ratio of our samples per second to Mitsuba's, and the same for
 //! Mitsuba with Embree's robust intersections (`embree_use_robust_intersections`, off by
 //! default: Embree's watertight triangle test and rounding-safe box test, the kind of query
-//! ours always is, so the like-for-like figure). With
-//! `WPBGI_PREVIOUS=/path/to/an/older/wpbgi`, that version's `wpbgi reference` at the same
-//! settings (its own seconds, from its `--json`), and our time over its.
+//! ours always is, so the like-for-like figure), and for Mitsuba's `scalar_rgb` variant (one
+//! path at a time, as ours, with Embree's default intersections): beside `llvm_ad_rgb` it
+//! says how much of the gap is the width of Mitsuba's shading and how much the code of one
+//! path. With `WPBGI_PREVIOUS=/path/to/an/older/wpbgi`, that version's `wpbgi reference` at
+//! the same settings (its own seconds, from its `--json`), and our time over its.
 //!
 //! `cargo run --release --example bench_pathtracer [-- SPP [ROUNDS]]` (default 256 spp, one
 //! round). Mitsuba renders only that count (the anchor script's AOVs and denoiser run too,
@@ -38,8 +40,10 @@ use wpbgi::reference::{render, RenderSettings};
 use wpbgi::sampler::Sampler;
 use wpbgi::scene::Scene;
 
-#[allow(dead_code)] // the benchmarks' shared helpers, of which this one uses three
+#[allow(dead_code)] // the benchmarks' shared helpers, of which this one uses a few
 mod common;
+
+use common::MitsubaMode;
 
 const SIZE: u32 = 256;
 
@@ -69,9 +73,9 @@ fn main() -> common::Result<()> {
     println!(
         "| scene | ours s | ours Msamples/s | previous s | ours / previous: time | Mitsuba s | \
          Mitsuba Msamples/s | ours / Mitsuba: samples/s | Mitsuba robust Msamples/s | \
-         ours / Mitsuba robust |"
+         ours / Mitsuba robust | Mitsuba scalar Msamples/s | ours / Mitsuba scalar |"
     );
-    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     let samples = f64::from(SIZE * SIZE) * f64::from(spp);
     for name in SCENES {
         let scene_path = dir.join(format!("{name}.gltf"));
@@ -82,17 +86,19 @@ fn main() -> common::Result<()> {
             max_depth: 8,
             ..Default::default()
         };
-        // Each round runs the four one after the other, so that the machine's drift falls on
+        // Each round runs the five one after the other, so that the machine's drift falls on
         // all of them; each keeps its fastest round. Odd rounds run them in the reverse order:
         // here the same binary timed twice in a fixed order read 6 % apart by its place.
         let (mut ours, mut before) = (f64::INFINITY, f64::INFINITY);
-        let (mut mitsuba, mut mitsuba_robust) = (f64::INFINITY, f64::INFINITY);
+        // Mitsuba's fastest seconds in each mode of `MITSUBA_MODES`.
+        let mut mitsuba = [f64::INFINITY; MITSUBA_MODES.len()];
         for round in 0..rounds {
             let mut order = [
                 Run::Ours,
                 Run::Previous,
-                Run::Mitsuba { robust: false },
-                Run::Mitsuba { robust: true },
+                Run::Mitsuba(0),
+                Run::Mitsuba(1),
+                Run::Mitsuba(2),
             ];
             if round % 2 == 1 {
                 order.reverse();
@@ -110,25 +116,20 @@ fn main() -> common::Result<()> {
                             before = before.min(b);
                         }
                     }
-                    Run::Mitsuba { robust } => {
+                    Run::Mitsuba(mode) => {
                         if let Some(py) = &python {
                             let m = common::mitsuba_anchor_with(
                                 Path::new(py),
                                 &scene_path,
                                 &dir.join(format!("{name}_d8_ref.exr")),
                                 &[spp],
-                                robust,
+                                MITSUBA_MODES[mode],
                             )?
                             .into_iter()
                             .find(|(s, _)| *s == spp)
                             .and_then(|(_, v)| v["pt_s"].as_f64())
                             .ok_or("the Mitsuba anchor printed no time")?;
-                            let best = if robust {
-                                &mut mitsuba_robust
-                            } else {
-                                &mut mitsuba
-                            };
-                            *best = best.min(m);
+                            mitsuba[mode] = mitsuba[mode].min(m);
                         }
                     }
                 }
@@ -140,17 +141,20 @@ fn main() -> common::Result<()> {
         };
         let rate = |s: f64| samples / s / 1e6;
         match python {
-            Some(_) => println!(
-                "| {name} | {ours:.2} | {:.2} | {before} | {mitsuba:.2} | {:.2} | {:.2} | {:.2} | \
-                 {:.2} |",
-                rate(ours),
-                rate(mitsuba),
-                mitsuba / ours,
-                rate(mitsuba_robust),
-                mitsuba_robust / ours
-            ),
+            Some(_) => {
+                // Per mode: its samples per second, and ours over them.
+                let [llvm, robust, scalar] =
+                    mitsuba.map(|m| format!("{:.2} | {:.2}", rate(m), m / ours));
+                println!(
+                    "| {name} | {ours:.2} | {:.2} | {before} | {:.2} | {llvm} | {robust} | \
+                     {scalar} |",
+                    rate(ours),
+                    mitsuba[0],
+                )
+            }
             None => println!(
-                "| {name} | {ours:.2} | {:.2} | {before} | not run (`WPBGI_ANCHOR_PYTHON`) | | | | |",
+                "| {name} | {ours:.2} | {:.2} | {before} | not run (`WPBGI_ANCHOR_PYTHON`) \
+                 | | | | | | |",
                 rate(ours)
             ),
         }
@@ -300,11 +304,23 @@ fn mitsuba_rays(
 enum Run {
     Ours,
     Previous,
-    /// With Embree's robust intersections where `robust`.
-    Mitsuba {
-        robust: bool,
-    },
+    /// Mitsuba in the mode `MITSUBA_MODES[k]`.
+    Mitsuba(usize),
 }
+
+/// The Mitsuba columns, in the table's order: the anchor's `llvm_ad_rgb`, the same with
+/// Embree's robust intersections, and `scalar_rgb`.
+const MITSUBA_MODES: [MitsubaMode; 3] = [
+    MitsubaMode::DEFAULT,
+    MitsubaMode {
+        robust: true,
+        ..MitsubaMode::DEFAULT
+    },
+    MitsubaMode {
+        variant: "scalar_rgb",
+        robust: false,
+    },
+];
 
 /// The previous version's own seconds for the same render (`wpbgi reference --json`).
 fn previous_seconds(bin: &Path, scene: &Path, name: &str, spp: u32) -> common::Result<f64> {

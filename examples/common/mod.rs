@@ -87,23 +87,42 @@ pub fn mitsuba_anchor(
     reference: &Path,
     spps: &[u32],
 ) -> Result<Vec<(u32, Value)>> {
-    mitsuba_anchor_with(python, scene, reference, spps, false)
+    mitsuba_anchor_with(python, scene, reference, spps, MitsubaMode::DEFAULT)
 }
 
-/// [`mitsuba_anchor`], with Embree's robust intersections where `robust` (its watertight
-/// triangle test, as our accel's; Mitsuba's default is off).
+/// How the anchor runs Mitsuba.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MitsubaMode {
+    /// Its variant: `llvm_ad_rgb` (the JIT's lanes over paths, the anchor's default) or
+    /// `scalar_rgb` (one path at a time, as our path tracer).
+    pub variant: &'static str,
+    /// Embree's robust intersections (its watertight triangle test, as our accel's;
+    /// Mitsuba's default is off).
+    pub robust: bool,
+}
+
+impl MitsubaMode {
+    /// The anchor's Mitsuba: `llvm_ad_rgb`, Embree's default intersections.
+    pub const DEFAULT: MitsubaMode = MitsubaMode {
+        variant: "llvm_ad_rgb",
+        robust: false,
+    };
+}
+
+/// [`mitsuba_anchor`], with Mitsuba run as `mode` says.
 pub fn mitsuba_anchor_with(
     python: &Path,
     scene: &Path,
     reference: &Path,
     spps: &[u32],
-    robust: bool,
+    mode: MitsubaMode,
 ) -> Result<Vec<(u32, Value)>> {
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/anchor/mitsuba_oidn.py");
     let run = run_ok(
         "the Mitsuba anchor",
         Command::new(python)
-            .env("EMBREE_ROBUST", if robust { "1" } else { "0" })
+            .env("EMBREE_ROBUST", if mode.robust { "1" } else { "0" })
+            .env("MITSUBA_VARIANT", mode.variant)
             .arg(script)
             .arg(scene)
             .arg(reference)
