@@ -79,7 +79,9 @@ struct Child;
 
 impl Child {
     const LEAF: u64 = 1 << 63;
-    const EMPTY: u64 = u64::MAX;
+    /// An unused slot: a leaf of no packets. Its box is empty, so no ray enters it; one that
+    /// did (a NaN in its box test) would visit nothing, so the traversal need not check.
+    const EMPTY: u64 = Self::LEAF;
 
     fn leaf(first: usize, packets: usize) -> u64 {
         Self::LEAF | ((packets as u64) << 32) | first as u64
@@ -249,7 +251,9 @@ pub(crate) struct Bvh8 {
     root: u64,
     /// Whether the node test runs eight boxes wide with AVX (the CPU has it).
     avx: bool,
-    /// Stack entries a traversal can need (seven per level below the root, plus one).
+    /// Stack entries a traversal can need: seven per level below the root, plus one (a node
+    /// that a ray enters three or more children of writes all eight before it takes the
+    /// nearest back).
     stack_size: usize,
 }
 
@@ -597,34 +601,57 @@ impl Bvh8 {
                 };
                 #[cfg(not(target_arch = "x86_64"))]
                 let (near, mut mask) = node.enter(ray, tmax);
-                // The entered children, pushed farthest first so the nearest is visited next.
-                let mut hits = [(0u64, 0f32); WIDTH];
-                let mut count = 0;
-                while mask != 0 {
-                    let k = mask.trailing_zeros() as usize;
+                // The entered children, pushed farthest first so the nearest is visited next;
+                // equally near ones in slot order, the last visited first.
+                if mask != 0 {
+                    let first = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
-                    let child = node.child[k];
-                    if child != Child::EMPTY {
-                        hits[count] = (child, near[k]);
-                        count += 1;
+                    if mask == 0 {
+                        // One child (most visits): no sorting, nothing pushed.
+                        current = node.child[first];
+                        continue;
                     }
-                }
-                if ordered && count > 1 {
-                    // Insertion sort, farthest first.
-                    for i in 1..count {
-                        let mut j = i;
-                        while j > 0 && hits[j - 1].1 < hits[j].1 {
-                            hits.swap(j - 1, j);
-                            j -= 1;
-                        }
+                    let second = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    let a = (node.child[first], near[first]);
+                    let b = (node.child[second], near[second]);
+                    if mask == 0 {
+                        // Two: the farther pushed (the later slot where they tie).
+                        let (far, next) = if ordered && a.1 < b.1 { (b, a) } else { (a, b) };
+                        stack[top].write(far);
+                        top += 1;
+                        current = next.0;
+                        continue;
                     }
-                }
-                if count > 0 {
-                    for &entry in &hits[..count - 1] {
+                    // Three or more: an insertion sort, farthest first, on the stack itself.
+                    let base = top;
+                    for entry in [a, b] {
                         stack[top].write(entry);
                         top += 1;
                     }
-                    current = hits[count - 1].0;
+                    while mask != 0 {
+                        let k = mask.trailing_zeros() as usize;
+                        mask &= mask - 1;
+                        stack[top].write((node.child[k], near[k]));
+                        top += 1;
+                    }
+                    if ordered {
+                        for i in base + 1..top {
+                            let mut j = i;
+                            // SAFETY: entries `base..top` were written just above.
+                            while j > base
+                                && unsafe {
+                                    stack[j - 1].assume_init().1 < stack[j].assume_init().1
+                                }
+                            {
+                                stack.swap(j - 1, j);
+                                j -= 1;
+                            }
+                        }
+                    }
+                    top -= 1;
+                    // SAFETY: written above.
+                    current = unsafe { stack[top].assume_init() }.0;
                     continue;
                 }
             } else {
@@ -641,7 +668,7 @@ impl Bvh8 {
                 top -= 1;
                 // SAFETY: every entry below `top` was written by the push above before `top`
                 // passed it, and `stack` holds `stack_size` entries, the most a tree of this
-                // depth can push (seven per level).
+                // depth can push (seven per level, and the eighth a node writes for a moment).
                 let (child, near) = unsafe { stack[top].assume_init() };
                 if near <= tmax {
                     current = child;
