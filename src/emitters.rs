@@ -1,8 +1,10 @@
 //! Sampling of every emitter in a scene for next-event estimation: emissive triangles (uniform
 //! by area within a triangle), punctual lights and the environment (by its radiance, see
 //! [`crate::scene::environment`]), chosen with probability proportional to their power. Kinds
-//! the scene does not have cost nothing. Where the emitters are a few triangles of constant
-//! radiance, their unshadowed irradiance also in closed form ([`ClosedFormLight`]).
+//! the scene does not have cost nothing. Estimators of many samples at one point take the
+//! delta lights apart, each once and exactly ([`Draw::WithoutDelta`]). Where the emitters are
+//! a few triangles of constant radiance, their unshadowed irradiance also in closed form
+//! ([`ClosedFormLight`]).
 
 use crate::accel::{Accel, Segment, TriangleId};
 use crate::geometry::offset::{interpolate_with_error, offset_origin, SHADOW_EPSILON};
@@ -10,7 +12,7 @@ use crate::geometry::polygon_irradiance::projected_solid_angle;
 use crate::geometry::spherical_triangle::SphericalTriangle;
 use crate::geometry::warp::square_to_uniform_triangle;
 use crate::scene::environment::EnvironmentSampler;
-use crate::scene::{LightKind, Mesh, Scene};
+use crate::scene::{LightKind, Mesh, PunctualLight, Scene};
 use crate::spectrum::{luminance, Rgb};
 use glam::{Vec2, Vec3, Vec3A};
 
@@ -107,6 +109,30 @@ struct EmissiveTriangle {
     textured: bool,
 }
 
+/// The most delta lights that [`Draw::WithoutDelta`] hands over one by one
+/// ([`EmitterSampler::delta_lights`]); with more, they are drawn with the other emitters, as
+/// [`Draw::All`] draws them. Sixteen: the bake sends more point and spot lights than that
+/// through a light tree, and a render's hit then casts at most this many more shadow rays.
+pub const EXACT_DELTA_LIGHTS: usize = 16;
+
+/// Which emitters a draw of [`EmitterSampler`] chooses among.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Draw {
+    /// Every emitter, by power: the path tracer's next-event estimation, one draw a vertex,
+    /// Mitsuba's.
+    All,
+    /// The emitters other than the delta lights (point, spot, directional), by power, where
+    /// there are at most [`EXACT_DELTA_LIGHTS`] of those: [`EmitterSampler::delta_lights`]
+    /// gives each of them once instead, exactly. For the estimators that draw many samples at
+    /// one point and stratify the choice of emitter over them (the final render's direct
+    /// light and the bake's): drawn with the rest, a delta light took either of the two
+    /// whole numbers of samples nearest its share of them, each sample bringing the same
+    /// light, and its light came out a few percent too bright or too dark from one pixel or
+    /// surfel to the next (a speckle on every surface a point light lit beside an area
+    /// light). With more delta lights than that, all are drawn ([`Draw::All`]).
+    WithoutDelta,
+}
+
 /// Power-proportional emitter selection.
 pub struct EmitterSampler {
     tris: Vec<EmissiveTriangle>,
@@ -120,6 +146,10 @@ pub struct EmitterSampler {
     scene_radius: f32,
     /// The emitters' unshadowed light in closed form, where they allow it.
     closed_form: Option<ClosedFormLight>,
+    /// The delta lights' summed selection weight (their entries in `cdf` follow `tris`'),
+    /// and whether [`Draw::WithoutDelta`] leaves them out.
+    delta_weight: f64,
+    delta_apart: bool,
 }
 
 impl EmitterSampler {
@@ -198,6 +228,8 @@ impl EmitterSampler {
         for (i, t) in tris.iter_mut().enumerate() {
             t.selection = selection_probability(&cdf, i);
         }
+        let lights = &weights[tris.len()..tris.len() + scene.lights.len()];
+        let delta_count = lights.iter().filter(|&&w| w > 0.0).count();
         EmitterSampler {
             tris,
             mesh_base,
@@ -205,7 +237,77 @@ impl EmitterSampler {
             environment,
             scene_radius,
             closed_form: ClosedFormLight::of(scene),
+            delta_weight: lights.iter().sum(),
+            delta_apart: (1..=EXACT_DELTA_LIGHTS).contains(&delta_count),
         }
+    }
+
+    /// The factor by which `draw` raises the selection probability of an emitter it may draw
+    /// (1 for [`Draw::All`]): the delta lights' weight left out of the total.
+    fn selection_scale(&self, draw: Draw) -> f32 {
+        if draw == Draw::All || !self.delta_apart {
+            return 1.0;
+        }
+        let total = self.cdf.last().copied().unwrap_or(0.0);
+        let rest = total - self.delta_weight;
+        if rest > 0.0 {
+            (total / rest) as f32
+        } else {
+            0.0
+        }
+    }
+
+    /// The entry of `cdf` that `u_sel` draws under `draw`: for [`Draw::WithoutDelta`], over
+    /// the weights with the delta lights' left out (`None` where nothing else emits).
+    fn drawn(&self, u_sel: f32, draw: Draw) -> Option<usize> {
+        let total = *self.cdf.last()?;
+        let last = self.cdf.len() - 1;
+        let pick = |target: f64| self.cdf.partition_point(|&c| c <= target).min(last);
+        if draw == Draw::All || !self.delta_apart {
+            return Some(pick(u_sel as f64 * total));
+        }
+        let rest = total - self.delta_weight;
+        if !(rest > 0.0) {
+            return None;
+        }
+        let (tris, lights) = (self.tris.len(), self.cdf.len() - self.tris.len());
+        let below = if tris == 0 { 0.0 } else { self.cdf[tris - 1] };
+        let mut target = u_sel as f64 * rest;
+        if target >= below {
+            target += self.delta_weight;
+        }
+        let i = pick(target);
+        // Rounding may land on a delta light: the emitter beyond them (the environment), or
+        // else the last triangle before them.
+        let environment = usize::from(self.environment.is_some());
+        Some(if i >= tris && i < tris + lights - environment {
+            if environment == 1 {
+                last
+            } else {
+                tris.checked_sub(1)?
+            }
+        } else {
+            i
+        })
+    }
+
+    /// Under [`Draw::WithoutDelta`], each delta light that it leaves out, as seen from `p`,
+    /// exactly (its selection probability taken as 1); nothing under [`Draw::All`] or where
+    /// the delta lights are drawn with the rest.
+    pub fn delta_lights<'a>(
+        &'a self,
+        scene: &'a Scene,
+        p: Vec3,
+        draw: Draw,
+    ) -> impl Iterator<Item = EmitterSample> + 'a {
+        let apart = draw == Draw::WithoutDelta && self.delta_apart;
+        let base = self.tris.len();
+        scene
+            .lights
+            .iter()
+            .enumerate()
+            .filter(move |&(i, _)| apart && selection_probability(&self.cdf, base + i) > 0.0)
+            .filter_map(move |(_, l)| self.light_sample(l, p, 1.0))
     }
 
     /// The emitters' unshadowed irradiance in closed form, where they are a few triangles of
@@ -219,10 +321,10 @@ impl EmitterSampler {
         self.cdf.last().is_none_or(|&t| t <= 0.0)
     }
 
-    /// Solid-angle density with which [`EmitterSampler::sample`] would pick the point hit on
-    /// `(mesh, tri)` at distance `dist` along unit direction `w`, from a surface with geometric
-    /// normal `ng` there.
-    pub fn pdf_hit(&self, mesh: u32, tri: u32, dist: f32, w: Vec3, ng: Vec3) -> f32 {
+    /// Solid-angle density with which [`EmitterSampler::sample`] under `draw` would pick the
+    /// point hit on `(mesh, tri)` at distance `dist` along unit direction `w`, from a surface
+    /// with geometric normal `ng` there.
+    pub fn pdf_hit(&self, mesh: u32, tri: u32, dist: f32, w: Vec3, ng: Vec3, draw: Draw) -> f32 {
         let base = self
             .mesh_base
             .get(mesh as usize)
@@ -236,24 +338,33 @@ impl EmitterSampler {
         if cos <= 0.0 {
             return 0.0;
         }
-        self.tris[i].selection / self.tris[i].area * dist * dist / cos
+        self.tris[i].selection * self.selection_scale(draw) / self.tris[i].area * dist * dist / cos
     }
 
     /// Solid-angle density with which [`EmitterSampler::sample`] would pick the environment
     /// along world direction `w` (0 without one).
-    pub(crate) fn pdf_environment(&self, scene: &Scene, w: Vec3) -> f32 {
+    pub(crate) fn pdf_environment(&self, scene: &Scene, w: Vec3, draw: Draw) -> f32 {
         match (&self.environment, &scene.environment) {
             (Some(s), Some(env)) => {
-                selection_probability(&self.cdf, self.cdf.len() - 1) * s.pdf(env, w)
+                selection_probability(&self.cdf, self.cdf.len() - 1)
+                    * self.selection_scale(draw)
+                    * s.pdf(env, w)
             }
             _ => 0.0,
         }
     }
 
-    /// Sample an emitter as seen from `p`: `u_sel` picks the emitter, `u` the point on it
-    /// (uniform by area on a triangle, the density [`EmitterSampler::pdf_hit`] gives).
-    pub fn sample(&self, scene: &Scene, p: Vec3, u_sel: f32, u: Vec2) -> Option<EmitterSample> {
-        self.sample_with(scene, p, u_sel, u, false)
+    /// Sample an emitter as seen from `p`: `u_sel` picks the emitter among those `draw`
+    /// takes, `u` the point on it (uniform by area on a triangle, the density
+    /// [`EmitterSampler::pdf_hit`] gives under the same `draw`).
+    pub fn sample(
+        &self,
+        scene: &Scene,
+        p: Vec3,
+        (u_sel, u): (f32, Vec2),
+        draw: Draw,
+    ) -> Option<EmitterSample> {
+        self.sample_with(scene, p, (u_sel, u), false, draw)
     }
 
     /// Like [`EmitterSampler::sample`], but a triangle that subtends enough solid angle is
@@ -264,31 +375,27 @@ impl EmitterSampler {
         &self,
         scene: &Scene,
         p: Vec3,
-        u_sel: f32,
-        u: Vec2,
+        (u_sel, u): (f32, Vec2),
+        draw: Draw,
     ) -> Option<EmitterSample> {
-        self.sample_with(scene, p, u_sel, u, true)
+        self.sample_with(scene, p, (u_sel, u), true, draw)
     }
 
     fn sample_with(
         &self,
         scene: &Scene,
         p: Vec3,
-        u_sel: f32,
-        u: Vec2,
+        (u_sel, u): (f32, Vec2),
         by_solid_angle: bool,
+        draw: Draw,
     ) -> Option<EmitterSample> {
         if self.is_empty() {
             return None;
         }
-        let total = *self.cdf.last()?;
-        let target = u_sel as f64 * total;
-        let i = self
-            .cdf
-            .partition_point(|&c| c <= target)
-            .min(self.cdf.len() - 1);
+        let i = self.drawn(u_sel, draw)?;
+        let scale = self.selection_scale(draw);
         if let Some(et) = self.tris.get(i) {
-            let sel = et.selection;
+            let sel = et.selection * scale;
             if sel <= 0.0 {
                 return None;
             }
@@ -338,7 +445,7 @@ impl EmitterSampler {
                 normal: ng,
             });
         }
-        let sel = selection_probability(&self.cdf, i);
+        let sel = selection_probability(&self.cdf, i) * scale;
         if sel <= 0.0 {
             return None;
         }
@@ -358,6 +465,11 @@ impl EmitterSampler {
                 normal: -wi,
             });
         };
+        self.light_sample(l, p, sel)
+    }
+
+    /// Punctual light `l` as seen from `p`, drawn with probability `sel`.
+    fn light_sample(&self, l: &PunctualLight, p: Vec3, sel: f32) -> Option<EmitterSample> {
         match l.kind {
             LightKind::Directional => Some(EmitterSample {
                 wi: -l.direction,
@@ -498,4 +610,116 @@ pub fn shadowed(unshadowed: Rgb, visible: Rgb, all: Rgb) -> Rgb {
             ratio(visible.y, all.y),
             ratio(visible.z, all.z),
         )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bsdf::{Bsdf, Diffuse};
+    use crate::scene::{Emission, Material, Scattering};
+
+    /// Two emitting triangles side by side (the right one twice the left's area), facing
+    /// down from z = 1, and a point and a spot light.
+    fn two_triangles_and_two_lights() -> Scene {
+        let mesh = Mesh {
+            name: "panels".into(),
+            positions: vec![
+                Vec3::new(-2.0, 0.0, 1.0),
+                Vec3::new(-2.0, 1.0, 1.0),
+                Vec3::new(-1.0, 0.0, 1.0),
+                Vec3::new(1.0, 0.0, 1.0),
+                Vec3::new(1.0, 2.0, 1.0),
+                Vec3::new(2.0, 0.0, 1.0),
+            ],
+            normals: None,
+            uvs: None,
+            triangles: vec![[0, 1, 2], [3, 4, 5]],
+            material: 0,
+        };
+        let light = |name: &str, kind| PunctualLight {
+            name: name.into(),
+            kind,
+            position: Vec3::new(0.0, 0.0, 2.0),
+            direction: -Vec3::Z,
+            intensity: Rgb::splat(3.0),
+        };
+        Scene {
+            meshes: vec![mesh],
+            materials: vec![Material {
+                name: "panel".into(),
+                scattering: Scattering::Explicit(Bsdf::Diffuse(Diffuse {
+                    reflectance: Rgb::ZERO,
+                })),
+                cutout: None,
+                normal_map: None,
+                emission: Some(Emission {
+                    radiance: Rgb::splat(2.0),
+                    texture: None,
+                    two_sided: false,
+                }),
+            }],
+            lights: vec![
+                light("bulb", LightKind::Point),
+                light(
+                    "spot",
+                    LightKind::Spot {
+                        cos_inner: 0.9,
+                        cos_outer: 0.8,
+                    },
+                ),
+            ],
+            ..Default::default()
+        }
+    }
+
+    /// `Draw::WithoutDelta` draws the triangles alone, in proportion to their power (1 : 2),
+    /// each sample's density the one `pdf_hit` gives under the same draw (as MIS needs), and
+    /// hands the two lights over whole; `Draw::All` still draws the lights by their power.
+    #[test]
+    fn without_delta_draws_the_rest_by_power_and_hands_the_lights_over_whole() {
+        let scene = two_triangles_and_two_lights();
+        let emitters = EmitterSampler::new(&scene);
+        let p = Vec3::new(0.1, 0.2, 0.0);
+        let n = 4096;
+        let mut right = 0;
+        for k in 0..n {
+            let u_sel = (k as f32 + 0.5) / n as f32;
+            let u = Vec2::new(0.3, 0.6);
+            let es = emitters
+                .sample(&scene, p, (u_sel, u), Draw::WithoutDelta)
+                .expect("a triangle");
+            assert!(!es.delta, "u_sel {u_sel} drew a delta light");
+            let tri = u32::from(es.point.x > 0.0);
+            right += tri;
+            let pdf = emitters.pdf_hit(0, tri, es.dist, es.wi, es.normal, Draw::WithoutDelta);
+            assert!((es.pdf / pdf - 1.0).abs() < 1e-5, "{} vs {pdf}", es.pdf);
+        }
+        assert!(
+            (right as f32 / n as f32 - 2.0 / 3.0).abs() < 1e-3,
+            "{right} of {n}"
+        );
+        let last = 1.0 - f32::EPSILON;
+        let es = emitters.sample(&scene, p, (last, Vec2::splat(0.5)), Draw::WithoutDelta);
+        assert!(es.is_some_and(|s| !s.delta));
+
+        let whole: Vec<EmitterSample> = emitters
+            .delta_lights(&scene, p, Draw::WithoutDelta)
+            .collect();
+        assert_eq!(whole.len(), 2);
+        let d2 = (Vec3::new(0.0, 0.0, 2.0) - p).length_squared();
+        let cos = 2.0 / d2.sqrt();
+        let falloff = ((cos - 0.8) / 0.1f32).clamp(0.0, 1.0).powi(2);
+        for (es, expected) in whole.iter().zip([3.0 / d2, 3.0 * falloff / d2]) {
+            assert!((es.value.x / expected - 1.0).abs() < 1e-5);
+        }
+        assert_eq!(emitters.delta_lights(&scene, p, Draw::All).count(), 0);
+        let drawn_delta = (0..n)
+            .filter_map(|k| {
+                let u_sel = (k as f32 + 0.5) / n as f32;
+                emitters.sample(&scene, p, (u_sel, Vec2::splat(0.5)), Draw::All)
+            })
+            .filter(|s| s.delta)
+            .count();
+        assert!(drawn_delta > 0);
+    }
 }

@@ -7,7 +7,7 @@
 
 use crate::accel::{Accel, Hit, TriangleId};
 use crate::bsdf::{Bsdf, TransportMode};
-use crate::emitters::EmitterSampler;
+use crate::emitters::{Draw, EmitterSampler};
 use crate::geometry::frame::Frame;
 use crate::geometry::offset::{interpolate_with_error, offset_origin};
 use crate::scene::{Mesh, Scene};
@@ -67,7 +67,10 @@ impl<'a> Tracer<'a> {
         (u_sel, u): (f32, Vec2),
         throughput: Rgb,
     ) -> Rgb {
-        let Some(es) = self.emitters.sample(self.scene, hit.p, u_sel, u) else {
+        let Some(es) = self
+            .emitters
+            .sample(self.scene, hit.p, (u_sel, u), Draw::All)
+        else {
             return Rgb::ZERO;
         };
         let wo = hit.frame.to_local(es.wi);
@@ -106,7 +109,7 @@ impl<'a> Tracer<'a> {
             mis(
                 pdf,
                 self.emitters
-                    .pdf_hit(hit.mesh, hit.triangle, hit.t, w, hit.ng),
+                    .pdf_hit(hit.mesh, hit.triangle, hit.t, w, hit.ng, Draw::All),
             )
         });
         throughput * le * weight
@@ -120,7 +123,7 @@ impl<'a> Tracer<'a> {
             return Rgb::ZERO;
         };
         let weight = bsdf_pdf.map_or(1.0, |pdf| {
-            mis(pdf, self.emitters.pdf_environment(self.scene, w))
+            mis(pdf, self.emitters.pdf_environment(self.scene, w, Draw::All))
         });
         throughput * env.radiance(w) * weight
     }

@@ -11,7 +11,7 @@ use wpbgi::geometry::frame::Frame;
 use wpbgi::haar::{
     direction_to_square, square_to_direction, texel_centre, texel_of, Haar2d, SparseHaar,
 };
-use wpbgi::scene::{Emission, Material, Mesh, Scattering, Scene};
+use wpbgi::scene::{Emission, LightKind, Material, Mesh, PunctualLight, Scattering, Scene};
 use wpbgi::spectrum::Rgb;
 use wpbgi::surfels::Surfel;
 
@@ -151,6 +151,53 @@ fn diffuse_surfel_under_a_rectangle_light() {
         100.0 * (ours / exact - 1.0)
     );
     assert!((ours / exact - 1.0).abs() < 0.005);
+}
+
+/// A surfel's point and directional lights come in once each and exactly, beside an area
+/// light drawn by its samples: under a rectangle that faces away (it sends the surfel nothing
+/// but takes its share of the samples), the irradiance is I cos θ / d² + E cos θ for every
+/// count of samples and every seed. Drawn among the samples by power, the point light took a
+/// whole number of them near its share, one more or fewer from surfel to surfel.
+#[test]
+fn delta_lights_beside_an_area_light_are_exact_at_a_surfel() {
+    let mut away = tilted_rectangle();
+    away.reverse();
+    let mut sc = scene(
+        &away,
+        Bsdf::Diffuse(Diffuse {
+            reflectance: Rgb::splat(0.5),
+        }),
+    );
+    let bulb = Vec3::new(0.4, -0.3, 0.8);
+    let sun = Vec3::new(0.2, 0.1, -1.0).normalize();
+    sc.lights = vec![
+        PunctualLight {
+            name: "bulb".into(),
+            kind: LightKind::Point,
+            position: bulb,
+            direction: -Vec3::Z,
+            intensity: Rgb::splat(0.5),
+        },
+        PunctualLight {
+            name: "sun".into(),
+            kind: LightKind::Directional,
+            position: Vec3::ZERO,
+            direction: sun,
+            intensity: Rgb::splat(0.7),
+        },
+    ];
+    let exact = 0.5 * bulb.z / bulb.length().powi(3) + 0.7 * -sun.z;
+    for samples in [4, 8, 32] {
+        for seed in 0..8 {
+            let ours = with_direct(&sc, samples, seed, |d| {
+                d.irradiance(&surfel(), surfel().n, 0).x
+            });
+            assert!(
+                (ours / exact - 1.0).abs() < 1e-5,
+                "{samples} samples, seed {seed}: {ours} vs {exact}"
+            );
+        }
+    }
 }
 
 #[test]
