@@ -973,6 +973,25 @@ fn a_kept_transport_is_reported_and_relight_re_solves_from_it() {
     assert_ok(&out);
     let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
     assert_eq!(report["how"], "resolved", "{report}");
+    // The re-solve reports its bounces as the bake does: a time for each, and those times
+    // and the final maps' within its "bounces" stage, which they make up.
+    let bounces = &report["bounces"];
+    let count = bounces["bounces"].as_u64().expect("a bounce count");
+    let seconds: Vec<f64> = bounces["seconds"]
+        .as_array()
+        .expect("seconds")
+        .iter()
+        .map(|v| v.as_f64().expect("a number"))
+        .collect();
+    assert!(count > 0 && seconds.len() as u64 == count, "{bounces}");
+    let inside = seconds.iter().sum::<f64>() + bounces["final_seconds"].as_f64().expect("final");
+    let stage = report["stage_seconds"]["bounces"]
+        .as_f64()
+        .expect("bounces stage");
+    assert!(
+        inside > 0.0 && inside <= stage,
+        "the bounces' {inside} s lie outside their stage's {stage} s"
+    );
     let out = bake_into(&[edit], &fresh, &[]);
     assert_ok(&out);
     assert!(std::fs::read(&relit).expect("relit") == std::fs::read(&fresh).expect("fresh"));

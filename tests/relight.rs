@@ -416,6 +416,8 @@ fn the_command_relights_and_refuses() {
     );
     let report: serde_json::Value = serde_json::from_slice(&ok.stdout).expect("json");
     assert_eq!(report["how"], "rescaled");
+    // A rescale runs no bounce.
+    assert!(report["bounces"].is_null(), "{report}");
     // The stages' seconds are the run's, within its total.
     let stages = report["stage_seconds"].as_object().expect("stage_seconds");
     assert_eq!(

@@ -25,7 +25,7 @@
 
 use super::baked::Baked;
 use super::bounce::kept::beside;
-use super::bounce::{KeptProjected, KeptTransport, TransportHandoff};
+use super::bounce::{BounceReport, KeptProjected, KeptTransport, TransportHandoff};
 use super::pipeline::bake_with_transport;
 use super::plan::{recolourable, SAME_RATIO};
 use super::settings::BakeSettings;
@@ -115,6 +115,9 @@ pub struct Relit {
     /// Wall seconds by stage, in order: reading the kept transport and the bake's own stages
     /// where the cache was re-solved or baked again, then writing the new cache.
     pub timings: Vec<(&'static str, f64)>,
+    /// Where the cache was re-solved or baked again, what its bounces did (each one's
+    /// seconds, and the final maps': the "bounces" stage of `timings`).
+    pub bounces: Option<BounceReport>,
 }
 
 /// Relight `cache`, a fresh bake of `original`, for `original` with `edits` applied, and
@@ -132,6 +135,7 @@ pub fn relight(
     let scene = original.edited(edits)?;
     let lightcuts = cache.plan["plan"]["lightcuts"].as_bool().unwrap_or(true);
     let mut timings = Vec::new();
+    let mut bounces = None;
     let how = match emission_factor(original, &scene, lightcuts) {
         Ok(factor) => {
             let hash = bake_hash(&scene, cache.settings());
@@ -172,6 +176,7 @@ pub fn relight(
             let baked: Baked =
                 bake_with_transport(&scene, &settings, progress, cancel, &mut handoff)?;
             timings.extend(&baked.timings);
+            bounces.clone_from(&baked.bounces);
             let writing = Instant::now();
             save(output, &scene, &baked)?;
             timings.push(("write", writing.elapsed().as_secs_f64()));
@@ -206,6 +211,7 @@ pub fn relight(
         scene,
         seconds: start.elapsed().as_secs_f64(),
         timings,
+        bounces,
     })
 }
 

@@ -272,9 +272,7 @@ pub fn bake_command(a: BakeArgs) -> Result<()> {
     stats["seconds"] = crate::stage_seconds_json(&baked.timings);
     stats["seconds"]["write"] = json!(t.elapsed().as_secs_f64());
     if let Some(r) = &baked.bounces {
-        stats["bounces"] = r.to_json();
-        stats["bounces"]["seconds"] = json!(r.seconds);
-        stats["bounces"]["final_seconds"] = json!(r.final_seconds);
+        stats["bounces"] = crate::bounces_json(r);
         let t = &r.transport;
         stats["bounces"]["transport"] = json!({
             "bytes": t.bytes,
@@ -321,16 +319,7 @@ pub fn bake_command(a: BakeArgs) -> Result<()> {
             );
         }
         if let Some(r) = &baked.bounces {
-            let per: Vec<String> = r.seconds.iter().map(|s| format!("{s:.2}")).collect();
-            say!(
-                "  {} bounces ({} s each), residual {:.1e}{}",
-                r.bounces,
-                per.join(", "),
-                r.residual,
-                r.extrapolated.map_or(String::new(), |t| format!(
-                    ", tail extrapolated (× {t:.2} of the last bounce)"
-                )),
-            );
+            crate::say_bounces(r);
             let t = &r.transport;
             let regathered = if t.regathered_groups > 0 {
                 format!(

@@ -37,6 +37,7 @@ use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::{Path, PathBuf};
 use std::time::Duration;
+use wpbgi::bake::bounce::BounceReport;
 use wpbgi::image::{write_exr, write_png};
 use wpbgi::reference::{render, RenderOutput, RenderSettings};
 use wpbgi::scene::{Camera, Scene};
@@ -292,6 +293,32 @@ pub(crate) fn say_stages(timings: &[(&str, f64)]) {
     for (stage, secs) in timings {
         say!("  {stage}: {secs:.2} s");
     }
+}
+
+/// What the bounces of a bake or a re-solving relight did, as their JSON reports it: the
+/// cache's record ([`BounceReport::to_json`]) with each bounce's seconds and those of the
+/// final maps.
+pub(crate) fn bounces_json(r: &BounceReport) -> serde_json::Value {
+    let mut json = r.to_json();
+    json["seconds"] = serde_json::json!(r.seconds);
+    json["final_seconds"] = serde_json::json!(r.final_seconds);
+    json
+}
+
+/// The bounces' line under a bake's or a relight's stages: how many, each one's seconds and
+/// the final maps' (together the "bounces" stage), the residual and the tail.
+pub(crate) fn say_bounces(r: &BounceReport) {
+    let per: Vec<String> = r.seconds.iter().map(|s| format!("{s:.2}")).collect();
+    say!(
+        "  {} bounces ({} s each) and {:.2} s turning their light into maps, residual {:.1e}{}",
+        r.bounces,
+        per.join(", "),
+        r.final_seconds,
+        r.residual,
+        r.extrapolated.map_or(String::new(), |t| format!(
+            ", tail extrapolated (× {t:.2} of the last bounce)"
+        )),
+    );
 }
 
 pub(crate) fn progress_bar(what: &str) -> ProgressBar {

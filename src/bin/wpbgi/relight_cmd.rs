@@ -80,6 +80,7 @@ pub fn relight_command(a: RelightArgs) -> Result<()> {
                 "detail": detail,
                 "seconds": relit.seconds,
                 "stage_seconds": crate::stage_seconds_json(&relit.timings),
+                "bounces": relit.bounces.as_ref().map(crate::bounces_json),
             })
         );
     } else {
@@ -90,6 +91,9 @@ pub fn relight_command(a: RelightArgs) -> Result<()> {
             relit.how
         );
         crate::say_stages(&relit.timings);
+        if let Some(r) = &relit.bounces {
+            crate::say_bounces(r);
+        }
     }
     Ok(())
 }
