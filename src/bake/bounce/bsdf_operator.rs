@@ -238,7 +238,7 @@ pub struct BsdfOperator {
     pub hemispheres: u32,
     basis: Basis,
     /// Column a (incoming coefficient or texel a) is `entries[starts[a]..starts[a + 1]]`,
-    /// pairs of (outgoing coefficient or texel b, V[b][a] or K[b][a]).
+    /// pairs of (outgoing coefficient or texel b, V\[b\]\[a\] or K\[b\]\[a\]).
     starts: Vec<u32>,
     /// Column a's entries into the other hemisphere (b ≥ n², scaled by the other tint) start
     /// at `lower_starts[a]`: found once here, not searched for in every product (the search

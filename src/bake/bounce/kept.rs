@@ -166,7 +166,7 @@ pub struct TransportHandoff {
 impl KeptTransport {
     /// The links of the groups kept, checked against the bake's: the same key, the slots'
     /// bitmap of their size, every group's receivers its members in order, and every index
-    /// in range (see [`check_links`]). The reason, when they are not.
+    /// in range (see `check_links`). The reason, when they are not.
     pub(super) fn check(
         &self,
         key: &TransportKey,

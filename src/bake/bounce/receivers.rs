@@ -190,7 +190,7 @@ impl Receivers {
     }
 }
 
-/// Σ w·light[j] over `from` (gathering surfels, all of one kind).
+/// Σ w·light\[j\] over `from` (gathering surfels, all of one kind).
 fn blend_of(from: &[(u32, f32)], light: &[SurfelRadiance], tau: f32) -> SurfelRadiance {
     let mut rgb = Rgb::ZERO;
     let mut maps: Vec<(&SparseHaar<Rgb>, f32)> = Vec::new();

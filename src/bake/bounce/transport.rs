@@ -141,7 +141,7 @@ impl Slots {
 }
 
 /// The row-major index of the texel of a map of `levels` that holds `point` (the order of
-/// [`Haar2d::inverse`]).
+/// [`Haar2d::inverse`](crate::haar::Haar2d::inverse)).
 fn texel_index(point: glam::Vec2, levels: u32) -> u32 {
     let (x, y) = texel_at(point, 1 << levels);
     (y << levels) + x

@@ -56,7 +56,7 @@ pub(super) fn sample(
 }
 
 /// Whether `path` is an absolute prim path of identifiers (what openusd 0.6 can resolve
-/// without looping; see [`check_names`]).
+/// without looping; see [`check_names`](super::check_names)).
 pub(super) fn is_plain_prim_path(path: &str) -> bool {
     path.strip_prefix('/')
         .is_some_and(|p| !p.is_empty() && p.split('/').all(sdf::Path::is_valid_identifier))
