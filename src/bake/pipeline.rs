@@ -73,8 +73,9 @@ fn mesh_densities(scene: &Scene, densities: &[(String, f32)]) -> Result<Vec<f32>
 /// Refuse, before any work, a bake that cannot fit: bounces whose transport slots overflow
 /// 32 bits, or a floor of what the bake must hold (surfels, their radiance, the tree and its
 /// coding, the cache's records, and for bounces the tree as senders and the slots' bitmap,
-/// with no transport kept: that part gives way, see [`BounceSettings::transport_budget`](crate::bake::bounce::BounceSettings::transport_budget); or
-/// the surfel sampling's, where larger) above the memory the machine has available. The
+/// with no transport kept: that part gives way, see
+/// [`BounceSettings::transport_budget`](crate::bake::bounce::BounceSettings::transport_budget);
+/// or the surfel sampling's, where larger) above the memory the machine has available. The
 /// floor counts the structures only, not the maps' coefficients, so a bake it lets through
 /// may still need more.
 fn check_fits(settings: &BakeSettings, map_levels: u32) -> Result<()> {
