@@ -48,9 +48,17 @@ impl Packet {
     /// The triangle in lane `lane`.
     #[inline]
     pub fn triangle(&self, lane: usize) -> [Vec3A; 3] {
-        // Through arrays: glam's `Vec4` indexing is a `match`, a jump table.
-        self.v
-            .map(|c| Vec3A::from_array(c.map(|axis| axis.as_ref()[lane])))
+        // Through arrays: glam's `Vec4` indexing is a `match`, a jump table. Written out:
+        // `array::map` here was left a call, its result stored a float at a time and read
+        // back whole (a stalled store forwarding per vertex).
+        let corner = |c: &[Vec4; 3]| {
+            Vec3A::new(
+                c[0].as_ref()[lane],
+                c[1].as_ref()[lane],
+                c[2].as_ref()[lane],
+            )
+        };
+        [corner(&self.v[0]), corner(&self.v[1]), corner(&self.v[2])]
     }
 
     /// Bit `i` set for each used lane.

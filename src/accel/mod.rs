@@ -298,6 +298,7 @@ impl Accel {
     /// origin offset off the triangle's plane towards `dir`): the same hit, without deciding
     /// in double precision that the ray does not meet the triangle it leaves (a closest
     /// hit's most common undecided lane).
+    #[inline(always)]
     pub fn closest_hit_leaving(
         &self,
         leaving: Option<TriangleId>,
@@ -309,6 +310,7 @@ impl Accel {
         self.closest_hit_of(&self.query(leaving, origin, dir, tmin, tmax)?)
     }
 
+    #[inline(always)]
     fn closest_hit_of(&self, q: &Query) -> Option<Hit> {
         let mut best: Option<(&Packet, usize, TriangleHit)> = None;
         let mut closest = q.tmax;
@@ -341,6 +343,7 @@ impl Accel {
 
     /// [`Accel::occluded`] for a ray spawned off triangle `leaving` where it is `Some`, as
     /// [`Accel::closest_hit_leaving`].
+    #[inline(always)]
     pub fn occluded_leaving(
         &self,
         leaving: Option<TriangleId>,

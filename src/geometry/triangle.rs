@@ -62,7 +62,11 @@ impl Hits4 {
         // Through arrays: glam's `Vec4` indexing is a `match`, a jump table.
         TriangleHit {
             t: self.t.as_ref()[lane],
-            b: self.b.map(|b| b.as_ref()[lane]),
+            b: [
+                self.b[0].as_ref()[lane],
+                self.b[1].as_ref()[lane],
+                self.b[2].as_ref()[lane],
+            ],
         }
     }
 }
