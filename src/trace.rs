@@ -184,10 +184,10 @@ pub fn intersect(ctx: &Tracer, o: Vec3, d: Vec3) -> Option<SurfaceHit> {
     intersect_within(ctx, o, d, f32::INFINITY)
 }
 
-/// [`intersect`] for a ray spawned off triangle `leaving` ([`SurfaceHit::spawn`]; `None`
-/// where it was not, as a camera ray): the same hit, found without deciding in double
-/// precision that the ray does not meet the triangle it leaves
-/// ([`Accel::closest_hit_leaving`]).
+/// [`intersect`] along a unit `d` (as `Vec3::normalize` leaves it), for a ray spawned off
+/// triangle `leaving` ([`SurfaceHit::spawn`]; `None` where it was not, as a camera ray): the
+/// same hit, found without normalising `d` again or deciding in double precision that the
+/// ray does not meet the triangle it leaves ([`Accel::closest_hit_unit`]).
 #[inline(always)]
 pub fn intersect_leaving(
     ctx: &Tracer,
@@ -197,7 +197,7 @@ pub fn intersect_leaving(
 ) -> Option<SurfaceHit> {
     let hit = ctx
         .accel
-        .closest_hit_leaving(leaving, o, d, 0.0, f32::INFINITY)?;
+        .closest_hit_unit(leaving, o, d, 0.0, f32::INFINITY)?;
     Some(surface_hit(ctx, geometric_hit(hit)))
 }
 
