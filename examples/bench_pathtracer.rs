@@ -10,12 +10,15 @@
 //! ours always is, so the like-for-like figure), and for Mitsuba's `scalar_rgb` variant (one
 //! path at a time, as ours, with Embree's default intersections): beside `llvm_ad_rgb` it
 //! says how much of the gap is the width of Mitsuba's shading and how much the code of one
-//! path. With `WPBGI_PREVIOUS=/path/to/an/older/wpbgi`, that version's `wpbgi reference` at
+//! path. Last, what a user of Mitsuba pays for the same count denoised: `llvm_ad_rgb`'s
+//! render, the albedo and normal guides (16 spp) and Intel Open Image Denoise together (the
+//! anchor script's `oidn_total_s`), and our time over it (ours undenoised: the error each
+//! reaches is `compare`'s and `bench_render`'s business, not this table's). With `WPBGI_PREVIOUS=/path/to/an/older/wpbgi`, that version's `wpbgi reference` at
 //! the same settings (its own seconds, from its `--json`), and our time over its.
 //!
 //! `cargo run --release --example bench_pathtracer [-- SPP [ROUNDS]]` (default 256 spp, one
 //! round). Mitsuba renders only that count (the anchor script's AOVs and denoiser run too,
-//! outside the timing). With several rounds, each runs ours, the previous version and
+//! outside its render's timing, and are the Mitsuba + OIDN column's). With several rounds, each runs ours, the previous version and
 //! Mitsuba one after the other (odd rounds in the reverse order), and each keeps its fastest:
 //! on a shared machine a single run of either can be 10 % slow, and one in a fixed place 6 %.
 //!
@@ -73,9 +76,10 @@ fn main() -> common::Result<()> {
     println!(
         "| scene | ours s | ours Msamples/s | previous s | ours / previous: time | Mitsuba s | \
          Mitsuba Msamples/s | ours / Mitsuba: samples/s | Mitsuba robust Msamples/s | \
-         ours / Mitsuba robust | Mitsuba scalar Msamples/s | ours / Mitsuba scalar |"
+         ours / Mitsuba robust | Mitsuba scalar Msamples/s | ours / Mitsuba scalar | \
+         Mitsuba + OIDN s | ours / Mitsuba + OIDN: time |"
     );
-    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
+    println!("|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|");
     let samples = f64::from(SIZE * SIZE) * f64::from(spp);
     for name in SCENES {
         let scene_path = dir.join(format!("{name}.gltf"));
@@ -90,8 +94,10 @@ fn main() -> common::Result<()> {
         // all of them; each keeps its fastest round. Odd rounds run them in the reverse order:
         // here the same binary timed twice in a fixed order read 6 % apart by its place.
         let (mut ours, mut before) = (f64::INFINITY, f64::INFINITY);
-        // Mitsuba's fastest seconds in each mode of `MITSUBA_MODES`.
+        // Mitsuba's fastest seconds in each mode of `MITSUBA_MODES`, and its default mode's
+        // image denoised by OIDN (render, guide AOVs and denoiser together).
         let mut mitsuba = [f64::INFINITY; MITSUBA_MODES.len()];
+        let mut denoised = f64::INFINITY;
         for round in 0..rounds {
             let mut order = [
                 Run::Ours,
@@ -118,7 +124,7 @@ fn main() -> common::Result<()> {
                     }
                     Run::Mitsuba(mode) => {
                         if let Some(py) = &python {
-                            let m = common::mitsuba_anchor_with(
+                            let line = common::mitsuba_anchor_with(
                                 Path::new(py),
                                 &scene_path,
                                 &dir.join(format!("{name}_d8_ref.exr")),
@@ -127,9 +133,17 @@ fn main() -> common::Result<()> {
                             )?
                             .into_iter()
                             .find(|(s, _)| *s == spp)
-                            .and_then(|(_, v)| v["pt_s"].as_f64())
-                            .ok_or("the Mitsuba anchor printed no time")?;
-                            mitsuba[mode] = mitsuba[mode].min(m);
+                            .map(|(_, v)| v)
+                            .ok_or("the Mitsuba anchor printed no line")?;
+                            let seconds = |key: &str| {
+                                line[key]
+                                    .as_f64()
+                                    .ok_or(format!("the Mitsuba anchor printed no {key}"))
+                            };
+                            mitsuba[mode] = mitsuba[mode].min(seconds("pt_s")?);
+                            if mode == 0 {
+                                denoised = denoised.min(seconds("oidn_total_s")?);
+                            }
                         }
                     }
                 }
@@ -147,14 +161,15 @@ fn main() -> common::Result<()> {
                     mitsuba.map(|m| format!("{:.2} | {:.2}", rate(m), m / ours));
                 println!(
                     "| {name} | {ours:.2} | {:.2} | {before} | {:.2} | {llvm} | {robust} | \
-                     {scalar} |",
+                     {scalar} | {denoised:.2} | {:.2} |",
                     rate(ours),
                     mitsuba[0],
+                    ours / denoised,
                 )
             }
             None => println!(
                 "| {name} | {ours:.2} | {:.2} | {before} | not run (`WPBGI_ANCHOR_PYTHON`) \
-                 | | | | | | |",
+                 | | | | | | | | |",
                 rate(ours)
             ),
         }

@@ -10,8 +10,9 @@
 //! accel's queries they make: left as calls, each handed its vectors and its result through
 //! memory, written a float or two at a time and read back whole, and every such read waited
 //! for the stores to retire (a failed store-to-load forwarding, a dozen cycles or more). Inlined
-//! into the path's loop the values stay in registers: `wpbgi reference` 0.87 of the time, the
-//! images the same bit for bit (docs/benchmarks.md).
+//! into the path's loop the values stay in registers: with the accel's packet reads written out
+//! likewise, `wpbgi reference` 0.87 of the time on cbox-diffuse, the images the same bit for
+//! bit (docs/benchmarks.md).
 
 use crate::accel::{Accel, Hit, TriangleId};
 use crate::bsdf::{Bsdf, TransportMode};

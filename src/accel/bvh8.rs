@@ -133,7 +133,8 @@ impl BoxRay {
     /// The ray's [`Octant`]: the sign bits of `inv`. Read by each traversal as it starts,
     /// from the one vector, not kept beside it: three flags stored a byte at a time by the
     /// query's set-up and loaded as one word by the traversal made the load wait for the
-    /// stores to retire (a failed store-to-load forwarding, 1-2 % of a path tracer's time).
+    /// stores to retire (a failed store-to-load forwarding: about 3 % of a path tracer's
+    /// profile, 6 % of the closest-hit traversal's samples and 11 % of the occlusion one's).
     #[inline(always)]
     fn octant(&self) -> Octant {
         let bits = self.inv.is_negative_bitmask();

@@ -314,10 +314,9 @@ impl Accel {
     /// origin offset off the triangle's plane towards `dir`), for a path tracer's rays. The
     /// direction is taken as it is, not normalised again (a square root and a division on
     /// the way from one vertex to the next: `wpbgi reference` 0.94–0.96 of the time without
-    /// them, medians of ten alternated runs), so the hit's
-    /// distance is along `dir` itself; and the triangle the ray leaves (a closest hit's most
-    /// common undecided lane) is skipped, not decided in double precision. A `dir` not finite
-    /// meets nothing.
+    /// them, medians of ten alternated runs), so the hit's distance is along `dir` itself;
+    /// and the triangle the ray leaves (a closest hit's most common undecided lane) is
+    /// skipped, not decided in double precision. A `dir` not finite meets nothing.
     #[inline(always)]
     pub fn closest_hit_unit(
         &self,
