@@ -486,6 +486,9 @@ pub fn composite_shared(cut: &mut ClusterCut, mb: &mut Microbuffer) {
         mb.alpha[k] = ar * own_w.0 + ac * shared_w.0;
         mb.coverage[k] = cover_r * own_w.0 + cover_c * shared_w.0;
         mb.depth[k] = dr.min(dc);
+        if shared.is_mixed(c) || ar > 0.0 {
+            mb.mark_mixed(k);
+        }
         if recording {
             own[k] = own_w;
             from_shared.push((k as u32, c as u32, shared_w.0, shared_w.1));

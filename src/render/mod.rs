@@ -21,6 +21,7 @@
 //! Every random number is keyed by (pixel, sample), and every tile is processed in a fixed
 //! order, so the image is the same for any thread count.
 
+pub mod bright;
 pub mod near_field;
 pub mod paths;
 mod pixels;
@@ -292,6 +293,8 @@ pub struct GatherStats {
     pub interpolated_glossy: u64,
     /// Rays traced for receivers' near fields ([`near_field`]).
     pub near_rays: u64,
+    /// Rays traced through receivers' brightest buffer pixels ([`bright`]).
+    pub bright_rays: u64,
 }
 
 impl GatherStats {
@@ -305,6 +308,7 @@ impl GatherStats {
         self.interpolated += o.interpolated;
         self.interpolated_glossy += o.interpolated_glossy;
         self.near_rays += o.near_rays;
+        self.bright_rays += o.bright_rays;
     }
 }
 
@@ -817,6 +821,7 @@ fn gather_set(
         } else {
             &r.bsdf
         };
+        stats.bright_rays += bright::trace_bright_pixels(ctx, senders, r, mb, bsdf);
         mb.convolve(bsdf, r.view)
     };
     // Each lone receiver's value and what its gather cost.

@@ -33,6 +33,7 @@ use super::primary::Receiver;
 use crate::gather::lookup::Lookup;
 use crate::gather::microbuffer::Sender;
 use crate::gather::{Microbuffer, Senders};
+use crate::spectrum::Rgb;
 use crate::trace::{intersect_geometry_within, GeometricHit, Tracer};
 use glam::Vec3;
 
@@ -79,27 +80,62 @@ pub fn trace_near_field(
         }
         traced += 1;
         let w = mb.frame.to_world(px.dir).normalize();
-        let Some(GeometricHit { p, ng, hit, .. }) =
-            intersect_geometry_within(ctx, r.spawn(w), w, reach)
-        else {
+        let Some((found_hit, radiance)) = cache_radiance_along(ctx, senders, r, w, reach) else {
             continue;
         };
-        let lookup = senders
-            .lookup_at(p, hit.mesh, ng, -w, r.mesh)
-            .unwrap_or(Lookup::Nothing);
+        let CacheHit { p, ng, t, lookup } = found_hit;
         let sender = Sender {
             offset: p - r.p,
             // The pixel's footprint there: what holds its depth together with the senders
             // of the same surface in the neighbouring pixels.
-            radius: hit.t * px.solid_angle.sqrt(),
+            radius: t * px.solid_angle.sqrt(),
             normal: ng,
-            radiance: senders.evaluated(lookup),
+            radiance,
             lookup,
         };
         found.push((k, sender));
     }
     mb.record_hits(&found);
     traced
+}
+
+/// Where a receiver's ray met the scene, and where the cache's light there is read.
+pub struct CacheHit {
+    /// The hit point.
+    pub p: Vec3,
+    /// Its unit geometric normal (front face).
+    pub ng: Vec3,
+    /// The distance to it.
+    pub t: f32,
+    /// The cache's radiance there towards the receiver ([`Senders::lookup_at`]).
+    pub lookup: Lookup,
+}
+
+/// What receiver `r` sees along unit direction `w` within `t_max`: the hit and the cache's
+/// reflected radiance there towards it, read as the path-traced gather reads it (the nearest
+/// surfel of the hit mesh facing the same way; none, for the back of a one-sided emitter, is
+/// dark). `None` where the ray leaves the scene.
+pub fn cache_radiance_along(
+    ctx: &Tracer,
+    senders: &Senders,
+    r: &Receiver,
+    w: Vec3,
+    t_max: f32,
+) -> Option<(CacheHit, Rgb)> {
+    let GeometricHit { p, ng, hit, .. } = intersect_geometry_within(ctx, r.spawn(w), w, t_max)?;
+    let lookup = senders
+        .lookup_at(p, hit.mesh, ng, -w, r.mesh)
+        .unwrap_or(Lookup::Nothing);
+    let radiance = senders.evaluated(lookup);
+    Some((
+        CacheHit {
+            p,
+            ng,
+            t: hit.t,
+            lookup,
+        },
+        radiance,
+    ))
 }
 
 /// How far round a near leaf's disc, in its radii, rays are traced: twice the disc, for the

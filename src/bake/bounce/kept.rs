@@ -59,8 +59,10 @@ use xxhash_rust::xxh3::Xxh3;
 /// The file's first bytes.
 const MAGIC: &[u8; 16] = b"WPBGI-TRANSPORT\0";
 
-/// The format this build writes and reads.
-pub const VERSION: u32 = 4;
+/// The format this build writes and reads. 5: the same layout as 4, whose links lack the
+/// rays through mixed pixels (`iterate::trace_mixed_pixels`), so a file of 4 no longer
+/// replays this build's bake.
+pub const VERSION: u32 = 5;
 
 /// The hash of everything a bake's transport depends on (see [`super::iterate`]'s
 /// `transport_key`): equal keys, equal transports.

@@ -296,13 +296,14 @@ pub fn print_summary(out: &FinalOutput) {
     );
     detail!(
         "  cut: {} nodes visited and {} splatted by receivers, {} and {} by clusters; {} near \
-         surfels, {} rays traced through near fields",
+         surfels, {} rays traced through near fields and {} through bright pixels",
         s.receiver_cut.visited,
         s.receiver_cut.splats,
         s.cluster_cut.visited,
         s.cluster_cut.splats,
         s.receiver_cut.near_leaves,
-        s.near_rays
+        s.near_rays,
+        s.bright_rays
     );
     crate::say_stages(&out.timings);
     if let Some(b) = wpbgi::compare::memory::peak() {
