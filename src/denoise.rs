@@ -4,11 +4,13 @@
 //! docs/render.md: the emitters' edges must not be smeared).
 //!
 //! The library is loaded when a denoise is asked for, not linked: wpbgi builds and runs
-//! without it, and `--denoise` without it says in one sentence what to install. It is looked
-//! for at `WPBGI_OIDN_LIBRARY` (a path to `libOpenImageDenoise.so.2`), else by the system's
-//! search path. PyPI's `pyoidn` wheel ships one (`pip install pyoidn`, then
-//! `WPBGI_OIDN_LIBRARY=<site-packages>/pyoidn/oidn/lib/libOpenImageDenoise.so.2`), as do Intel's
-//! release archives; Debian 12 packages none.
+//! without it, and `--denoise` without it says in one sentence what to install. Where a user
+//! has it, it is found without a variable to set ([`library_candidates`]): at
+//! `WPBGI_OIDN_LIBRARY` when that names a path (then only there), else on the system's search
+//! path (`LD_LIBRARY_PATH`, `ld.so.conf`: Intel's release archives), else in PyPI's `pyoidn`
+//! wheel (`pip install pyoidn`), which ships the library at `pyoidn/oidn/lib/`: the package of
+//! the active virtual or conda environment (`VIRTUAL_ENV`, `CONDA_PREFIX`), then the one the
+//! `python3` on `PATH` imports. Debian 12 packages none.
 //!
 //! Only the C API's stable core is used (OIDN 2: devices, the `RT` filter, shared images).
 //! The device runs on the CPU with the render's thread count; its output for one input is the
@@ -18,6 +20,7 @@ use crate::error::{Error, Result};
 use crate::image::Image;
 use crate::spectrum::Rgb;
 use std::ffi::{c_char, c_int, c_void, CStr};
+use std::path::{Path, PathBuf};
 
 /// The environment variable naming the library's path.
 pub(crate) const LIBRARY_VARIABLE: &str = "WPBGI_OIDN_LIBRARY";
@@ -60,27 +63,90 @@ struct Api {
 /// What `--denoise` says when the library is missing.
 fn missing(reason: &str) -> Error {
     Error::InvalidSetting(format!(
-        "--denoise needs Intel Open Image Denoise 2 ({reason}): `pip install pyoidn` and set \
-         {LIBRARY_VARIABLE} to its pyoidn/oidn/lib/libOpenImageDenoise.so.2, or install the \
-         library from Intel's release archive"
+        "--denoise needs Intel Open Image Denoise 2 ({reason}): `pip install pyoidn` into the \
+         active Python (wpbgi finds it there), or set {LIBRARY_VARIABLE} to a \
+         libOpenImageDenoise.so.2"
     ))
+}
+
+/// Where the pyoidn wheel keeps the library, below its package folder.
+const WHEEL_LIBRARY: &str = "oidn/lib/libOpenImageDenoise.so.2";
+
+/// Where to look for the library when `WPBGI_OIDN_LIBRARY` names none, in order: the system's
+/// search path by [`NAMES`], then the `pyoidn` package below each of `environments` (virtual
+/// or conda prefixes: `lib/python3.*/site-packages/pyoidn`). The package the active Python
+/// imports comes after these ([`python_package`]), asked only when they all fail: it runs
+/// `python3`.
+fn library_candidates(environments: &[PathBuf]) -> Vec<std::ffi::OsString> {
+    let mut candidates: Vec<std::ffi::OsString> = NAMES.iter().map(Into::into).collect();
+    for prefix in environments {
+        candidates.extend(
+            site_packages(prefix)
+                .into_iter()
+                .map(|dir| dir.join("pyoidn").join(WHEEL_LIBRARY).into_os_string()),
+        );
+    }
+    candidates
+}
+
+/// The `site-packages` folders of the Python environment at `prefix`
+/// (`lib/python3.*/site-packages`), sorted by name.
+fn site_packages(prefix: &Path) -> Vec<PathBuf> {
+    let Ok(entries) = std::fs::read_dir(prefix.join("lib")) else {
+        return Vec::new();
+    };
+    let mut found: Vec<PathBuf> = entries
+        .filter_map(|e| e.ok())
+        .filter(|e| e.file_name().to_string_lossy().starts_with("python3"))
+        .map(|e| e.path().join("site-packages"))
+        .filter(|p| p.is_dir())
+        .collect();
+    found.sort();
+    found
+}
+
+/// The library at `name` (a path, or a name for the system's search path), loaded.
+fn open(name: &std::ffi::OsStr) -> std::result::Result<libloading::Library, String> {
+    // SAFETY: loading runs the library's initialisers; OIDN's have no preconditions.
+    unsafe { libloading::Library::new(name) }.map_err(|e| e.to_string())
+}
+
+/// The active virtual and conda environments' prefixes.
+fn active_environments() -> Vec<PathBuf> {
+    ["VIRTUAL_ENV", "CONDA_PREFIX"]
+        .iter()
+        .filter_map(std::env::var_os)
+        .map(PathBuf::from)
+        .collect()
+}
+
+/// The folder of the `pyoidn` package that the `python3` on `PATH` imports, if it has one.
+fn python_package() -> Option<PathBuf> {
+    let out = std::process::Command::new("python3")
+        .args([
+            "-c",
+            "import os, pyoidn; print(os.path.dirname(os.path.abspath(pyoidn.__file__)))",
+        ])
+        .stdin(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .output()
+        .ok()?;
+    let text = String::from_utf8(out.stdout).ok()?;
+    let dir = text.trim();
+    (out.status.success() && !dir.is_empty()).then(|| PathBuf::from(dir))
 }
 
 impl Api {
     fn load() -> Result<Api> {
-        let candidates: Vec<std::ffi::OsString> = match std::env::var_os(LIBRARY_VARIABLE) {
-            Some(path) => vec![path],
-            None => NAMES.iter().map(Into::into).collect(),
-        };
-        let mut last = String::from("not found");
-        for name in &candidates {
-            // SAFETY: loading runs the library's initialisers; OIDN's have no preconditions.
-            match unsafe { libloading::Library::new(name) } {
-                Ok(library) => return Self::bind(library),
-                Err(e) => last = e.to_string(),
-            }
+        if let Some(path) = std::env::var_os(LIBRARY_VARIABLE).filter(|v| !v.is_empty()) {
+            return Self::bind(open(&path).map_err(|e| missing(&e))?);
         }
-        Err(missing(&last))
+        let library = library_candidates(&active_environments())
+            .iter()
+            .find_map(|name| open(name).ok())
+            .or_else(|| open(python_package()?.join(WHEEL_LIBRARY).as_os_str()).ok())
+            .ok_or_else(|| missing("not on the library path, nor in the active Python's pyoidn"))?;
+        Self::bind(library)
     }
 
     fn bind(library: libloading::Library) -> Result<Api> {
@@ -208,4 +274,36 @@ pub fn denoise(beauty: &Image, albedo: &Image, normal: &Image, threads: usize) -
         height: beauty.height,
         pixels: output,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The system's names come first, then each environment's wheel (every `python3.*`, in
+    /// order); an environment without a `lib` folder adds none.
+    #[test]
+    fn candidates_are_the_system_then_each_environment() {
+        let root = std::env::temp_dir().join(format!("wpbgi-oidn-{}", std::process::id()));
+        let env = root.join("venv");
+        for version in ["python3.12", "python3.11"] {
+            std::fs::create_dir_all(env.join("lib").join(version).join("site-packages"))
+                .expect("scratch");
+        }
+        std::fs::create_dir_all(env.join("lib/ruby")).expect("scratch");
+        let found = library_candidates(&[env.clone(), root.join("absent")]);
+        let wheel = |v: &str| {
+            env.join("lib")
+                .join(v)
+                .join("site-packages/pyoidn/oidn/lib/libOpenImageDenoise.so.2")
+                .into_os_string()
+        };
+        let expected: Vec<std::ffi::OsString> = NAMES
+            .iter()
+            .map(Into::into)
+            .chain([wheel("python3.11"), wheel("python3.12")])
+            .collect();
+        assert_eq!(found, expected);
+        std::fs::remove_dir_all(&root).expect("clean up");
+    }
 }

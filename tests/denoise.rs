@@ -240,3 +240,75 @@ fn denoising_the_path_tracer() {
         "1 and 2 threads denoise differently"
     );
 }
+
+/// Without `WPBGI_OIDN_LIBRARY`, `--denoise` finds the pyoidn that scripts/test.sh installed
+/// in its virtual environment: as the active environment (`VIRTUAL_ENV`, as `activate` sets
+/// it) and as the package the `python3` first on `PATH` imports (the environment's `bin`
+/// first, `VIRTUAL_ENV` unset). Each run writes the same file byte for byte as the library
+/// named by the variable.
+#[test]
+fn denoise_finds_the_active_pythons_pyoidn() {
+    let Some(lib) = std::env::var_os("WPBGI_OIDN_LIBRARY") else {
+        eprintln!("skipped: WPBGI_OIDN_LIBRARY is not set (scripts/test.sh sets it)");
+        return;
+    };
+    let lib = PathBuf::from(lib);
+    // <venv>/lib/python3.X/site-packages/pyoidn/oidn/lib/libOpenImageDenoise.so.2
+    let Some(venv) = lib
+        .ancestors()
+        .nth(7)
+        .filter(|v| v.join("bin/python3").exists())
+    else {
+        eprintln!(
+            "skipped: {} is not in a virtual environment's pyoidn",
+            lib.display()
+        );
+        return;
+    };
+    let d = dir("discovery");
+    let cache = cache(&d);
+    let named = render(
+        &cache,
+        &d.join("named.exr"),
+        "2",
+        &["--denoise"],
+        Some(utf8(&lib)),
+    );
+    assert_ok(&named);
+    let path = std::env::var_os("PATH").unwrap_or_default();
+    let mut venv_first = std::ffi::OsString::from(venv.join("bin"));
+    venv_first.push(":");
+    venv_first.push(&path);
+    for (name, virtual_env, path) in [
+        ("environment", Some(venv.as_os_str()), path.clone()),
+        ("python", None, venv_first),
+    ] {
+        let exr = d.join(format!("{name}.exr"));
+        let mut cmd = Command::new(WPBGI);
+        cmd.args([
+            "--threads",
+            "2",
+            "render",
+            utf8(&scene()),
+            "--cache",
+            utf8(&cache),
+        ])
+        .args([
+            "--size", "256x256", "--gather", "paths", "--spp", "2", "--json",
+        ])
+        .args(["--denoise", "-o", utf8(&exr)])
+        .env("SOURCE_DATE_EPOCH", "1764000000")
+        .env_remove("WPBGI_OIDN_LIBRARY")
+        .env_remove("CONDA_PREFIX")
+        .env("PATH", path);
+        match virtual_env {
+            Some(v) => cmd.env("VIRTUAL_ENV", v),
+            None => cmd.env_remove("VIRTUAL_ENV"),
+        };
+        assert_ok(&cmd.output().expect("runs"));
+        assert!(
+            std::fs::read(&exr).expect(name) == std::fs::read(d.join("named.exr")).expect("named"),
+            "{name}: not the named library's image"
+        );
+    }
+}

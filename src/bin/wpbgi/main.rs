@@ -188,9 +188,9 @@ struct ReferenceArgs {
     variance: Option<PathBuf>,
     /// Denoise with Intel Open Image Denoise (its RT filter, HDR): the light after the first
     /// hit, guided by the first hit's albedo and normal; the emission the camera sees
-    /// directly is kept as rendered. The library is loaded at run time: `pip install pyoidn`
-    /// and set WPBGI_OIDN_LIBRARY to its pyoidn/oidn/lib/libOpenImageDenoise.so.2
-    /// (docs/render.md).
+    /// directly is kept as rendered. The library is loaded at run time, found on the library
+    /// path or as the active Python's pyoidn (`pip install pyoidn`), or wherever
+    /// WPBGI_OIDN_LIBRARY names it (docs/render.md).
     #[arg(long)]
     denoise: bool,
     /// Also write an 8-bit sRGB preview: PNG, or JPEG for a name ending in .jpg (see

@@ -146,8 +146,8 @@ pub struct RenderArgs {
     /// first hit's albedo and normal), for the noisy `--gather paths` mode, whose rays then go
     /// on through glossy and glass hits to the first rough one rather than reading the cache's
     /// blurred maps there (less bias, more noise, for the denoiser to take). The library is
-    /// loaded at run time: `pip install pyoidn` and set WPBGI_OIDN_LIBRARY to its
-    /// pyoidn/oidn/lib/libOpenImageDenoise.so.2 (docs/render.md).
+    /// loaded at run time, found on the library path or as the active Python's pyoidn
+    /// (`pip install pyoidn`), or wherever WPBGI_OIDN_LIBRARY names it (docs/render.md).
     #[arg(long)]
     pub denoise: bool,
     /// Render only the pixels x0 ≤ x < x1, y0 ≤ y < y1 (x0,y0,x1,y1), each exactly as in
