@@ -117,18 +117,56 @@ pub fn mitsuba_anchor_with(
     spps: &[u32],
     mode: MitsubaMode,
 ) -> Result<Vec<(u32, Value)>> {
-    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/anchor/mitsuba_oidn.py");
-    let run = run_ok(
+    anchor_lines(run_ok(
         "the Mitsuba anchor",
         Command::new(python)
             .env("EMBREE_ROBUST", if mode.robust { "1" } else { "0" })
             .env("MITSUBA_VARIANT", mode.variant)
-            .arg(script)
+            .arg(anchor_script())
             .arg(scene)
             .arg(reference)
             .arg("8")
             .args(spps.iter().map(|s| s.to_string())),
-    )?;
+    )?)
+}
+
+/// A deep reference: Mitsuba's image at max_depth 64 and its per-sample variance over its
+/// sample count (`scripts/anchor/mitsuba_ref.py`).
+#[allow(dead_code)] // only the still benchmark holds images to deep references
+pub struct DeepReference {
+    pub image: PathBuf,
+    pub variance: PathBuf,
+    pub spp: u32,
+}
+
+/// [`mitsuba_anchor`] at max_depth 64 against a deep reference, whose own noise (its
+/// variance over its samples) is taken out of every squared error.
+#[allow(dead_code)] // only the still benchmark holds images to deep references
+pub fn mitsuba_anchor_deep(
+    python: &Path,
+    scene: &Path,
+    reference: &DeepReference,
+    spps: &[u32],
+) -> Result<Vec<(u32, Value)>> {
+    anchor_lines(run_ok(
+        "the Mitsuba anchor",
+        Command::new(python)
+            .env("REF_VAR", &reference.variance)
+            .env("REF_SPP", reference.spp.to_string())
+            .arg(anchor_script())
+            .arg(scene)
+            .arg(&reference.image)
+            .arg("64")
+            .args(spps.iter().map(|s| s.to_string())),
+    )?)
+}
+
+fn anchor_script() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/anchor/mitsuba_oidn.py")
+}
+
+/// The anchor's JSON lines, by sample count.
+fn anchor_lines(run: std::process::Output) -> Result<Vec<(u32, Value)>> {
     Ok(String::from_utf8_lossy(&run.stdout)
         .lines()
         .filter_map(|l| serde_json::from_str::<Value>(l).ok())
