@@ -134,10 +134,12 @@ fn still(bin: &Path, subject: &Subject) -> common::Result<Still> {
     let dir = std::env::temp_dir();
     let cache = dir.join(format!("wpbgi-bench-still-{}.wpc", subject.name));
     let image = dir.join(format!("wpbgi-bench-still-{}.exr", subject.name));
-    let what = bin.display().to_string();
-    let start = Instant::now();
-    common::run_ok(
-        &what,
+    let timed = |command: &mut Command| -> common::Result<f64> {
+        let start = Instant::now();
+        common::run_ok(&bin.display().to_string(), command)?;
+        Ok(start.elapsed().as_secs_f64())
+    };
+    let bake_s = timed(
         Command::new(bin)
             .arg("bake")
             .arg(&subject.scene)
@@ -145,10 +147,7 @@ fn still(bin: &Path, subject: &Subject) -> common::Result<Still> {
             .arg(&cache)
             .arg("-q"),
     )?;
-    let bake_s = start.elapsed().as_secs_f64();
-    let start = Instant::now();
-    common::run_ok(
-        &what,
+    let render_s = timed(
         Command::new(bin)
             .arg("render")
             .arg(&subject.scene)
@@ -157,7 +156,6 @@ fn still(bin: &Path, subject: &Subject) -> common::Result<Still> {
             .args(["--size", SIZE, "-o"])
             .arg(&image),
     )?;
-    let render_s = start.elapsed().as_secs_f64();
     let _ = std::fs::remove_file(&cache);
     let ours = read_exr(&image)?;
     let reference = read_exr(&subject.reference.image)?;
