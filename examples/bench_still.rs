@@ -67,6 +67,8 @@ fn subject(name: &str) -> Result<Subject, String> {
     let indirect = root.join("indirect");
     let (scene, refs, spp) = if indirect.join(format!("{name}.gltf")).exists() {
         (indirect.join(format!("{name}.gltf")), indirect, 4096)
+    } else if !root.join(format!("mitsuba/{name}.gltf")).exists() {
+        return Err("no such scene in tests/data/mitsuba or tests/data/indirect".into());
     } else {
         let refs = std::env::var_os("WPBGI_DEEP_REFS")
             .map(PathBuf::from)
