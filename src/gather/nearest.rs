@@ -95,13 +95,24 @@ impl NearestSurfel {
     }
 
     /// The surfel of mesh `mesh` nearest `q` among those `accept` takes (by surfel index),
-    /// the lowest index among equally near ones; `None` where the mesh has none.
-    pub fn nearest(&self, q: Vec3, mesh: u32, accept: impl Fn(u32) -> bool) -> Option<u32> {
+    /// the lowest index among equally near ones; `None` where the mesh has none. `seed`, a
+    /// surfel of mesh `mesh` and its position (the answer for a nearby query, say), bounds
+    /// the search from the start; the answer is the same without it.
+    pub fn nearest(
+        &self,
+        q: Vec3,
+        mesh: u32,
+        accept: impl Fn(u32) -> bool,
+        seed: Option<(u32, Vec3)>,
+    ) -> Option<u32> {
         let &(lo, hi) = self.meshes.get(mesh as usize)?;
         let mut best = Best {
             d2: f32::INFINITY,
             surfel: u32::MAX,
         };
+        if let Some((surfel, p)) = seed {
+            best.offer(p.distance_squared(q), surfel, &accept);
+        }
         self.search(q, lo as usize, hi as usize, &accept, &mut best);
         (best.surfel != u32::MAX).then_some(best.surfel)
     }
@@ -193,10 +204,16 @@ mod tests {
                             da.total_cmp(&db).then(a.cmp(&b))
                         });
                     assert_eq!(
-                        index.nearest(q, mesh, accept),
+                        index.nearest(q, mesh, accept, None),
                         scan,
                         "n {n} query {k} mesh {mesh}"
                     );
+                    // Seeded with any surfel of the mesh, accepted or not: the same answer.
+                    if let Some(seed) = (0..n as u32).find(|&i| mesh_of[i as usize] == mesh) {
+                        let seeded =
+                            index.nearest(q, mesh, accept, Some((seed, positions[seed as usize])));
+                        assert_eq!(seeded, scan, "seeded: n {n} query {k} mesh {mesh}");
+                    }
                 }
             }
         }

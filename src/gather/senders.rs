@@ -618,16 +618,37 @@ impl Senders {
         w: Vec3,
         receiver_mesh: u32,
     ) -> Option<Lookup> {
+        let i = self.surfel_at(q, mesh, ng, None)?;
+        Some(self.surfel_read(i, w, receiver_mesh))
+    }
+
+    /// The surfel that [`Senders::lookup_at`] reads at `q` (mesh `mesh`, normal `ng`): the
+    /// nearest of that mesh facing `ng`'s way (within 60°). `near`, a surfel found for a
+    /// point near `q` (a ray beside this one), starts the search: the answer is the same,
+    /// found sooner.
+    pub fn surfel_at(&self, q: Vec3, mesh: u32, ng: Vec3, near: Option<u32>) -> Option<u32> {
         let nearest = self.nearest.get_or_init(|| {
             let positions: Vec<Vec3> = self.surfels.iter().map(|s| Vec3::from(s.p)).collect();
             let meshes: Vec<u32> = self.surfels.iter().map(|s| s.mesh).collect();
             NearestSurfel::new(&positions, &meshes)
         });
-        let i = nearest.nearest(q, mesh, |i| {
-            Vec3::from(self.surfels[i as usize].n).dot(ng) > 0.5
-        })?;
+        let seed = near
+            .and_then(|i| self.surfels.get(i as usize).map(|s| (i, s)))
+            .filter(|(_, s)| s.mesh == mesh)
+            .map(|(i, s)| (i, Vec3::from(s.p)));
+        nearest.nearest(
+            q,
+            mesh,
+            |i| Vec3::from(self.surfels[i as usize].n).dot(ng) > 0.5,
+            seed,
+        )
+    }
+
+    /// Surfel `i`'s light along `w` towards a receiver on mesh `receiver_mesh`, as a gather
+    /// reads a leaf ([`Senders::surfel_lookup`]).
+    pub fn surfel_read(&self, i: u32, w: Vec3, receiver_mesh: u32) -> Lookup {
         let cos = Vec3::from(self.surfels[i as usize].n).dot(w);
-        Some(self.surfel_lookup(i, w, cos, receiver_mesh))
+        self.surfel_lookup(i, w, cos, receiver_mesh)
     }
 
     /// Node `j` as a microbuffer records it, at `offset` from the receiver, seen as `seen`.

@@ -611,6 +611,7 @@ fn trace_mixed_pixels(
     let ng = Vec3A::from(s.n);
     let mut traced = Vec::new();
     let mut found = Vec::new();
+    let mut near = None;
     for k in 0..mb.pixels.len() {
         if !mb.is_mixed(k) {
             continue;
@@ -624,7 +625,10 @@ fn trace_mixed_pixels(
             };
             let [a, b, c] = h.corners.map(Vec3::from);
             let normal = (b - a).cross(c - a).normalize_or_zero();
-            if let Some(lookup) = senders.lookup_at(origin + w * h.t, h.mesh, normal, -w, s.mesh) {
+            // The ray beside this one found a surfel near this hit: the search starts there.
+            if let Some(i) = senders.surfel_at(origin + w * h.t, h.mesh, normal, near) {
+                near = Some(i);
+                let lookup = senders.surfel_read(i, -w, s.mesh);
                 found.push((lookup, senders.evaluated(lookup), cos));
             }
         }
