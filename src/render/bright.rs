@@ -14,8 +14,9 @@
 //! visibility), the whole image 4–23 % by region.
 //!
 //! So after the cut (and the near field, and the cluster's shared buffer) is resolved, every
-//! pixel holding more than [`BRIGHT_SHARE`] of the receiver's reflected light is traced
-//! instead: [`RAYS_PER_SIDE`]² rays through the centres of equal-area parts of it (a fixed
+//! pixel of the upper hemisphere holding more than [`BRIGHT_SHARE`] of the receiver's
+//! reflected light is traced instead (a glass receiver's transmitted pixels keep the cut's
+//! light: see [`trace_bright_pixels`]): [`RAYS_PER_SIDE`]² rays through the centres of equal-area parts of it (a fixed
 //! grid: no noise, the same for every frame), each reading the cache where it hits as the near
 //! field's rays do ([`cache_radiance_along`]), and the pixel takes their mean. A pixel below
 //! the share can be wrong by at most its own light, so the error this leaves is bounded by
