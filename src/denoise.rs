@@ -5,7 +5,7 @@
 //!
 //! The library is loaded when a denoise is asked for, not linked: wpbgi builds and runs
 //! without it, and `--denoise` without it says in one sentence what to install. Where a user
-//! has it, it is found without a variable to set ([`library_candidates`]): at
+//! has it, it is found without a variable to set (`library_candidates`): at
 //! `WPBGI_OIDN_LIBRARY` when that names a path (then only there), else on the system's search
 //! path (`LD_LIBRARY_PATH`, `ld.so.conf`: Intel's release archives), else in PyPI's `pyoidn`
 //! wheel (`pip install pyoidn`), which ships the library at `pyoidn/oidn/lib/`: the package of

@@ -30,7 +30,7 @@
 //!
 //! A diffuse receiver's pixel that holds more than one surface (an occluder in front of what
 //! it hides, a node whose surfels face many ways) is traced instead, 9 rays through equal
-//! parts of it ([`trace_mixed_pixels`]): coverages composite a pixel as a whole, which missed
+//! parts of it (`trace_mixed_pixels`): coverages composite a pixel as a whole, which missed
 //! a small lamp hiding the brightest part of its own spot on the ceiling.
 //!
 //! The gather is geometry alone, so it runs once: the first bounce records, per receiver, its
@@ -556,7 +556,7 @@ pub(crate) struct PixelHit {
 /// empty) take the light of the surfel nearest the hit point, on the hit mesh and facing the
 /// same way. Pixels the splats cover fully are closed without a ray (in a closed room, most:
 /// the rays were half a bounce's time). A `diffuse` receiver's pixels that hold more than one
-/// surface are then traced finely ([`trace_mixed_pixels`]); a directional receiver's are not:
+/// surface are then traced finely (`trace_mixed_pixels`); a directional receiver's are not:
 /// traced, the conductor furnace of tests/furnace.rs fell from +0.4 % to −2.0 % at ρ = 0.99
 /// (−0.1 % to −0.6 % at 0.9), a bias not yet understood (docs/bounces.md).
 pub fn close_buffer(
@@ -586,7 +586,7 @@ pub fn close_buffer(
     }
 }
 
-/// Rays per side of a mixed pixel's grid ([`trace_mixed_pixels`]): 9 rays, each a ninth of
+/// Rays per side of a mixed pixel's grid (`trace_mixed_pixels`): 9 rays, each a ninth of
 /// the pixel. On ceiling-diffuse (default bake and render against Mitsuba's max_depth 64) 2², 3²
 /// and 4² rays gave relMSE 1.33e-3, 1.23e-3 and 1.32e-3, on cbox-diffuse 2.43e-4, 2.41e-4
 /// and 2.41e-4: the render's bright pixels resolve what a mixed pixel leaves, and 3² costs
