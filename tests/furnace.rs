@@ -368,6 +368,7 @@ fn uniform_gather(scene: &Scene, settings: &BakeSettings, step: usize) -> (Baked
                 return 0.0;
             }
             let mut mb = Microbuffer::new(n, false, Frame::from_normal(s.n));
+            mb.record_links();
             splat_cut(&senders, s.p, s.mesh, &mut mb, &[0], &mut stack);
             mb.resolve();
             let diffuse = matches!(baked.radiance[i], SurfelRadiance::Rgb(_));

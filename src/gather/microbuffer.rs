@@ -235,8 +235,8 @@ pub struct Microbuffer {
     /// receiver's reflected light is faint ([`Microbuffer::is_faint_at`]); empty where none
     /// is.
     faint: Vec<bool>,
-    /// After [`Microbuffer::resolve`]: per pixel, whether it holds more than one surface (see
-    /// [`Microbuffer::is_mixed`]).
+    /// After [`Microbuffer::resolve`] of a buffer that records links: per pixel, whether it
+    /// holds more than one surface (see [`Microbuffer::is_mixed`]); empty otherwise.
     mixed: Vec<bool>,
 }
 
@@ -436,7 +436,8 @@ impl Microbuffer {
     /// senders whose normals differ by more than 30° (or one without a normal: a node whose
     /// surfels face many ways), or that lie apart in depth. Its coverages then composite
     /// layers that may hide one another's brightest parts, which a pixel-wide coverage cannot
-    /// resolve (`bake::bounce::close_buffer` traces such pixels).
+    /// resolve (`bake::bounce::close_buffer` traces such pixels). Classified only in a buffer
+    /// that records links (the bake's); `false` in any other.
     pub fn is_mixed(&self, k: usize) -> bool {
         self.mixed.get(k).copied().unwrap_or(false)
     }
@@ -788,8 +789,13 @@ impl Microbuffer {
         self.alpha.fill(0.0);
         self.coverage.fill(0.0);
         self.depth.fill(f32::INFINITY);
+        // Only the bake traces mixed pixels (`bake::bounce::close_buffer`), and only its
+        // buffers record links: a render's resolve does not classify them.
+        let classify_mixed = self.links.is_some();
         self.mixed.clear();
-        self.mixed.resize(self.pixels.len(), false);
+        if classify_mixed {
+            self.mixed.resize(self.pixels.len(), false);
+        }
         let splats = std::mem::take(&mut self.pending);
         let order = self.order_by_pixel_and_depth(&splats);
         let mut links = self.links.take();
@@ -809,18 +815,17 @@ impl Microbuffer {
                 continue;
             };
             let footprint = self.pixels[k].solid_angle.sqrt();
-            let first_normal = splats[first as usize].shape.normal;
-            self.mixed[k] = first_normal == Vec3::ZERO
-                || run.iter().any(|&j| {
-                    let s = &splats[j as usize];
-                    s.shape.normal.dot(first_normal) <= SAME_FACING
-                        || !splats[first as usize].shape.same_surface(
-                            splats[first as usize].dist,
-                            &s.shape,
-                            s.dist,
-                            footprint,
-                        )
-                });
+            if classify_mixed {
+                let front = &splats[first as usize];
+                self.mixed[k] = front.shape.normal == Vec3::ZERO
+                    || run.iter().any(|&j| {
+                        let s = &splats[j as usize];
+                        s.shape.normal.dot(front.shape.normal) <= SAME_FACING
+                            || !front
+                                .shape
+                                .same_surface(front.dist, &s.shape, s.dist, footprint)
+                    });
+            }
             let mut open = 1.0f32;
             let mut covered = 0.0f32;
             let mut sum = Rgb::ZERO;
@@ -1080,34 +1085,32 @@ impl Microbuffer {
         traced: &[(usize, usize, u32)],
         found: &[(Lookup, Rgb, f32)],
     ) {
-        let ends = traced.iter().skip(1).map(|t| t.1).chain([found.len()]);
-        let mut replaced = vec![
-            false;
-            if self.links.is_some() {
-                self.pixels.len()
-            } else {
-                0
-            }
-        ];
-        for (&(k, first, count), end) in traced.iter().zip(ends) {
+        // Each traced pixel's rays' finds: found[first..end].
+        let ends: Vec<usize> = traced
+            .iter()
+            .skip(1)
+            .map(|t| t.1)
+            .chain([found.len()])
+            .collect();
+        for (&(k, first, count), &end) in traced.iter().zip(&ends) {
             let (mut sum, mut cos_sum) = (Rgb::ZERO, Rgb::ZERO);
             for &(_, l, cos) in &found[first..end] {
                 sum += l;
                 cos_sum += l * cos;
             }
             self.set_traced(k, sum, cos_sum, (end - first) as u32, count);
-            if let Some(r) = replaced.get_mut(k) {
-                *r = true;
-            }
         }
         if self.links.is_none() {
             return;
         }
         let sources: Vec<u32> = found.iter().map(|&(l, _, _)| self.source_of(l)).collect();
+        let mut replaced = vec![false; self.pixels.len()];
+        for &(k, _, _) in traced {
+            replaced[k] = true;
+        }
         let Some(links) = &mut self.links else { return };
         links.entries.retain(|e| !replaced[e.pixel as usize]);
-        let ends = traced.iter().skip(1).map(|t| t.1).chain([found.len()]);
-        for (&(k, first, count), end) in traced.iter().zip(ends) {
+        for (&(k, first, count), &end) in traced.iter().zip(&ends) {
             let share = 1.0 / count as f32;
             links.entries.extend((first..end).map(|i| PixelLink {
                 pixel: k as u32,
