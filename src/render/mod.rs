@@ -821,8 +821,9 @@ fn gather_set(
         } else {
             &r.bsdf
         };
-        stats.bright_rays += bright::trace_bright_pixels(ctx, senders, r, mb, bsdf);
-        mb.convolve(bsdf, r.view)
+        let (reflected, rays) = bright::reflect_tracing_bright_pixels(ctx, senders, r, mb, bsdf);
+        stats.bright_rays += rays;
+        reflected
     };
     // Each lone receiver's value and what its gather cost.
     let gathered_alone: Vec<(Rgb, GatherStats)> = alone
