@@ -29,5 +29,9 @@ mean = s1 / 16
 def write(path, img):
     mi.Bitmap(np.ascontiguousarray(img, dtype=np.float32), mi.Bitmap.PixelFormat.RGB).write(path)
 write(o.out, mean)
+# The sample count beside the image (`caustic_d64_ref.exr` → `caustic_d64_ref.spp`), for
+# whoever takes its noise out of an error (examples/bench_still.rs).
+with open(os.path.splitext(o.out)[0] + '.spp', 'w') as f:
+    f.write(f'{n * 16}\n')
 if o.var:
     write(o.var, np.maximum(s2 - 16 * mean * mean, 0) / 15 * n)
