@@ -338,6 +338,7 @@ const RENDER_KEYS: &[&str] = &[
     "far_eps",
     "spp",
     "paths_through_glossy",
+    "retrace_glossy",
     "sparse",
     "seed",
 ];
@@ -376,6 +377,7 @@ fn render_settings(settings: Option<&Bound<'_, PyDict>>) -> PyResult<wpbgi::Rend
             "far_eps" => s.far_eps = value.extract()?,
             "spp" => s.spp = value.extract()?,
             "paths_through_glossy" => s.paths_through_glossy = value.extract()?,
+            "retrace_glossy" => s.retrace_glossy = value.extract()?,
             "sparse" => s.sparse = value.extract()?,
             "seed" => s.seed = value.extract()?,
             other => return Err(refuse(other, "render", RENDER_KEYS)),

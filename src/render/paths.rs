@@ -88,7 +88,8 @@ pub(crate) fn path_gather(
                 r.mesh,
                 continuation,
                 &mut sampler,
-            );
+            )
+            .light;
     }
     let l = r.weight * sum / spp as f32;
     if l.is_finite() {
@@ -98,21 +99,36 @@ pub(crate) fn path_gather(
     }
 }
 
+/// What a ray into the cache brought back ([`into_cache`]).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct CacheRay {
+    /// All the light it brought.
+    pub light: Rgb,
+    /// The part of `light` that emitters sent through its glossy hits (found by next-event
+    /// estimation or by a BSDF sample): the path-traced part, whose noise is a glint's
+    /// (`super::bright` caps it).
+    pub emitted: Rgb,
+    /// Whether the ray hit the scene at all.
+    pub hit: bool,
+}
+
 /// The light arriving along the ray `(o, w)` leaving a receiver on mesh `receiver_mesh`, less
 /// what its own next-event estimation took (the emitters it hits first): the cache's at the
 /// first hit, or, through glossy hits ([`Continuation`]), a path traced on to the first rough
 /// one, its emitters found by next-event estimation and by its BSDF samples, combined by the
 /// power heuristic as the reference path tracer combines them.
-fn into_cache(
+pub(crate) fn into_cache(
     ctx: &Tracer,
     senders: &Senders,
     (mut o, mut w): (Vec3, Vec3),
     receiver_mesh: u32,
     continuation: Continuation,
     sampler: &mut Sampler,
-) -> Rgb {
+) -> CacheRay {
     let scene = ctx.scene;
-    let mut sum = Rgb::ZERO;
+    let mut cached = Rgb::ZERO;
+    let mut emitted = Rgb::ZERO;
+    let mut hit_any = false;
     let mut throughput = Rgb::ONE;
     // The BSDF density of the direction that led here from a glossy hit (none yet: the
     // receiver's own emitters are its next-event estimation's).
@@ -121,26 +137,27 @@ fn into_cache(
     for through in 0..=continuation.most {
         let Some(hit) = intersect(ctx, o, w) else {
             if from_glossy.is_some() {
-                sum += ctx.environment_hit(w, from_glossy, throughput);
+                emitted += ctx.environment_hit(w, from_glossy, throughput);
             }
             break;
         };
+        hit_any = true;
         let material = &scene.materials[scene.meshes[hit.mesh as usize].material];
         let view = hit.frame.to_local(-w);
         if from_glossy.is_some() {
-            sum += ctx.emission_hit(&hit, w, from_glossy, throughput);
+            emitted += ctx.emission_hit(&hit, w, from_glossy, throughput);
         }
         let bsdf = material.bsdf_at(&scene.textures, hit.uv);
         let glossy = bsdf.alpha().is_some_and(|a| a < continuation.glossy_below);
         if !(continuation.through_glossy && glossy && through < continuation.most) {
             if let Some(lookup) = senders.lookup_at(hit.p, hit.mesh, hit.ng, -w, reader) {
-                sum += throughput * senders.radiance_of(lookup);
+                cached += throughput * senders.radiance_of(lookup);
             }
             break;
         }
         // A glossy hit: one emitter sample, then a BSDF sample onwards.
         let u = (sampler.next_1d(), sampler.next_2d());
-        sum += ctx.next_event(&hit, &bsdf, view, u, throughput);
+        emitted += ctx.next_event(&hit, &bsdf, view, u, throughput);
         let (u0, u) = (sampler.next_1d(), sampler.next_2d());
         let Some(bs) = bsdf.sample(view, u0, u, TransportMode::Radiance) else {
             break;
@@ -155,5 +172,9 @@ fn into_cache(
         o = hit.spawn(dir);
         w = dir;
     }
-    sum
+    CacheRay {
+        light: cached + emitted,
+        emitted,
+        hit: hit_any,
+    }
 }
