@@ -96,7 +96,9 @@ pub struct Retrace {
 ///
 /// Only the upper hemisphere's: traced, a glass receiver's transmitted pixels (rays into its
 /// own solid, reading the inward light where they leave it) made cbox-rough's sphere 7 % too
-/// dark (its mean against the reference 0.974 → 0.898), a bias not yet understood.
+/// dark (its mean against the reference 0.974 → 0.898), a bias not yet understood; retraced
+/// through the sphere instead, 0.920: the loss is not in the light the rays read
+/// (docs/render.md, "Bright pixels traced").
 pub fn reflect_tracing_bright_pixels(
     ctx: &Tracer,
     senders: &Senders,
