@@ -1,13 +1,14 @@
-//! A still frame's whole job against deep references, beside Mitsuba 3 + Intel OIDN from the
-//! same run (issue 75).
+//! A still frame's whole job against deep references, beside Mitsuba 3 alone and Mitsuba 3 +
+//! Intel OIDN from the same run (issue 75).
 //!
 //! For each scene: `wpbgi bake` and `wpbgi render --size 256x256` with their defaults, as a
 //! user runs them (fresh processes, wall seconds each), the image's relMSE against Mitsuba's
 //! max_depth 64 reference with that reference's own noise taken out (its per-sample variance
 //! over its samples, as `mitsuba_oidn.py` does with `REF_VAR`), on caustic.gltf also the
-//! relMSE inside the caustic spot under its sphere; then the seconds Mitsuba 3 + OIDN takes to
-//! the same relMSE (`scripts/anchor/mitsuba_oidn.py` at 4 to 1 024 spp, read log-log between
-//! the two sample counts that bracket it), and the still's ratio: bake + render over that.
+//! relMSE inside the caustic spot under its sphere; then the seconds Mitsuba 3 alone and
+//! Mitsuba 3 + OIDN take to the same relMSE (`scripts/anchor/mitsuba_oidn.py` at 4 to 1 024
+//! spp, one render each denoised or not, read log-log between the two sample counts that
+//! bracket it), and the still's ratios: bake + render over each.
 //! With `WPBGI_PREVIOUS=/path/to/an/older/wpbgi`, the same for that binary, from the same run.
 //!
 //! ```sh
@@ -181,14 +182,38 @@ fn still(bin: &Path, subject: &Subject) -> common::Result<Still> {
     })
 }
 
-/// Mitsuba + OIDN's (spp, seconds, relMSE) on `subject`, by sample count.
-fn anchor(python: &Path, subject: &Subject) -> common::Result<Vec<(u32, f64, f64)>> {
+/// One anchor's (spp, seconds, relMSE) by sample count: Mitsuba alone, and Mitsuba + OIDN.
+struct Anchors {
+    mitsuba: Vec<(u32, f64, f64)>,
+    oidn: Vec<(u32, f64, f64)>,
+}
+
+/// Mitsuba's and Mitsuba + OIDN's runs on `subject`, from the same renders.
+fn anchor(python: &Path, subject: &Subject) -> common::Result<Anchors> {
     let runs =
         common::mitsuba_anchor_deep(python, &subject.scene, &subject.reference, &ANCHOR_SPP)?;
-    Ok(runs
-        .iter()
-        .filter_map(|(spp, v)| Some((*spp, v["oidn_total_s"].as_f64()?, v["oidn"][1].as_f64()?)))
-        .collect())
+    let series = |seconds: &str, error: &str| -> Vec<(u32, f64, f64)> {
+        runs.iter()
+            .filter_map(|(spp, v)| Some((*spp, v[seconds].as_f64()?, v[error][1].as_f64()?)))
+            .collect()
+    };
+    Ok(Anchors {
+        mitsuba: series("pt_s", "pt"),
+        oidn: series("oidn_total_s", "oidn"),
+    })
+}
+
+/// `runs`' seconds to relMSE `target` as a table cell, and the still's `total` seconds over
+/// them ("<" where the runs never reach it: the ratio is below that).
+fn versus(runs: Option<&[(u32, f64, f64)]>, target: f64, total: f64) -> (String, String) {
+    match runs.map(|r| seconds_to(r, target)) {
+        None => ("not run".to_string(), "-".to_string()),
+        Some(Ok(t)) => (format!("{t:.2}"), format!("{:.2}", total / t)),
+        Some(Err(last)) => (
+            format!("not reached in {last:.1}"),
+            format!("< {:.2}", total / last),
+        ),
+    }
 }
 
 /// The seconds `runs` take to relMSE `target`: the first sample count that reaches it,
@@ -224,19 +249,19 @@ fn main() -> common::Result<()> {
     let python = std::env::var_os("WPBGI_ANCHOR_PYTHON").map(PathBuf::from);
     println!(
         "A still at 256², `wpbgi bake` + `wpbgi render` (defaults) against Mitsuba's max_depth \
-         64, its noise taken out; Mitsuba + OIDN's seconds to the same relMSE; {} threads.",
+         64, its noise taken out; Mitsuba's and Mitsuba + OIDN's seconds to the same relMSE; {} threads.",
         rayon::current_num_threads()
     );
     println!(
-        "| scene | version | bake s | render s | relMSE | caustic spot relMSE | Mitsuba + OIDN s \
-         to that relMSE | still ÷ Mitsuba + OIDN |"
+        "| scene | version | bake s | render s | relMSE | caustic spot relMSE | Mitsuba s to that \
+         relMSE | still ÷ Mitsuba | Mitsuba + OIDN s to that relMSE | still ÷ Mitsuba + OIDN |"
     );
-    println!("|---|---|---:|---:|---:|---:|---:|---:|");
+    println!("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|");
     for name in &names {
         let subject = match subject(name) {
             Ok(s) => s,
             Err(why) => {
-                println!("| {name} | not run: {why} | | | | | | |");
+                println!("| {name} | not run: {why} | | | | | | | | |");
                 continue;
             }
         };
@@ -252,16 +277,12 @@ fn main() -> common::Result<()> {
         };
         for (version, s) in &stills {
             let total = s.bake_s + s.render_s;
-            let (anchor_s, ratio) = match runs.as_deref().map(|r| seconds_to(r, s.rel)) {
-                None => ("not run".to_string(), "-".to_string()),
-                Some(Ok(t)) => (format!("{t:.2}"), format!("{:.2}", total / t)),
-                Some(Err(last)) => (
-                    format!("not reached in {last:.1}"),
-                    format!("< {:.2}", total / last),
-                ),
-            };
+            let (mitsuba_s, mitsuba_ratio) =
+                versus(runs.as_ref().map(|r| &r.mitsuba[..]), s.rel, total);
+            let (oidn_s, oidn_ratio) = versus(runs.as_ref().map(|r| &r.oidn[..]), s.rel, total);
             println!(
-                "| {name} | {version} | {:.2} | {:.2} | {:.3e} | {} | {anchor_s} | {ratio} |",
+                "| {name} | {version} | {:.2} | {:.2} | {:.3e} | {} | {mitsuba_s} | \
+                 {mitsuba_ratio} | {oidn_s} | {oidn_ratio} |",
                 s.bake_s,
                 s.render_s,
                 s.rel,

@@ -42,7 +42,7 @@ use crate::trace::Tracer;
 /// Measured at 256² against Mitsuba's max_depth 64 (default caches): the first tier alone gave
 /// relMSE 2.41e-4 (cbox-diffuse), 1.23e-3 (ceiling-diffuse), 7.2e-4 (cbox-rough), 6.4e-4
 /// (cbox-mirror), 1.75e-3 (wall-glossy); the three, 1.99e-4, 5.9e-4, 4.9e-4, 4.0e-4, 1.23e-3,
-/// for renders 1.5–3 times as long. Tiers of 16, 4 and 1 rays, or a last tier of one ray,
+/// for renders 2–3.1 times as long (one session, runs apart). Tiers of 16, 4 and 1 rays, or a last tier of one ray,
 /// were worse on wall-glossy (2.5e-3, 1.6e-3): one ray cannot place an edge.
 pub const TIERS: [(f32, u32); 3] = [(1.0 / 32.0, 8), (1.0 / 128.0, 4), (1.0 / 512.0, 2)];
 
@@ -57,9 +57,10 @@ fn rays_per_side(share: f32) -> Option<u32> {
 
 /// A traced ray's light from emitters through glossy hits is capped at this many times the
 /// luminance the cut found in its pixel (see [`Retrace`]). Measured at 256² against Mitsuba's
-/// max_depth 64 (default caches): a cap of 4, 16 and none gave cbox-mirror relMSE 8.3e-4,
-/// 6.4e-4 and 5.9e-4 and caustic.gltf's spot 1.35e-2, 1.94e-2 and 1.98e-2; without a cap,
-/// caustic.gltf's ceiling is speckled where the sphere mirrors the lamp.
+/// max_depth 64 (default caches, 64 rays a traced pixel, before [`TIERS`]): caps of 4 and 16
+/// gave cbox-mirror relMSE 8.3e-4 and 6.4e-4, no cap 5.9e-4 (with the first glossy hit's
+/// samples stratified, a variant since dropped); without a cap, caustic.gltf's ceiling is
+/// speckled where the sphere mirrors the lamp.
 pub const GLINT_CAP: f32 = 16.0;
 
 /// Sample indices of the bright pixels' streams start here, above any camera sample's and
