@@ -216,3 +216,64 @@ fn footprint_splats_conserve_coverage() {
         );
     }
 }
+
+/// A rough glass's lobes under uniform light, through a buffer refined by its BSDF: the
+/// convolution's reflected and transmitted light against the BSDF's own sampled albedo
+/// (Mitsuba's importance sampling, 400 000 samples, of which the reflected lobe takes about
+/// 4 %: its noise is below 0.5 %, the transmitted one's below 0.1 %). A pixel that holds the
+/// lobe takes the BSDF's mean over its parts (`LOBE_QUADRATURE`); at its centre alone, α
+/// 0.1's transmitted light came out 0.926–1.008 of the albedo for θo 0–75° (7.4 % dark at
+/// 20°). Measured now: α 0.1 reflected 0.985–0.998, transmitted 0.991–0.999; α 0.2
+/// 0.990–1.004 and 0.995–0.998.
+#[test]
+fn refined_buffers_integrate_a_narrow_lobe_over_its_pixels() {
+    use glam::Vec2;
+    use wpbgi::bsdf::{Distribution, Microfacet, RoughDielectric, TransportMode};
+    for alpha in [0.1f32, 0.2] {
+        let bsdf = Bsdf::Dielectric(RoughDielectric {
+            distr: Microfacet::new(Distribution::Ggx, alpha, alpha),
+            eta: 1.5,
+            specular_reflectance: Rgb::ONE,
+            specular_transmittance: Rgb::ONE,
+        });
+        for degrees in [0.0f32, 10.0, 20.0, 30.0, 45.0, 60.0, 75.0] {
+            let t = degrees.to_radians();
+            let wo = Vec3::new(t.sin(), 0.0, t.cos());
+            let n = 400_000;
+            let mut s = Sampler::new(7, u64::from(degrees as u32), 0);
+            let (mut reflected, mut transmitted) = (0.0f64, 0.0f64);
+            for _ in 0..n {
+                let (u0, u): (f32, Vec2) = (s.next_1d(), s.next_2d());
+                if let Some(b) = bsdf.sample(wo, u0, u, TransportMode::Radiance) {
+                    let w = f64::from(b.weight.x);
+                    if b.wo.z < 0.0 {
+                        transmitted += w;
+                    } else {
+                        reflected += w;
+                    }
+                }
+            }
+            let mut mb = Microbuffer::new(16, true, Frame::from_normal(Vec3::Z));
+            mb.refine_for_bsdf(&bsdf, wo, 1.0 / 64.0, 5);
+            mb.fill(Rgb::ONE);
+            let (mut up, mut down) = (0.0f64, 0.0f64);
+            for (k, l) in mb.convolved_pixels(&bsdf, wo) {
+                if mb.pixels[k].dir.z < 0.0 {
+                    down += f64::from(l.x);
+                } else {
+                    up += f64::from(l.x);
+                }
+            }
+            let (up, down) = (up * n as f64 / reflected, down * n as f64 / transmitted);
+            eprintln!("α {alpha} θo {degrees}°: reflected {up:.4}, transmitted {down:.4}");
+            assert!(
+                (up - 1.0).abs() < 0.02,
+                "α {alpha} θo {degrees}°: reflected {up}"
+            );
+            assert!(
+                (down - 1.0).abs() < 0.02,
+                "α {alpha} θo {degrees}°: transmitted {down}"
+            );
+        }
+    }
+}

@@ -37,6 +37,21 @@ pub const MAX_LAYER_COVER: f32 = 2.0;
 /// relMSE (docs/render.md).
 pub const FAINT_LIGHT: f32 = 0.01;
 
+/// A refined buffer's pixel that holds more than this share of its receiver's BSDF weight
+/// ([`Microbuffer::refine_for_bsdf`]) is convolved with the BSDF's mean over a
+/// [`LOBE_QUADRATURE`]² grid of equal-area parts of it, not its value at the centre. The
+/// midpoint rule misses the curvature of a narrow lobe: a rough dielectric's transmitted lobe
+/// (α 0.1, η 1.5) under uniform light came out up to 7.4 % dark in refined buffers
+/// (`tests/microbuffer.rs`), and a glass sphere under a white sky 11 % with the cut's light
+/// (`tests/glass_furnace.rs`). The share leaves the pixels far
+/// from the lobe, which hold almost none of the light, at one evaluation.
+pub const LOBE_QUADRATURE_SHARE: f32 = 1.0 / 4096.0;
+
+/// The parts per side of a lobe pixel's quadrature ([`LOBE_QUADRATURE_SHARE`]). Under uniform
+/// light, α 0.1 glass's transmitted light with 1, 2, 4 and 8 parts per side in every pixel:
+/// 0.926–1.008, 0.971–0.999, 0.991–1.000 and 0.998–1.000 of the exact integral, θo 0–45°.
+pub const LOBE_QUADRATURE: u32 = 4;
+
 /// The least cosine between the normals of two senders of one surface (30°): what
 /// [`Shape::same_surface`] and [`Microbuffer::is_mixed`] take as facing one way.
 const SAME_FACING: f32 = 0.866;
@@ -235,6 +250,9 @@ pub struct Microbuffer {
     /// receiver's reflected light is faint ([`Microbuffer::is_faint_at`]); empty where none
     /// is.
     faint: Vec<bool>,
+    /// After [`Microbuffer::refine_for_bsdf`]: per pixel, whether it is convolved by
+    /// quadrature ([`LOBE_QUADRATURE_SHARE`]); empty where none is.
+    lobe: Vec<bool>,
     /// After [`Microbuffer::resolve`] of a buffer that records links: per pixel, whether it
     /// holds more than one surface (see [`Microbuffer::is_mixed`]); empty otherwise.
     mixed: Vec<bool>,
@@ -377,6 +395,7 @@ impl Microbuffer {
             keys: Vec::new(),
             links: None,
             faint: Vec::new(),
+            lobe: Vec::new(),
             mixed: Vec::new(),
         }
     }
@@ -426,6 +445,7 @@ impl Microbuffer {
         self.frame = frame;
         self.pending.clear();
         self.faint.clear();
+        self.lobe.clear();
         if let Some(links) = &mut self.links {
             links.sources.clear();
             links.entries.clear();
@@ -594,6 +614,10 @@ impl Microbuffer {
             return;
         }
         self.mark_faint(&weights, total);
+        let mut lobe: Vec<bool> = weights
+            .iter()
+            .map(|&w| w > LOBE_QUADRATURE_SHARE * total)
+            .collect();
         let mut queue: Vec<(usize, f32)> = weights.into_iter().enumerate().collect();
         while let Some((k, w)) = queue.pop() {
             if w <= share * total || self.pixels[k].level >= max_level {
@@ -601,11 +625,14 @@ impl Microbuffer {
             }
             let first_new = self.pixels.len();
             self.split(k);
+            lobe.resize(self.pixels.len(), false);
             for child in std::iter::once(k).chain(first_new..first_new + 3) {
                 let wc = lanes.weight(self, child, bsdf, wo, &centres);
+                lobe[child] = wc > LOBE_QUADRATURE_SHARE * total;
                 queue.push((child, wc));
             }
         }
+        self.lobe = lobe;
     }
 
     /// Mark the base pixels (of BSDF weights `weights`, summing to `total`) whose reflected
@@ -1148,11 +1175,25 @@ impl Microbuffer {
             .enumerate()
             .filter(|(_, (l, _))| **l != Rgb::ZERO)
             .map(move |(k, (l, px))| {
-                let term = *l
-                    * bsdf.eval(wo, px.dir, TransportMode::Radiance)
-                    * (px.solid_angle / px.dir.z.abs());
-                (k, term)
+                let f = if self.lobe.get(k) == Some(&true) {
+                    self.lobe_mean(k, bsdf, wo)
+                } else {
+                    bsdf.eval(wo, px.dir, TransportMode::Radiance) / px.dir.z.abs()
+                };
+                (k, *l * f * px.solid_angle)
             })
+    }
+
+    /// The mean of `bsdf` seen from `wo` (without the cosine Mitsuba's eval includes) over
+    /// pixel `k`, weighted by |cos θ| and over the pixel's mean |cos θ|: over
+    /// [`LOBE_QUADRATURE`]² equal-area parts ([`Microbuffer::pixel_directions`]). At one part
+    /// it is the BSDF at the centre.
+    fn lobe_mean(&self, k: usize, bsdf: &Bsdf, wo: Vec3) -> Rgb {
+        let parts = self.pixel_directions(k, LOBE_QUADRATURE);
+        let sum = parts.iter().fold(Rgb::ZERO, |a, &(d, cos)| {
+            a + bsdf.eval(wo, d, TransportMode::Radiance) * (cos / d.z.abs())
+        });
+        sum / (parts.len() as f32 * self.mean_cos(k))
     }
 }
 
