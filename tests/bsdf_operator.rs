@@ -229,6 +229,40 @@ fn outgoing_flux_is_at_most_incoming() {
     }
 }
 
+/// Light binned into the operator's grid from emitter samples ([`BsdfOperator::incident`])
+/// sends out the albedo's share of the flux it brings, whatever the sample's cosine within
+/// its texel: the operator weights a texel's light by the texel's mean cosine, so the bins
+/// hold cosine-weighted radiance over it. Binned as plain radiance, a lamp just above a gold
+/// face's horizon (cos θ = 0.01, in a texel of mean cosine 0.12) sent out twelve times its flux.
+#[test]
+fn binned_samples_send_out_the_albedos_share_of_their_flux() {
+    let bsdf = conductor(0.2);
+    let n = operator_side(&bsdf);
+    let op = BsdfOperator::new(&bsdf, n, 1e-2);
+    let k = kernel(&bsdf, n);
+    let texel_solid_angle = std::f32::consts::TAU / (n * n) as f32;
+    for z in [0.01f32, 0.05, 0.2, 0.9] {
+        let w = Vec3::new((1.0 - z * z).sqrt(), 0.0, z);
+        let i = op.texel_of(w).expect("above the horizon") as usize;
+        let value = Rgb::splat(2.0);
+        let x = op.incident([(w, value)].into_iter());
+        let lo = op.outgoing(&x, 0.0, UNTINTED);
+        let sent = lo
+            .iter()
+            .zip(&k.cosines)
+            .fold(Rgb::ZERO, |a, (l, c)| a + *l * (*c * texel_solid_angle));
+        let arrived = value * z;
+        let ratio = sent / (arrived * k.albedo[i][0]);
+        eprintln!(
+            "cos θ {z}: texel {i} of mean cosine {:.3}, sent / (albedo × arrived) {:?}",
+            k.cosines[i], ratio
+        );
+        for c in 0..3 {
+            assert!((ratio[c] - 1.0).abs() < 1e-3, "cos θ {z}: {ratio:?}");
+        }
+    }
+}
+
 /// A tinted BSDF through its untinted operator and its tints ([`Bsdf::untinted`]) gives what
 /// the tinted BSDF's own kernel gives, summed directly: the tints scale K's reflection and
 /// transmission blocks, which is what lets one operator serve a textured colour. Also the

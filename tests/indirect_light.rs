@@ -69,14 +69,34 @@ fn rel_mse_less_noise(img: &Image, reference: &Image, variance: &Image) -> f64 {
 
 #[test]
 fn a_lamp_facing_the_ceiling_lights_the_room_as_mitsuba_does() {
-    let scene = Scene::load(&data("ceiling-diffuse.gltf")).expect("scene");
-    let dir = common::Scratch::new("indirect_light");
+    within_two_percent_by_region("ceiling-diffuse", 9e-4);
+}
+
+/// The same room with `cbox-rough`'s gold box (α 0.2) and rough glass sphere (α 0.1):
+/// `tests/data/indirect/ceiling-rough.gltf`. The gold box's faces see the ceiling's spot
+/// near their horizon, where they reflect it most strongly towards the floor. Measured
+/// (2-core AMD EPYC): before a directional receiver's mixed pixels at its horizon were traced
+/// in the bake (`bake::bounce::iterate::trace_mixed_pixels`) and its links weighed each
+/// sender by its own cosine (`bake::bounce::transport`), the floor was 2.5 % too bright, the
+/// tall box 2.4 %, relMSE 1.18e-3; after, every region within 1.2 % (the back wall) and
+/// relMSE 1.04e-3.
+#[test]
+fn a_lamp_facing_the_ceiling_lights_gold_and_glass_as_mitsuba_does() {
+    within_two_percent_by_region("ceiling-rough", 1.6e-3);
+}
+
+/// The default bake and render of `tests/data/indirect/{name}.gltf` at 256² against its
+/// Mitsuba reference: every region's mean within 2 % and the relMSE (less the reference's
+/// noise) below `max_rel_mse`.
+fn within_two_percent_by_region(name: &str, max_rel_mse: f64) {
+    let scene = Scene::load(&data(&format!("{name}.gltf"))).expect("scene");
+    let dir = common::Scratch::new(&format!("indirect_light-{name}"));
     let cache = common::bake_to_cache(&scene, &BakeSettings::default(), &dir.join("c.wpc"));
     let camera = scene.default_camera(256, 256).expect("camera");
     let out = common::final_render(&scene, &cache, &camera);
     assert!(out.beauty.pixels.iter().all(|p| p.is_finite()));
-    let reference = read_exr(&data("ceiling-diffuse_d64_ref.exr")).expect("reference");
-    let variance = read_exr(&data("ceiling-diffuse_d64_var.exr")).expect("variance");
+    let reference = read_exr(&data(&format!("{name}_d64_ref.exr"))).expect("reference");
+    let variance = read_exr(&data(&format!("{name}_d64_var.exr"))).expect("variance");
     let names = regions(&scene, &camera);
     let mut worst = 0.0f64;
     for region in [
@@ -98,7 +118,7 @@ fn a_lamp_facing_the_ceiling_lights_the_room_as_mitsuba_does() {
         }
         assert!(count > 500, "{region}: {count} pixels");
         let ratio = ours / theirs;
-        eprintln!("{region}: {count} pixels, mean / Mitsuba's {ratio:.4}");
+        eprintln!("{name} {region}: {count} pixels, mean / Mitsuba's {ratio:.4}");
         worst = worst.max((ratio - 1.0).abs());
     }
     let rel = rel_mse_less_noise(&out.beauty, &reference, &variance);
@@ -111,5 +131,5 @@ fn a_lamp_facing_the_ceiling_lights_the_room_as_mitsuba_does() {
         "a region's mean is {:.1} % off",
         100.0 * worst
     );
-    assert!(rel < 9e-4, "relMSE {rel:.3e}");
+    assert!(rel < max_rel_mse, "relMSE {rel:.3e}");
 }

@@ -462,6 +462,15 @@ impl Microbuffer {
         self.mixed.get(k).copied().unwrap_or(false)
     }
 
+    /// Whether pixel `k` borders the horizon: its square touches the edge of its hemisphere's
+    /// unit square, which the equal-area map takes to the horizon. There the cut's footprints
+    /// are clipped and what falls past the edge is moved inside ([`Microbuffer::splat`]).
+    pub fn at_horizon(&self, k: usize) -> bool {
+        let cell = &self.cells[self.pixels[k].cell as usize];
+        let far = cell.corner + Vec2::splat(cell.side);
+        cell.corner.x <= 0.0 || cell.corner.y <= 0.0 || far.x >= 1.0 || far.y >= 1.0
+    }
+
     /// Mark pixel `k` as holding more than one surface ([`Microbuffer::is_mixed`]): a shared
     /// buffer's light composited with the member's own.
     pub(crate) fn mark_mixed(&mut self, k: usize) {
@@ -986,7 +995,7 @@ impl Microbuffer {
     }
 
     /// The exact mean |cos θ| over pixel `k`.
-    fn mean_cos(&self, k: usize) -> f32 {
+    pub(crate) fn mean_cos(&self, k: usize) -> f32 {
         let px = &self.pixels[k];
         px.dir.z.abs() * px.cos_weight
     }

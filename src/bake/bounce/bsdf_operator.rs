@@ -874,16 +874,21 @@ impl BsdfOperator {
             .collect()
     }
 
-    /// The mean incoming radiance per texel of the grid from samples of an estimator: each a
-    /// local direction and what it carries, radiance times solid angle (Lₑ/(p K) for one of
-    /// K emitter samples). A texel's mean is its samples' sum over its solid angle (the grid
-    /// is equal-area: 2π/n² a texel); samples below a reflecting BSDF's horizon are dropped.
+    /// The incoming radiance per texel of the grid from samples of an estimator: each a local
+    /// unit direction and what it carries, radiance times solid angle (Lₑ/(p K) for one of K
+    /// emitter samples). A texel's value is the radiance that, weighted by the texel's mean
+    /// |cos θ| as the operator weights it ([`kernel`]), carries the flux its samples bring:
+    /// their cosine-weighted sum over the texel's solid angle (2π/n², the grid is equal-area)
+    /// and mean cosine. A plain mean would give a light near the texel's horizon edge the
+    /// texel's mean cosine, several times its own. Samples below a reflecting BSDF's horizon
+    /// are dropped.
     pub fn incident(&self, samples: impl Iterator<Item = (Vec3, Rgb)>) -> Vec<Rgb> {
         let texel_solid_angle = 2.0 * std::f32::consts::PI / (self.n * self.n) as f32;
         let mut x = vec![Rgb::ZERO; self.size()];
         for (w, value) in samples {
             if let Some(t) = self.texel_of(w) {
-                x[t as usize] += value / texel_solid_angle;
+                let t = t as usize;
+                x[t] += value * (w.z.abs() / (self.cosines[t] * texel_solid_angle));
             }
         }
         x

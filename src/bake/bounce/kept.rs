@@ -61,8 +61,10 @@ const MAGIC: &[u8; 16] = b"WPBGI-TRANSPORT\0";
 
 /// The format this build writes and reads. 5: the same layout as 4, whose links lack the
 /// rays through mixed pixels (`iterate::trace_mixed_pixels`), so a file of 4 no longer
-/// replays this build's bake.
-pub const VERSION: u32 = 5;
+/// replays this build's bake. 6: the same layout as 5, whose directional receivers' links
+/// weigh a pixel's senders by radiance rather than by cosine-weighted radiance, and lack the
+/// rays through their mixed pixels at the horizon.
+pub const VERSION: u32 = 6;
 
 /// The hash of everything a bake's transport depends on (see [`super::iterate`]'s
 /// `transport_key`): equal keys, equal transports.

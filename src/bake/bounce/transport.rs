@@ -355,7 +355,13 @@ impl ReceiverLinks {
                 map_texels: Run::default(),
             };
         }
-        // Directional: the entries grouped into pixel runs, each run merged by slot.
+        // Directional: the entries grouped into pixel runs, each run merged by slot. A pixel's
+        // light is its cosine-weighted radiance over the pixel's mean |cos θ|: the BSDF
+        // operator weights a texel's light by that mean (`bsdf_operator::kernel`), so this is
+        // the radiance that carries the flux that arrived. The plain radiance would weigh a
+        // sender near the texel's horizon edge by the texel's mean cosine instead of its own:
+        // a bright sender just above a gold face's horizon sent up to 2.5× its light on
+        // (docs/bounces.md, "Light near a glossy receiver's horizon").
         let pixels = mb.pixels.len();
         let entries = &links.entries;
         group_by_pixel(entries.len(), pixels, |i| entries[i].pixel, order, ends);
@@ -365,9 +371,10 @@ impl ReceiverLinks {
             run.clear();
             for &i in &order[begin..end as usize] {
                 let e = &entries[i as usize];
-                if e.w != 0.0 {
+                let w = e.w_cos / mb.mean_cos(k);
+                if w != 0.0 && w.is_finite() {
                     let lookup = links.sources[e.source as usize];
-                    slots.terms(lookup, |slot, f| run.push(Term { slot, w: e.w * f }));
+                    slots.terms(lookup, |slot, f| run.push(Term { slot, w: w * f }));
                 }
             }
             merge_by_slot(run, terms);
