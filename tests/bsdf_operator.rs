@@ -258,7 +258,9 @@ fn binned_samples_send_out_the_albedos_share_of_their_flux() {
             k.cosines[i], ratio
         );
         for c in 0..3 {
-            assert!((ratio[c] - 1.0).abs() < 1e-3, "cos θ {z}: {ratio:?}");
+            // `outgoing` scales the flux to the albedo's exactly; what is left is f32
+            // rounding over the grid's texels (measured 6e-7).
+            assert!((ratio[c] - 1.0).abs() < 1e-5, "cos θ {z}: {ratio:?}");
         }
     }
 }

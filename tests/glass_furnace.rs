@@ -14,7 +14,6 @@ use glam::{Mat3, Vec2, Vec3};
 use wpbgi::bake::{BakeSettings, Quality};
 use wpbgi::bsdf::{Bsdf, Distribution, Microfacet, RoughDielectric};
 use wpbgi::reference::RenderSettings;
-use wpbgi::render::{render_final, FinalSettings};
 use wpbgi::scene::{Camera, Environment, Material, Scattering, Scene};
 use wpbgi::spectrum::{luminance, Rgb};
 
@@ -62,14 +61,7 @@ fn a_rough_glass_sphere_under_a_white_sky_matches_the_path_tracer() {
     let yfov = 0.6f32;
     let camera = Camera::look_at("camera", Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, yfov, n, n)
         .expect("camera");
-    let ours = render_final(
-        &scene,
-        &cache,
-        &camera,
-        &FinalSettings::default(),
-        &|_, _| {},
-    )
-    .expect("render");
+    let ours = common::final_render(&scene, &cache, &camera);
     let truth = wpbgi::reference::render(
         &scene,
         &camera,

@@ -105,16 +105,7 @@ fn byte_identical_for_any_thread_count() {
             .num_threads(threads)
             .build()
             .expect("pool");
-        pool.install(|| {
-            render_final(
-                &scene,
-                &cache,
-                &camera,
-                &FinalSettings::default(),
-                &|_, _| {},
-            )
-            .expect("render")
-        })
+        pool.install(|| common::final_render(&scene, &cache, &camera))
     };
     let (a, b) = (run(1), run(2));
     assert_eq!(a.beauty, b.beauty);

@@ -1165,8 +1165,9 @@ impl Microbuffer {
     }
 
     /// Outgoing radiance towards the local direction `wo` through `bsdf`: the BSDF at each
-    /// pixel's centre times the pixel's cosine-weighted radiance (Mitsuba's eval includes
-    /// the centre's cosine, divided out here).
+    /// pixel's centre (over a lobe pixel, its mean: [`LOBE_QUADRATURE_SHARE`]) times the
+    /// pixel's cosine-weighted radiance (Mitsuba's eval includes the centre's cosine, divided
+    /// out here).
     pub fn convolve(&self, bsdf: &Bsdf, wo: Vec3) -> Rgb {
         self.convolved_pixels(bsdf, wo)
             .fold(Rgb::ZERO, |a, (_, b)| a + b)
@@ -1178,19 +1179,46 @@ impl Microbuffer {
         bsdf: &'b Bsdf,
         wo: Vec3,
     ) -> impl Iterator<Item = (usize, Rgb)> + 'b {
+        self.bsdf_factors(bsdf, wo)
+            .map(move |(k, f)| (k, self.convolved_term(k, f)))
+    }
+
+    /// The BSDF's factor of every pixel that holds light, as [`Microbuffer::convolve`] weighs
+    /// it: a caller that changes some pixels' light ([`Microbuffer::set_traced`]) convolves
+    /// again with [`Microbuffer::convolve_with`] without evaluating the BSDF again.
+    pub fn bsdf_factors<'b>(
+        &'b self,
+        bsdf: &'b Bsdf,
+        wo: Vec3,
+    ) -> impl Iterator<Item = (usize, Rgb)> + 'b {
         self.cos_radiance
             .iter()
             .zip(&self.pixels)
             .enumerate()
             .filter(|(_, (l, _))| **l != Rgb::ZERO)
-            .map(move |(k, (l, px))| {
+            .map(move |(k, (_, px))| {
                 let f = if self.lobe.get(k) == Some(&true) {
                     self.lobe_mean(k, bsdf, wo)
                 } else {
                     bsdf.eval(wo, px.dir, TransportMode::Radiance) / px.dir.z.abs()
                 };
-                (k, *l * f * px.solid_angle)
+                (k, f)
             })
+    }
+
+    /// [`Microbuffer::convolve`] from the `factors` [`Microbuffer::bsdf_factors`] gave, over
+    /// the pixels' light as it is now (which may only have changed where it was not zero):
+    /// the same terms, summed in the same order, so the same value to the bit.
+    pub fn convolve_with(&self, factors: &[(usize, Rgb)]) -> Rgb {
+        factors
+            .iter()
+            .filter(|&&(k, _)| self.cos_radiance[k] != Rgb::ZERO)
+            .fold(Rgb::ZERO, |a, &(k, f)| a + self.convolved_term(k, f))
+    }
+
+    /// Pixel `k`'s term of the convolution for its BSDF factor `f`.
+    pub(crate) fn convolved_term(&self, k: usize, f: Rgb) -> Rgb {
+        self.cos_radiance[k] * f * self.pixels[k].solid_angle
     }
 
     /// The mean of `bsdf` seen from `wo` (without the cosine Mitsuba's eval includes) over

@@ -42,8 +42,9 @@ use crate::trace::Tracer;
 /// Measured at 256² against Mitsuba's max_depth 64 (default caches): the first tier alone gave
 /// relMSE 2.41e-4 (cbox-diffuse), 1.23e-3 (ceiling-diffuse), 7.2e-4 (cbox-rough), 6.4e-4
 /// (cbox-mirror), 1.75e-3 (wall-glossy); the three, 1.99e-4, 5.9e-4, 4.9e-4, 4.0e-4, 1.23e-3,
-/// for renders 2–3.1 times as long (one session, runs apart). Tiers of 16, 4 and 1 rays, or a last tier of one ray,
-/// were worse on wall-glossy (2.5e-3, 1.6e-3): one ray cannot place an edge.
+/// for renders 2–3.1 times as long (one session, runs apart). Tiers of 16, 4 and 1 rays, or a
+/// last tier of one ray, were worse on wall-glossy (2.5e-3, 1.6e-3): one ray cannot place an
+/// edge.
 pub const TIERS: [(f32, u32); 3] = [(1.0 / 32.0, 8), (1.0 / 128.0, 4), (1.0 / 512.0, 2)];
 
 /// A glass receiver's transmitted pixels (its buffer's lower hemisphere: the inside of its
@@ -100,8 +101,10 @@ pub struct Retrace {
 /// The light receiver `r` reflects towards its viewer through `bsdf` from `mb` (resolved),
 /// as [`Microbuffer::convolve`] gives it, once the pixels that hold more than the last of
 /// [`TIERS`]' shares of it are traced, replacing what the cut splatted there; and the rays
-/// traced. Where no pixel is traced the convolution already made is the answer (the same
-/// terms summed in the same order), so the BSDF is evaluated over the buffer once.
+/// traced. The BSDF is evaluated over the buffer once ([`Microbuffer::bsdf_factors`]): where
+/// no pixel is traced the convolution already made is the answer, and where some are, the
+/// same factors convolve the traced light ([`Microbuffer::convolve_with`]), the same terms
+/// summed in the same order as [`Microbuffer::convolve`].
 ///
 /// With `retrace`, the rays go on through glossy hits ([`Retrace`]); without, each reads the
 /// cache at its first hit.
@@ -119,7 +122,12 @@ pub fn reflect_tracing_bright_pixels(
     bsdf: &Bsdf,
     retrace: Option<Retrace>,
 ) -> (Rgb, u64) {
-    let terms: Vec<(usize, Rgb)> = mb.convolved_pixels(bsdf, r.view).collect();
+    // The BSDF is evaluated once per lit pixel; the convolution after tracing reuses it.
+    let factors: Vec<(usize, Rgb)> = mb.bsdf_factors(bsdf, r.view).collect();
+    let terms: Vec<(usize, Rgb)> = factors
+        .iter()
+        .map(|&(k, f)| (k, mb.convolved_term(k, f)))
+        .collect();
     let reflected = terms.iter().fold(Rgb::ZERO, |a, &(_, b)| a + b);
     let total: f32 = terms.iter().map(|&(_, l)| luminance(l)).sum();
     if !(total > 0.0) || !total.is_finite() {
@@ -163,7 +171,7 @@ pub fn reflect_tracing_bright_pixels(
     if traced == 0 {
         return (reflected, 0);
     }
-    (mb.convolve(bsdf, r.view), traced)
+    (mb.convolve_with(&factors), traced)
 }
 
 /// `ray`'s light with its emitted part's luminance capped at `cap` ([`GLINT_CAP`]).

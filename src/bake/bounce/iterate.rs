@@ -604,7 +604,7 @@ pub const MIXED_RAYS_PER_SIDE: u32 = 3;
 /// horizon ([`Microbuffer::at_horizon`]), where the cut's footprints are clipped and a
 /// glossy surface reflects grazing light most strongly: a gold box under that lamp's spot
 /// sent the floor 1.6–2.0 times the path tracer's light, 1.04–1.23 with these pixels traced
-/// (1.0–1.1 with all). Its other mixed pixels keep the cut's light: traced, they moved the
+/// (0.99–1.10 with all). Its other mixed pixels keep the cut's light: traced, they moved the
 /// conductor furnace of tests/furnace.rs from +0.4 % to −2.9 % at ρ = 0.99 (−0.1 % to
 /// −0.8 % at 0.9), a bias not yet understood; the horizon's pixels left it at +0.4 %.
 fn trace_mixed_pixels(

@@ -360,8 +360,9 @@ impl ReceiverLinks {
         // operator weights a texel's light by that mean (`bsdf_operator::kernel`), so this is
         // the radiance that carries the flux that arrived. The plain radiance would weigh a
         // sender near the texel's horizon edge by the texel's mean cosine instead of its own:
-        // a bright sender just above a gold face's horizon sent up to 2.5× its light on
-        // (docs/bounces.md, "Light near a glossy receiver's horizon").
+        // one at cos θ = 0.01 in the outermost ring at 16² (mean cosine 0.12) would send on
+        // twelve times the flux it brings (docs/bounces.md, "Light near a glossy receiver's
+        // horizon").
         let pixels = mb.pixels.len();
         let entries = &links.entries;
         group_by_pixel(entries.len(), pixels, |i| entries[i].pixel, order, ends);
