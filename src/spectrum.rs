@@ -12,8 +12,11 @@ pub(crate) fn max_component(c: Rgb) -> f32 {
     c.x.max(c.y).max(c.z)
 }
 
+/// Rec. 709 luminance's weights of red, green and blue.
+pub const LUMINANCE: [f32; 3] = [0.212_671, 0.715_160, 0.072_169];
+
 /// Rec. 709 luminance.
 #[inline]
 pub fn luminance(c: Rgb) -> f32 {
-    0.212_671 * c.x + 0.715_160 * c.y + 0.072_169 * c.z
+    LUMINANCE[0] * c.x + LUMINANCE[1] * c.y + LUMINANCE[2] * c.z
 }

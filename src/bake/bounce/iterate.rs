@@ -16,7 +16,7 @@
 //! radiance. The loop stops when a bounce carries less than `tolerance` of the reflected
 //! total, when the ratio r of successive bounce energies has settled (three bounces within
 //! 1 % of each other), or at `max`; whichever stops it, the geometric tail Σ_{j≥1} rʲ of the
-//! last bounce is added at once (a stiff scene, albedo near 1, would need hundreds of
+//! last bounce is added at once, r each channel's own ratio (a stiff scene, albedo near 1, would need hundreds of
 //! bounces, and a tail left out darkens the cache by r/(1 − r) times the last bounce).
 //!
 //! Receivers gather per group of the view tree (docs/method.md §8.3, [`super::view_tree`]): nearby
@@ -61,7 +61,7 @@ use crate::geometry::offset::offset_origin;
 use crate::haar::{texel_directions, Haar2d, SparseHaar};
 use crate::progress::Progress;
 use crate::scene::Scene;
-use crate::spectrum::{luminance, Rgb};
+use crate::spectrum::{Rgb, LUMINANCE};
 use crate::surfels::coding::{encode, node_sums, CodedTree};
 use crate::surfels::radiance::{intensity_of, map_levels, SurfelRadiance};
 use crate::surfels::Surfel;
@@ -80,21 +80,42 @@ use std::sync::atomic::{AtomicBool, Ordering};
 /// a later bounce costs 0.75 s instead of 1.2 (docs/bounces.md).
 pub const SENT_TAU_FACTOR: f32 = 5.0;
 
-/// The energy measure of a set of surfel radiances: Σ area × luminance of the mean outgoing
-/// radiance (over the front hemisphere for diffuse surfels, the sphere for maps).
-fn energy(baked: &Baked, radiance: &[SurfelRadiance]) -> f64 {
+/// The energy of a set of surfel radiances per channel: Σ area × the mean outgoing radiance
+/// (over the front hemisphere for diffuse surfels, the sphere for maps), red, green, blue.
+fn channel_energies(baked: &Baked, radiance: &[SurfelRadiance]) -> [f64; 3] {
     baked
         .surfels
         .iter()
         .zip(radiance)
-        .map(|(s, r)| {
-            let mean = match r {
+        .fold([0.0; 3], |[r, g, b], (s, l)| {
+            let mean = match l {
                 SurfelRadiance::Rgb(c) => *c,
                 SurfelRadiance::Map(m) => m.mean(),
             };
-            f64::from(s.area) * f64::from(luminance(mean))
+            let a = f64::from(s.area);
+            [
+                r + a * f64::from(mean.x),
+                g + a * f64::from(mean.y),
+                b + a * f64::from(mean.z),
+            ]
         })
-        .sum()
+}
+
+/// The energy measure of the bounce control: the luminance of [`channel_energies`].
+fn energy_of(channels: [f64; 3]) -> f64 {
+    let [r, g, b] = LUMINANCE.map(f64::from);
+    r * channels[0] + g * channels[1] + b * channels[2]
+}
+
+/// The geometric tail Σ_{j≥1} rʲ = r/(1 − r) of a channel whose last two bounces carried
+/// `prev` and `last`: none where the light does not shrink from bounce to bounce.
+fn tail_of(prev: f64, last: f64) -> f64 {
+    let r = if prev > 0.0 { last / prev } else { 0.0 };
+    if r > 0.0 && r < 1.0 {
+        r / (1.0 - r)
+    } else {
+        0.0
+    }
 }
 
 /// `a + b·k`, surfel by surfel (both of the same kind per surfel).
@@ -245,7 +266,9 @@ pub fn add_bounces(
     let regathered = &groups[kept.len()..];
     let read = read_nodes(&slots, &index, &baked.tree);
 
-    let mut total_energy = energy(baked, &reflected_direct);
+    let mut total_energy = energy_of(channel_energies(baked, &reflected_direct));
+    // The last two bounces' energies per channel, for the tail.
+    let mut channels = [[0.0f64; 3]; 2];
     // What the receivers gathered over the bounces, summed before their BSDFs: the bounces'
     // light is turned into outgoing radiance and added to the total once, at the end.
     let mut gathered = vec![Incident::Nothing; baked.surfels.len()];
@@ -265,7 +288,8 @@ pub fn add_bounces(
         let (mut light, incident) = gather.evaluate(&kept, regathered, &index, &values, cancel)?;
         receivers.blend(&mut light, tau);
         gather.reflect(&mut light);
-        let e = energy(baked, &light);
+        channels = [channels[1], channel_energies(baked, &light)];
+        let e = energy_of(channels[1]);
         report.energies.push(e);
         if let Some(&prev) = report.energies.iter().rev().nth(1) {
             ratios.push(if prev > 0.0 { e / prev } else { 0.0 });
@@ -289,16 +313,23 @@ pub fn add_bounces(
         let stop = !fixed_count && (small || settled || bounce == settings.max);
         // On stopping, the bounces left sum to about this one times r/(1 − r), r the last
         // ratio of successive energies: added with it, whatever stopped the loop (left out,
-        // they would darken the cache by that much).
-        let r = *ratios.last().unwrap_or(&0.0);
-        let tail = (stop && r > 0.0 && r < 1.0).then(|| r / (1.0 - r));
-        let weight = 1.0 + tail.unwrap_or(0.0) as f32;
+        // they would darken the cache by that much). Per channel: a coloured room's channels
+        // shrink at their own rates (red light between a red wall and gold keeps more of
+        // itself each bounce than the room's luminance does), and one luminance ratio cut
+        // the redder channel's tail short.
+        let tail = stop.then(|| {
+            let [prev, last] = channels;
+            [0, 1, 2].map(|c| tail_of(prev[c], last[c]))
+        });
+        let tail = tail.filter(|t| t.iter().any(|&x| x > 0.0));
+        let weight = Rgb::ONE + tail.map_or(Rgb::ZERO, |t| Rgb::from(t.map(|x| x as f32)));
         for (i, l) in incident {
             gathered[i as usize].add(l, weight);
         }
         if let Some(tail) = tail {
             report.extrapolated = Some(tail);
-            report.residual = e * tail / (total_energy + e * tail);
+            let rest = energy_of([0, 1, 2].map(|c| channels[1][c] * tail[c]));
+            report.residual = rest / (total_energy + rest);
         }
         report.seconds.push(start.elapsed().as_secs_f64());
         start = std::time::Instant::now();
@@ -705,8 +736,9 @@ enum Incident {
 }
 
 impl Incident {
-    /// Add `other` times `weight` (both of one receiver, so of the same kind).
-    fn add(&mut self, other: Incident, weight: f32) {
+    /// Add `other` times `weight`, channel by channel (both of one receiver, so of the same
+    /// kind).
+    fn add(&mut self, other: Incident, weight: Rgb) {
         match (self, other) {
             (Incident::Diffuse(a), Incident::Diffuse(b)) => *a += b * weight,
             (Incident::Directional(a), Incident::Directional(b)) => {
@@ -722,7 +754,7 @@ impl Incident {
         }
     }
 
-    fn scale(&mut self, k: f32) {
+    fn scale(&mut self, k: Rgb) {
         match self {
             Incident::Nothing => {}
             Incident::Diffuse(a) => *a *= k,

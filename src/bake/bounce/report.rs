@@ -10,8 +10,9 @@ pub struct BounceReport {
     pub energies: Vec<f64>,
     /// The last bounce's energy over the reflected total (direct and bounces).
     pub residual: f64,
-    /// The geometric tail factor r/(1 − r) added, if any.
-    pub extrapolated: Option<f64>,
+    /// The geometric tail factors r/(1 − r) added, red, green and blue (r each channel's
+    /// ratio of its last two bounces), if any.
+    pub extrapolated: Option<[f64; 3]>,
     /// Seconds per bounce (the first records the transport).
     pub seconds: Vec<f64>,
     /// Seconds after the last bounce: what the receivers gathered over all of them turned

@@ -74,7 +74,8 @@ pub(crate) fn check_slots(points: u64, levels: u32) -> Result<()> {
 
 impl BounceSettings {
     /// `auto`: up to 30 bounces, stopping once one adds less than 3 % of the total, with the
-    /// geometric tail of the rest (docs/bounces.md, "Bounce control", measures the choice).
+    /// geometric tail of the rest, channel by channel (docs/bounces.md, "Bounce control",
+    /// measures the choice).
     pub const fn auto() -> Self {
         BounceSettings {
             max: 30,

@@ -97,7 +97,7 @@ pub struct BakeArgs {
     /// Indirect bounces after the direct light: a number (0: a direct-only cache), or `auto`:
     /// until a bounce adds less than 3 % of the light (at most 30), then the bounces left at
     /// once, as the geometric tail of the last (r/(1 − r) times it, r the ratio of the last
-    /// two bounces' light).
+    /// two bounces' light, for red, green and blue apart).
     #[arg(long, default_value_t = BakeSettings::default().bounces, value_parser = parse_bounces)]
     bounces: BounceSettings,
     /// Memory (MB) the bounces may keep their recorded light transport in: the first bounce

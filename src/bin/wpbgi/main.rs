@@ -315,8 +315,8 @@ pub(crate) fn say_bounces(r: &BounceReport) {
         per.join(", "),
         r.final_seconds,
         r.residual,
-        r.extrapolated.map_or(String::new(), |t| format!(
-            ", tail extrapolated (× {t:.2} of the last bounce)"
+        r.extrapolated.map_or(String::new(), |[red, green, blue]| format!(
+            ", tail extrapolated (× {red:.2}, {green:.2}, {blue:.2} of the last bounce's red, green, blue)"
         )),
     );
 }
