@@ -683,7 +683,7 @@ fn is_glossy(r: &Receiver, settings: &FinalSettings) -> bool {
 /// --spp 1024` reads the same cache; with a 32² base the face is within 1 % of the paths
 /// gather, and the buffer's convolution was not at fault (tests/microbuffer.rs holds it to the
 /// albedo to 85°). Measured at 256² (docs/render.md, "Glossy receivers on a finer grid"):
-/// relMSE −11 % on wall-glossy and cbox-glossy for 10 % and 0 % more render time. Glass keeps
+/// relMSE −11 % on wall-glossy and cbox-glossy for 9 % and 2 % more render time. Glass keeps
 /// the base grid: its spherical buffers at 2 × 32² cost cbox-rough 36 % more time for 4 %
 /// less error.
 pub const GLOSSY_BASE_FACTOR: u32 = 2;
@@ -870,12 +870,13 @@ fn gather_set(
         .map_init(
             || {
                 let gather = ClusterGather::alone(senders).whole_straddling_beyond(STRADDLE_RADII);
-                (gather, scratch(1), scratch(GLOSSY_BASE_FACTOR))
+                (gather, scratch(1), None)
             },
             |(gather, plain, finer), &k| {
                 let mut s = GatherStats::default();
+                // The finer buffer is made on a task's first glossy receiver, not for every task.
                 let buffers = if has_finer_base(&receivers[k], settings) {
-                    finer
+                    finer.get_or_insert_with(|| scratch(GLOSSY_BASE_FACTOR))
                 } else {
                     plain
                 };

@@ -65,7 +65,7 @@ use crate::spectrum::{Rgb, LUMINANCE};
 use crate::surfels::coding::{encode, node_sums, CodedTree};
 use crate::surfels::radiance::{intensity_of, map_levels, SurfelRadiance};
 use crate::surfels::Surfel;
-use glam::{Vec3, Vec3A};
+use glam::{DVec3, Vec3, Vec3A};
 use rayon::prelude::*;
 use std::path::Path;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -82,29 +82,23 @@ pub const SENT_TAU_FACTOR: f32 = 5.0;
 
 /// The energy of a set of surfel radiances per channel: Σ area × the mean outgoing radiance
 /// (over the front hemisphere for diffuse surfels, the sphere for maps), red, green, blue.
-fn channel_energies(baked: &Baked, radiance: &[SurfelRadiance]) -> [f64; 3] {
+fn channel_energies(baked: &Baked, radiance: &[SurfelRadiance]) -> DVec3 {
     baked
         .surfels
         .iter()
         .zip(radiance)
-        .fold([0.0; 3], |[r, g, b], (s, l)| {
+        .fold(DVec3::ZERO, |sum, (s, l)| {
             let mean = match l {
                 SurfelRadiance::Rgb(c) => *c,
                 SurfelRadiance::Map(m) => m.mean(),
             };
-            let a = f64::from(s.area);
-            [
-                r + a * f64::from(mean.x),
-                g + a * f64::from(mean.y),
-                b + a * f64::from(mean.z),
-            ]
+            sum + f64::from(s.area) * mean.as_dvec3()
         })
 }
 
 /// The energy measure of the bounce control: the luminance of [`channel_energies`].
-fn energy_of(channels: [f64; 3]) -> f64 {
-    let [r, g, b] = LUMINANCE.map(f64::from);
-    r * channels[0] + g * channels[1] + b * channels[2]
+fn energy_of(channels: DVec3) -> f64 {
+    DVec3::from(LUMINANCE.map(f64::from)).dot(channels)
 }
 
 /// The geometric tail Σ_{j≥1} rʲ = r/(1 − r) of a channel whose last two bounces carried
@@ -268,7 +262,7 @@ pub fn add_bounces(
 
     let mut total_energy = energy_of(channel_energies(baked, &reflected_direct));
     // The last two bounces' energies per channel, for the tail.
-    let mut channels = [[0.0f64; 3]; 2];
+    let mut channels = [DVec3::ZERO; 2];
     // What the receivers gathered over the bounces, summed before their BSDFs: the bounces'
     // light is turned into outgoing radiance and added to the total once, at the end.
     let mut gathered = vec![Incident::Nothing; baked.surfels.len()];
@@ -328,7 +322,7 @@ pub fn add_bounces(
         }
         if let Some(tail) = tail {
             report.extrapolated = Some(tail);
-            let rest = energy_of([0, 1, 2].map(|c| channels[1][c] * tail[c]));
+            let rest = energy_of(channels[1] * DVec3::from(tail));
             report.residual = rest / (total_energy + rest);
         }
         report.seconds.push(start.elapsed().as_secs_f64());
