@@ -683,7 +683,8 @@ fn is_glossy(r: &Receiver, settings: &FinalSettings) -> bool {
 /// --spp 1024` reads the same cache; with a 32² base the face is within 1 % of the paths
 /// gather, and the buffer's convolution was not at fault (tests/microbuffer.rs holds it to the
 /// albedo to 85°). Measured at 256² (docs/render.md, "Glossy receivers on a finer grid"):
-/// relMSE −11 % on wall-glossy and cbox-glossy for 9 % and 2 % more render time. Glass keeps
+/// relMSE −11 % on wall-glossy and cbox-glossy for 9 % and 2 % more render time (18 % and
+/// 27 % in a second run, docs/benchmarks.md). Glass keeps
 /// the base grid: its spherical buffers at 2 × 32² cost cbox-rough 36 % more time for 4 %
 /// less error.
 pub const GLOSSY_BASE_FACTOR: u32 = 2;
