@@ -629,19 +629,15 @@ impl Senders {
     pub fn surfel_at(&self, q: Vec3, mesh: u32, ng: Vec3, near: Option<u32>) -> Option<u32> {
         let nearest = self.nearest.get_or_init(|| {
             let positions: Vec<Vec3> = self.surfels.iter().map(|s| Vec3::from(s.p)).collect();
+            let normals: Vec<Vec3> = self.surfels.iter().map(|s| Vec3::from(s.n)).collect();
             let meshes: Vec<u32> = self.surfels.iter().map(|s| s.mesh).collect();
-            NearestSurfel::new(&positions, &meshes)
+            NearestSurfel::new(&positions, &normals, &meshes)
         });
         let seed = near
             .and_then(|i| self.surfels.get(i as usize).map(|s| (i, s)))
             .filter(|(_, s)| s.mesh == mesh)
-            .map(|(i, s)| (i, Vec3::from(s.p)));
-        nearest.nearest(
-            q,
-            mesh,
-            |i| Vec3::from(self.surfels[i as usize].n).dot(ng) > 0.5,
-            seed,
-        )
+            .map(|(i, s)| (i, Vec3::from(s.p), Vec3::from(s.n)));
+        nearest.nearest(q, mesh, |n| n.dot(ng) > 0.5, seed)
     }
 
     /// Surfel `i`'s light along `w` towards a receiver on mesh `receiver_mesh`, as a gather
