@@ -68,12 +68,17 @@ fn rays_per_side(share: f32, transmitted: bool) -> Option<u32> {
 }
 
 /// A traced ray's light from emitters through glossy hits is capped at this many times the
-/// luminance the cut found in its pixel (see [`Retrace`]). Measured at 256² against Mitsuba's
-/// max_depth 64 (default caches, 64 rays a traced pixel, before [`TIERS`]): caps of 4 and 16
-/// gave cbox-mirror relMSE 8.3e-4 and 6.4e-4, no cap 5.9e-4 (with the first glossy hit's
-/// samples stratified, a variant since dropped); without a cap, caustic.gltf's ceiling is
-/// speckled where the sphere mirrors the lamp.
-pub const GLINT_CAP: f32 = 16.0;
+/// luminance the cut found in its pixel (see [`Retrace`]). The cut reads a mirror's or clear
+/// glass's directional maps, which blur a lamp seen in them, so its pixel is darker than what
+/// the rays find there, and a low cap clips the light itself, not only the glints. Measured
+/// at 256² with the default caches against Mitsuba's max_depth 64 (2 048 spp for the Cornell
+/// boxes, 8 192 for caustic.gltf, noise taken out), caps of 16, 64 and 256: cbox-mirror
+/// relMSE 3.95e-4, 2.44e-4, 2.23e-4; cbox-glossy 3.87e-4, 3.28e-4, 3.24e-4; cbox-rough
+/// 2.32e-4, 2.27e-4, 2.30e-4; caustic.gltf 5.67e-4, 5.61e-4, 5.81e-4 (no cap: 5.99e-4, its
+/// ceiling speckled where the sphere mirrors the lamp), its caustic spot 7.70e-3, 7.31e-3,
+/// 7.21e-3; wall-glossy and ceiling-rough the same at every cap (docs/render.md, "The glint
+/// cap measured again").
+pub const GLINT_CAP: f32 = 64.0;
 
 /// Sample indices of the bright pixels' streams start here, above any camera sample's and
 /// the path-traced gather's.
