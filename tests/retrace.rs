@@ -62,21 +62,22 @@ fn both(name: &str, window: [u32; 4]) -> Both {
     b
 }
 
-/// cbox-mirror (a mirror box and a glass sphere, both α 0.001). Measured: relMSE 9.8e-4
-/// retraced, 1.20e-3 from the maps.
+/// cbox-mirror (a mirror box and a glass sphere, both α 0.001). Measured: relMSE 8.69e-4
+/// retraced (9.8e-4 when `render::bright::GLINT_CAP` was 16), 1.23e-3 from the maps.
 #[test]
 fn a_mirror_and_clear_glass_are_seen_through_not_in_their_maps() {
     let b = both("cbox-mirror", [0, 0, 128, 128]);
-    assert!(b.retraced.0 < 1.09e-3, "relMSE {:.3e}", b.retraced.0);
+    assert!(b.retraced.0 < 9.6e-4, "relMSE {:.3e}", b.retraced.0);
 }
 
 /// cbox-rough's glass sphere (α 0.1) focuses the lamp on the floor in the window. Measured:
-/// relMSE 8.0e-4 retraced, 1.21e-3 from the maps; the window 0.967 and 0.711 of the
-/// reference's light (the maps spread the lobe the sphere focuses).
+/// relMSE 4.50e-4 retraced, 9.1e-4 from the maps; the window 0.982 and 0.710 of the
+/// reference's light (the maps spread the lobe the sphere focuses). (When this test was
+/// written: 8.0e-4 and 1.21e-3, the bound 1.0e-3; the renders have improved since.)
 #[test]
 fn the_caustic_under_a_rough_glass_sphere_is_traced_through_it() {
     let b = both("cbox-rough", [83, 114, 7, 4]);
-    assert!(b.retraced.0 < 1.0e-3, "relMSE {:.3e}", b.retraced.0);
+    assert!(b.retraced.0 < 6.0e-4, "relMSE {:.3e}", b.retraced.0);
     assert!(
         b.retraced.1 > 0.85 && b.retraced.1 < 1.15,
         "caustic at {:.3} of the reference",
