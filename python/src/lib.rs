@@ -341,6 +341,7 @@ const RENDER_KEYS: &[&str] = &[
     "retrace_glossy",
     "sparse",
     "seed",
+    "supersample",
 ];
 
 /// The final render's settings: the library's default (`wpbgi render`'s), then each key given.
@@ -380,6 +381,7 @@ fn render_settings(settings: Option<&Bound<'_, PyDict>>) -> PyResult<wpbgi::Rend
             "retrace_glossy" => s.retrace_glossy = value.extract()?,
             "sparse" => s.sparse = value.extract()?,
             "seed" => s.seed = value.extract()?,
+            "supersample" => s.supersample = Some(value.extract()?),
             other => return Err(refuse(other, "render", RENDER_KEYS)),
         }
     }
