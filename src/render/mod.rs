@@ -144,7 +144,8 @@ pub const MAX_SUPERSAMPLE: u32 = 4;
 pub fn auto_supersample(width: u32, height: u32, settings: &FinalSettings) -> u32 {
     let short = width.min(height);
     let fits = 2 * width.max(height) <= Camera::MAX_SIDE;
-    if (256..512).contains(&short)
+    // The frames whose grid is still the base one (`sparse::coarsest_cell`).
+    if (sparse::ANCHOR_FRAME..2 * sparse::ANCHOR_FRAME).contains(&short)
         && fits
         && settings.sparse
         && settings.gather != GatherMode::Paths
@@ -455,7 +456,12 @@ pub fn render_final_cancellable(
         };
         let camera = camera.clone().with_size(w * factor, h * factor);
         let out = render_final_cancellable(scene, cache, &camera, &fine, progress, cancel)?;
-        return Ok(out.filtered_down(factor));
+        // The larger frame's sides (and its crop's) are multiples of `factor` by construction.
+        return out.filtered_down(factor).ok_or_else(|| {
+            Error::InvalidSetting(format!(
+                "a {w}x{h} frame cannot be filtered down by {factor}"
+            ))
+        });
     }
     scene.check_renderable()?;
     let mut timings = Vec::new();
@@ -634,65 +640,59 @@ pub fn render_final_cancellable(
 
 impl FinalOutput {
     /// This render, made at `factor` times the size, box-filtered down: each block of
-    /// `factor` × `factor` pixels becomes their mean (the light, the albedo, the coverage), the
-    /// normal their mean made unit, the depth the nearest hit's, the beauty direct plus
-    /// indirect again. The same blocks summed in the same order whatever the thread count.
-    pub fn filtered_down(mut self, factor: u32) -> FinalOutput {
-        let f = factor as usize;
+    /// `factor` × `factor` pixels becomes their mean ([`Image::box_downsample`]: the light, the
+    /// albedo; and the coverage), the normal their mean made unit, the depth the nearest hit's,
+    /// the beauty direct plus indirect again. `None` unless `factor` divides both sides.
+    pub fn filtered_down(mut self, factor: u32) -> Option<FinalOutput> {
         let (w, h) = (self.beauty.width / factor, self.beauty.height / factor);
-        let fine_width = self.beauty.width as usize;
-        let block = |x: usize, y: usize| {
-            (0..f).flat_map(move |dy| (0..f).map(move |dx| (y * f + dy) * fine_width + x * f + dx))
+        // Per pixel of the result, `reduce` over its block's pixel indices in the input.
+        let per_block = |reduce: &dyn Fn(&mut dyn Iterator<Item = usize>) -> f32| -> Vec<f32> {
+            let (f, fine_width) = (factor as usize, self.beauty.width as usize);
+            (0..(w * h) as usize)
+                .map(|i| {
+                    let (x, y) = (i % w as usize * f, i / w as usize * f);
+                    reduce(&mut (0..f * f).map(|k| (y + k / f) * fine_width + x + k % f))
+                })
+                .collect()
         };
-        let scale = 1.0 / (f * f) as f32;
-        let mean = |img: &Image| {
-            let mut out = Image::new(w, h);
-            for y in 0..h as usize {
-                for x in 0..w as usize {
-                    let sum = block(x, y).fold(Rgb::ZERO, |a, i| a + img.pixels[i]);
-                    out.pixels[y * w as usize + x] = sum * scale;
-                }
+        let scale = 1.0 / (factor * factor) as f32;
+        let alpha = per_block(&|block| block.map(|i| self.alpha[i]).sum::<f32>() * scale);
+        let depth = per_block(&|block| {
+            let nearest = block
+                .map(|i| self.depth.pixels[i].x)
+                .filter(|&d| d > 0.0)
+                .fold(f32::INFINITY, f32::min);
+            if nearest.is_finite() {
+                nearest
+            } else {
+                0.0
             }
-            out
-        };
-        let mut normal = mean(&self.normal);
+        });
+        let mut normal = self.normal.box_downsample(factor)?;
         for n in &mut normal.pixels {
             *n = n.normalize_or_zero();
         }
-        let mut depth = Image::new(w, h);
-        for y in 0..h as usize {
-            for x in 0..w as usize {
-                let nearest = block(x, y)
-                    .map(|i| self.depth.pixels[i].x)
-                    .filter(|&d| d > 0.0)
-                    .fold(f32::INFINITY, f32::min);
-                depth.pixels[y * w as usize + x] =
-                    Rgb::splat(if nearest.is_finite() { nearest } else { 0.0 });
-            }
-        }
-        let mut alpha = vec![0.0; (w * h) as usize];
-        for y in 0..h as usize {
-            for x in 0..w as usize {
-                alpha[y * w as usize + x] = block(x, y).map(|i| self.alpha[i]).sum::<f32>() * scale;
-            }
-        }
         let mut out = FinalOutput {
             beauty: Image::new(w, h),
-            direct: mean(&self.direct),
-            indirect: mean(&self.indirect),
-            indirect_diffuse: mean(&self.indirect_diffuse),
-            indirect_glossy: mean(&self.indirect_glossy),
-            albedo: mean(&self.albedo),
+            direct: self.direct.box_downsample(factor)?,
+            indirect: self.indirect.box_downsample(factor)?,
+            indirect_diffuse: self.indirect_diffuse.box_downsample(factor)?,
+            indirect_glossy: self.indirect_glossy.box_downsample(factor)?,
+            albedo: self.albedo.box_downsample(factor)?,
             normal,
-            depth,
+            depth: Image {
+                width: w,
+                height: h,
+                pixels: depth.into_iter().map(Rgb::splat).collect(),
+            },
             alpha,
             timings: std::mem::take(&mut self.timings),
-            stats: std::mem::take(&mut self.stats),
+            stats: self.stats,
             samples: self.samples,
             origin: (self.origin.0 / factor, self.origin.1 / factor),
         };
         out.compose();
-        out
+        Some(out)
     }
 
     /// The beauty: direct plus indirect light, pixel by pixel.
